@@ -1,0 +1,534 @@
+"""Parsing ``.elab`` text into the AST.
+
+Inline C blocks (``{{ ... }}``) run to the ``}}`` that balances the opening
+``{{``, which no regular expression can find. Before lexing, the C text is
+therefore blanked out (line breaks kept, so every position stays right) and
+kept aside by its offset; the grammar's ``C_CODE`` terminal matches the
+blanked block and the transformer puts the text back.
+"""
+
+from __future__ import annotations
+
+import functools
+from fractions import Fraction
+from importlib import resources
+
+import lark
+from lark import Token, Transformer, v_args
+from lark.exceptions import UnexpectedCharacters, UnexpectedEOF, UnexpectedInput, UnexpectedToken, VisitError
+
+from . import ast
+from .source import Diagnostic, ModelError, Span
+
+_DURATION_US = {"us": 1, "ms": 1000, "s": 1_000_000}
+
+
+def _grammar_text() -> str:
+    return resources.files(__package__).joinpath("elab.lark").read_text(encoding="utf-8")
+
+
+@functools.lru_cache(maxsize=1)
+def _parser() -> lark.Lark:
+    return lark.Lark(_grammar_text(), parser="lalr", lexer="contextual",
+                     propagate_positions=True, maybe_placeholders=False)
+
+
+# ----------------------------------------------------------- inline C blocks
+
+
+def _position(text: str, offset: int) -> tuple[int, int]:
+    line = text.count("\n", 0, offset) + 1
+    return line, offset - (text.rfind("\n", 0, offset) + 1) + 1
+
+
+def blank_inline_c(text: str, file: str) -> tuple[str, dict[int, str]]:
+    """Blank the C text of every ``{{ ... }}`` block; return it by offset.
+
+    Comments and strings of the model language are skipped, so a ``{{`` in a
+    comment opens nothing. Raises :class:`ModelError` for an unclosed block.
+    """
+    blocks: dict[int, str] = {}
+    out: list[str] = []
+    i, n, copied = 0, len(text), 0
+    while i < n:
+        c = text[i]
+        if text.startswith("//", i):
+            end = text.find("\n", i)
+            i = n if end < 0 else end
+        elif text.startswith("/*", i):
+            end = text.find("*/", i + 2)
+            i = n if end < 0 else end + 2
+        elif c == '"':
+            i += 1
+            while i < n and text[i] not in '"\n':
+                i += 2 if text[i] == "\\" else 1
+            i += 1
+        elif text.startswith("{{", i):
+            depth, k = 0, i
+            while k < n:
+                if text[k] == "{":
+                    depth += 1
+                elif text[k] == "}":
+                    depth -= 1
+                    if depth == 0:
+                        break
+                k += 1
+            if k >= n:
+                line, col = _position(text, i)
+                raise ModelError([Diagnostic(Span(file, line, col, line, col + 2),
+                                             "inline C block '{{' is never closed by a balancing '}}'",
+                                             "braces inside inline C, in its strings and comments too, must balance")])
+            body = text[i + 2:k - 1]
+            blocks[i] = body
+            out.append(text[copied:i + 2])
+            out.append("".join(ch if ch == "\n" else " " for ch in body))
+            out.append("}}")
+            copied = i = k + 1
+        else:
+            i += 1
+    out.append(text[copied:])
+    return "".join(out), blocks
+
+
+# ----------------------------------------------------------- tree -> AST
+
+
+def _token_span(file: str, tok: Token) -> Span:
+    return Span(file, tok.line, tok.column, tok.end_line, tok.end_column)
+
+
+@v_args(meta=True)
+class _ToAst(Transformer):
+    """Builds AST nodes bottom-up; every node gets the span of its rule."""
+
+    def __init__(self, file: str, blocks: dict[int, str]):
+        super().__init__()
+        self.file = file
+        self.blocks = blocks
+
+    # helpers
+    def _span(self, meta) -> Span:
+        if getattr(meta, "empty", True):
+            return Span.unknown(self.file)
+        return Span(self.file, meta.line, meta.column, meta.end_line, meta.end_column)
+
+    def _tspan(self, tok: Token) -> Span:
+        return _token_span(self.file, tok)
+
+    @staticmethod
+    def _string(tok: Token) -> str:
+        return bytes(tok[1:-1], "utf-8").decode("unicode_escape")
+
+    def _named(self, meta, name_tok: Token) -> dict:
+        return {"span": self._span(meta), "name": str(name_tok), "name_span": self._tspan(name_tok)}
+
+    # top level
+    def start(self, meta, items):
+        header = None
+        imports, decls, ifaces = [], [], []
+        extra_headers = []
+        for item in items:
+            if isinstance(item, ast.ModelDecl):
+                if header is None:
+                    header = item
+                else:
+                    extra_headers.append(item)
+            elif isinstance(item, ast.Import):
+                imports.append(item)
+            elif isinstance(item, ast.Interface):
+                ifaces.append(item)
+            else:
+                decls.append(item)
+        if extra_headers:
+            d = extra_headers[0]
+            raise ModelError([Diagnostic(d.span, "a file has at most one 'model' header",
+                                         f"the first is at {header.span}")])
+        return ast.Module(self.file, header, tuple(imports), tuple(decls), tuple(ifaces))
+
+    def model_decl(self, meta, ch):
+        title = self._string(ch[1]) if len(ch) > 1 else None
+        return ast.ModelDecl(**self._named(meta, ch[0]), title=title)
+
+    def import_decl(self, meta, ch):
+        tok = ch[0]
+        if tok.type == "STRING":
+            return ast.Import(self._span(meta), self._string(tok), False)
+        return ast.Import(self._span(meta), str(tok), True)
+
+    # data
+    def type_ref(self, meta, ch):
+        return ast.TypeRef(self._span(meta), str(ch[0]), ch[1] if len(ch) > 1 else None)
+
+    def const_decl(self, meta, ch):
+        return ast.Const(**self._named(meta, ch[0]), type=ch[1], value=ch[2])
+
+    def _data(self, meta, ch, kind):
+        name, type_ref, rest = ch[0], ch[1], ch[2:]
+        default = None
+        if rest and isinstance(rest[0], ast.Expr):
+            default, rest = rest[0], rest[1:]
+        attrs: dict[str, object] = {}
+        spans: list[tuple[str, Span]] = []
+        for key, value, span in rest:
+            if key in attrs:
+                raise ModelError([Diagnostic(span, f"attribute '{key}' given twice",
+                                             "each attribute may appear at most once")])
+            attrs[key] = value
+            spans.append((key, span))
+        return ast.Data(**self._named(meta, name), kind=kind, type=type_ref, default=default,
+                        range=attrs.get("range"), unit=attrs.get("unit"),
+                        service=attrs.get("service"), persist=bool(attrs.get("persist")),
+                        attr_spans=tuple(spans))
+
+    def param_decl(self, meta, ch):
+        return self._data(meta, ch, "param")
+
+    def var_decl(self, meta, ch):
+        return self._data(meta, ch, "var")
+
+    def range_attr(self, meta, ch):
+        return ("range", ast.RangeAttr(self._span(meta), ch[0], ch[2]), self._span(meta))
+
+    def unit_attr(self, meta, ch):
+        return ("unit", self._string(ch[1]), self._span(meta))
+
+    def service_attr(self, meta, ch):
+        address = ch[1] if len(ch) > 1 else None
+        return ("service", ast.ServiceAttr(self._span(meta), str(ch[0]), address), self._span(meta))
+
+    def address(self, meta, ch):
+        return int(str(ch[0]), 0)
+
+    def persist_attr(self, meta, ch):
+        return ("persist", True, self._span(meta))
+
+    def channel_decl(self, meta, ch):
+        return ast.Channel(**self._named(meta, ch[0]), type=ch[1], delay=ch[2] if len(ch) > 2 else None)
+
+    def delay(self, meta, ch):
+        value = ch[0]
+        if isinstance(value, tuple):
+            return ast.Delay(self._span(meta), None, value)
+        return ast.Delay(self._span(meta), value, None)
+
+    def delay_list(self, meta, ch):
+        return tuple(ch)
+
+    # devices
+    def formal_params(self, meta, ch):
+        return tuple(c for c in ch if c is not None)
+
+    def formal_param(self, meta, ch):
+        default = choices = None
+        for c in ch[2:]:
+            if isinstance(c, tuple):
+                choices = c
+            else:
+                default = c
+        return ast.FormalParam(**self._named(meta, ch[0]), type=ch[1], default=default, choices=choices)
+
+    def choices(self, meta, ch):
+        return tuple(ch[1:])
+
+    def actuals(self, meta, ch):
+        return tuple(c for c in ch if c is not None)
+
+    def actual(self, meta, ch):
+        return ast.Actual(**self._named(meta, ch[0]), value=ch[1])
+
+    def resource(self, meta, ch):
+        return ast.Resource(self._span(meta), str(ch[0]), ch[1] if len(ch) > 1 else None)
+
+    def claims(self, meta, ch):
+        return ("claims", tuple(ch))
+
+    def rate(self, meta, ch):
+        return ch[0]
+
+    def data_port(self, meta, ch):
+        return ast.DataPort(**self._named(meta, ch[1]), direction=str(ch[0]), type=ch[2],
+                            rate=ch[3] if len(ch) > 3 else None)
+
+    def data_export(self, meta, ch):
+        return ast.DataExport(**self._named(meta, ch[1]), direction=str(ch[0]), target=ch[2])
+
+    def part(self, meta, ch):
+        return ast.Part(**self._named(meta, ch[0]), type_name=str(ch[1]), type_span=self._tspan(ch[1]),
+                        args=ch[2])
+
+    def driver(self, meta, ch):
+        return ("driver", self._string(ch[0]), self._span(meta))
+
+    def device_type(self, meta, ch):
+        name, params, members = ch[0], ch[1], ch[2:]
+        claims, ports, exports, parts = [], [], [], []
+        driver = driver_span = None
+        for m in members:
+            if isinstance(m, ast.DataPort):
+                ports.append(m)
+            elif isinstance(m, ast.DataExport):
+                exports.append(m)
+            elif isinstance(m, ast.Part):
+                parts.append(m)
+            elif m[0] == "claims":
+                claims.extend(m[1])
+            elif m[0] == "driver":
+                if driver is not None:
+                    raise ModelError([Diagnostic(m[2], "a device type has at most one 'driver'")])
+                driver, driver_span = m[1], m[2]
+        return ast.DeviceType(**self._named(meta, name), params=params, claims=tuple(claims),
+                              ports=tuple(ports), exports=tuple(exports), parts=tuple(parts),
+                              driver=driver, driver_span=driver_span)
+
+    def device_decl(self, meta, ch):
+        return ast.DeviceInstance(**self._named(meta, ch[0]), type_name=str(ch[1]),
+                                  type_span=self._tspan(ch[1]), args=ch[2])
+
+    # actors
+    def type_params(self, meta, ch):
+        return tuple(c for c in ch if isinstance(c, ast.TypeParam))
+
+    def type_param(self, meta, ch):
+        return ast.TypeParam(**self._named(meta, ch[0]), bound=str(ch[1]) if len(ch) > 1 else None)
+
+    def actor_port(self, meta, ch):
+        return ast.ActorPort(**self._named(meta, ch[1]), direction=str(ch[0]), type=ch[2],
+                             rate=ch[3] if len(ch) > 3 else None)
+
+    def state_var(self, meta, ch):
+        return ast.StateVar(**self._named(meta, ch[0]), type=ch[1])
+
+    def code_block(self, meta, ch):
+        kind, code_tok = ch
+        code = self.blocks.get(code_tok.start_pos, "")
+        code_span = Span(self.file, code_tok.line, code_tok.column + 2, code_tok.end_line, code_tok.end_column - 2)
+        return ast.CodeBlock(self._span(meta), str(kind), code, code_span)
+
+    def impl(self, meta, ch):
+        return ("impl", self._string(ch[0]), self._span(meta))
+
+    def actor_type(self, meta, ch):
+        name = ch[0]
+        rest = list(ch[1:])
+        type_params: tuple = ()
+        if rest[0] and isinstance(rest[0][0], ast.TypeParam):
+            type_params = rest.pop(0)
+        params = rest.pop(0)
+        ports, states, code = [], [], []
+        impl = impl_span = None
+        for m in rest:
+            if isinstance(m, ast.ActorPort):
+                ports.append(m)
+            elif isinstance(m, ast.StateVar):
+                states.append(m)
+            elif isinstance(m, ast.CodeBlock):
+                code.append(m)
+            else:
+                if impl is not None:
+                    raise ModelError([Diagnostic(m[2], "an actor type has at most one 'impl'")])
+                impl, impl_span = m[1], m[2]
+        return ast.ActorType(**self._named(meta, name), type_params=type_params, params=params,
+                             ports=tuple(ports), states=tuple(states), code=tuple(code),
+                             impl=impl, impl_span=impl_span)
+
+    # dataflows
+    def schedule_choice(self, meta, ch):
+        return str(ch[0])
+
+    def dataflow(self, meta, ch):
+        name, rest = ch[0], ch[1:]
+        schedule = None
+        if rest and isinstance(rest[0], str) and not isinstance(rest[0], Token):
+            schedule, rest = rest[0], rest[1:]
+        instances = tuple(m for m in rest if isinstance(m, ast.Instance))
+        edges = tuple(m for m in rest if isinstance(m, ast.Edge))
+        return ast.Dataflow(**self._named(meta, name), schedule=schedule, instances=instances, edges=edges)
+
+    def type_args(self, meta, ch):
+        return tuple(c for c in ch if isinstance(c, ast.TypeRef))
+
+    def instance(self, meta, ch):
+        name, type_name = ch[0], ch[1]
+        type_args = ch[2] if len(ch) > 3 else ()
+        return ast.Instance(**self._named(meta, name), type_name=str(type_name),
+                            type_span=self._tspan(type_name), type_args=type_args, args=ch[-1])
+
+    def edge(self, meta, ch):
+        return ast.Edge(self._span(meta), ch[0], ch[1], ch[2] if len(ch) > 2 else None)
+
+    # charts
+    def entry_action(self, meta, ch):
+        return ast.Assign(self._span(meta), "entry", ch[0], ch[1])
+
+    def exit_action(self, meta, ch):
+        return ast.Assign(self._span(meta), "exit", ch[0], ch[1])
+
+    def run_action(self, meta, ch):
+        return ast.Run(**self._named(meta, ch[0]))
+
+    def step(self, meta, ch):
+        initial = isinstance(ch[0], Token) and ch[0].type == "INITIAL"
+        rest = ch[1:] if initial else ch
+        name, actions = rest[1], rest[2:]  # rest[0] is the `step` keyword
+        return ast.Step(**self._named(meta, name), initial=initial,
+                        entry=tuple(a for a in actions if isinstance(a, ast.Assign) and a.kind == "entry"),
+                        exit=tuple(a for a in actions if isinstance(a, ast.Assign) and a.kind == "exit"),
+                        runs=tuple(a for a in actions if isinstance(a, ast.Run)))
+
+    def step_set(self, meta, ch):
+        return tuple(ast.StepRef(self._tspan(t), str(t), self._tspan(t)) for t in ch)
+
+    def transition(self, meta, ch):
+        return ast.Transition(self._span(meta), ch[0], ch[1], ch[2])
+
+    def chart(self, meta, ch):
+        return ast.Chart(**self._named(meta, ch[0]),
+                         steps=tuple(c for c in ch[1:] if isinstance(c, ast.Step)),
+                         transitions=tuple(c for c in ch[1:] if isinstance(c, ast.Transition)))
+
+    # tasks and interfaces
+    def task_attr(self, meta, ch):
+        return ast.TaskAttr(self._span(meta), str(ch[0]), ch[1])
+
+    def task(self, meta, ch):
+        return ast.Task(**self._named(meta, ch[0]),
+                        attrs=tuple(c for c in ch[1:] if isinstance(c, ast.TaskAttr)),
+                        runs=tuple(c for c in ch[1:] if isinstance(c, ast.Run)))
+
+    def iface_attr(self, meta, ch):
+        key, value = ch
+        v: int | str = int(str(value), 0) if value.type == "INT" else str(value)
+        return ast.InterfaceAttr(self._span(meta), str(key), v, self._tspan(value))
+
+    def debug_iface(self, meta, ch):
+        return ast.Interface(self._span(meta), "debug", None, ch[0], tuple(ch[1:]))
+
+    def modbus_iface(self, meta, ch):
+        mode = str(ch[0])
+        resource = ch[1] if len(ch) > 1 and isinstance(ch[1], ast.Resource) else None
+        attrs = tuple(c for c in ch[1:] if isinstance(c, ast.InterfaceAttr))
+        return ast.Interface(self._span(meta), "modbus", mode, resource, attrs)
+
+    # expressions
+    def int_lit(self, meta, ch):
+        return ast.IntLit(self._span(meta), int(str(ch[0]), 0))
+
+    def real_lit(self, meta, ch):
+        return ast.RealLit(self._span(meta), Fraction(str(ch[0])), str(ch[0]))
+
+    def duration_lit(self, meta, ch):
+        number, unit = ch
+        value = Fraction(int(str(number), 0)) if number.type == "INT" else Fraction(str(number))
+        return ast.DurationLit(self._span(meta), value * _DURATION_US[str(unit)], f"{number} {unit}")
+
+    def true_lit(self, meta, ch):
+        return ast.BoolLit(self._span(meta), True)
+
+    def false_lit(self, meta, ch):
+        return ast.BoolLit(self._span(meta), False)
+
+    def string_lit(self, meta, ch):
+        return ast.StringLit(self._span(meta), self._string(ch[0]))
+
+    def path(self, meta, ch):
+        return ast.Path(self._span(meta), tuple(str(t) for t in ch), tuple(self._tspan(t) for t in ch))
+
+    def binary(self, meta, ch):
+        left, op, right = ch
+        return ast.Binary(self._span(meta), str(op), left, right)
+
+    def unary(self, meta, ch):
+        op, operand = ch
+        return ast.Unary(self._span(meta), str(op), operand)
+
+
+# ----------------------------------------------------------- syntax errors
+
+_TERMINAL_WORDS = {
+    "NAME": "a name", "INT": "an integer", "REAL": "a real number", "STRING": "a string",
+    "C_CODE": "an inline C block '{{ ... }}'", "$END": "the end of the file",
+}
+
+# Common mistakes, recognised by the parser state they fail in.
+_EXAMPLES = {
+    "an edge needs '->' between its source and its destination": [
+        "dataflow D { a.y b.x }", "dataflow D { a b }", "dataflow D { a.y = b.x }"],
+    "a declaration needs ':' and a type, as in 'var speed: int16'": [
+        "var x = 1", "param p = 1", "var x", "const C = 1"],
+    "a duration needs a unit: us, ms or s": [
+        "task t period 10 { }", "task t period 10 offset 1 ms { }"],
+    "a transition needs 'when' and a guard, as in 'transition A -> B when go'": [
+        "chart C { step A {} transition A -> B }", "chart C { step A {} transition A -> B step X {} }"],
+    "compare with '==': '=' only assigns": [
+        "chart C { transition A -> B when x = 1 }", "task t period 1 ms { } param p: int16 range x = 1..2"],
+    "edges and actor instances belong inside a 'dataflow { ... }'": [
+        "a.y -> b.x", "x = Foo()"],
+}
+
+
+def _describe_terminal(name: str) -> str:
+    if name in _TERMINAL_WORDS:
+        return _TERMINAL_WORDS[name]
+    try:
+        pattern = _parser().get_terminal(name).pattern
+    except KeyError:
+        return name
+    return f"'{pattern.value}'" if pattern.type == "str" else name.lower()
+
+
+def _describe_token(tok: Token) -> str:
+    if tok.type == "$END":
+        return "end of the file"
+    if tok.type == "C_CODE":
+        return "an inline C block"
+    return f"'{tok}'"
+
+
+def _syntax_error(err: UnexpectedInput, file: str, text: str) -> Diagnostic:
+    message = None
+    try:
+        label = err.match_examples(_parser().parse, _EXAMPLES, use_accepts=True)
+        message = label
+    except Exception:  # match_examples re-parses the examples; never let that hide the real error
+        message = None
+    if isinstance(err, UnexpectedCharacters):
+        line, col = err.line, err.column
+        found = f"character '{text[err.pos_in_stream]}'" if err.pos_in_stream < len(text) else "end of file"
+        base = f"unexpected {found}"
+        span = Span(file, line, col, line, col + 1)
+    elif isinstance(err, UnexpectedToken):
+        tok = err.token
+        if tok.type == "$END":
+            lines = text.splitlines() or [""]
+            line, col = len(lines), len(lines[-1]) + 1
+            span = Span(file, line, col, line, col + 1)
+        else:
+            span = _token_span(file, tok)
+        expected = sorted({_describe_terminal(t) for t in err.accepts or err.expected})
+        base = f"unexpected {_describe_token(tok)}"
+        if expected and not message:
+            shown = ", ".join(expected[:8]) + (", ..." if len(expected) > 8 else "")
+            base += f", expected {shown}"
+    else:  # UnexpectedEOF
+        lines = text.splitlines() or [""]
+        line, col = len(lines), len(lines[-1]) + 1
+        span = Span(file, line, col, line, col + 1)
+        base = "unexpected end of the file"
+    if message:
+        return Diagnostic(span, f"{base}: {message}" if not isinstance(err, UnexpectedEOF) else message)
+    return Diagnostic(span, base)
+
+
+def parse_text(text: str, file: str = "<string>") -> ast.Module:
+    """Parse model text into an :class:`ast.Module`; raise :class:`ModelError`."""
+    blanked, blocks = blank_inline_c(text, file)
+    try:
+        tree = _parser().parse(blanked)
+    except UnexpectedInput as err:
+        raise ModelError([_syntax_error(err, file, blanked)]) from None
+    try:
+        return _ToAst(file, blocks).transform(tree)
+    except VisitError as err:
+        if isinstance(err.orig_exc, ModelError):
+            raise err.orig_exc from None
+        raise
