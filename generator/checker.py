@@ -26,7 +26,11 @@ _KIND_NAMES = {
     ast.Chart: "chart", ast.Task: "task",
 }
 _MAX_RATE = 65535
-_MAX_DEVICE_DEPTH = 32
+
+
+def _a(noun: str) -> str:
+    """``noun`` with its indefinite article: 'a var', 'an actor type'."""
+    return f"{'an' if noun[:1] in 'aeiou' else 'a'} {noun}"
 
 
 def kind_name(decl) -> str:
@@ -57,7 +61,8 @@ class Checker:
         self.tasks: dict[str, TaskInfo] = {}
         self.interfaces: list[InterfaceInfo] = []
         self.claims: list[Claim] = []
-        self._const_in_progress: set[str] = set()
+        self._const_in_progress: list[str] = []
+        self._const_failed: set[str] = set()
 
     # ================================================================ driver
 
@@ -117,7 +122,7 @@ class Checker:
             for decl in module.declarations:
                 first = self.globals.get(decl.name)
                 if first is not None:
-                    self.error(decl.name_span, f"'{decl.name}' is already declared as a {kind_name(first)}",
+                    self.error(decl.name_span, f"'{decl.name}' is already declared as {_a(kind_name(first))}",
                                "give one of them another name",
                                [note(first.name_span, f"'{decl.name}' is first declared here")])
                     continue
@@ -136,7 +141,7 @@ class Checker:
             self.error(span, f"unknown {what} '{name}'", did_you_mean(name, candidates))
             return None
         if not isinstance(decl, wanted):
-            self.error(span, f"'{name}' is a {kind_name(decl)}, not a {what}",
+            self.error(span, f"'{name}' is {_a(kind_name(decl))}, not {_a(what)}",
                        notes=[note(decl.name_span, f"'{name}' is declared here")])
             return None
         return decl
@@ -168,18 +173,22 @@ class Checker:
                 return (f"'{head}' is a const and has no member '{path.parts[1]}'", None)
             info = self.const_value(head)
             if info is None:
-                return Symbol("const", T.INT32, 0, None, head)  # error reported already
+                return Symbol("const", None, None, None, head)  # error reported already
             return Symbol("const", info.type, info.value, info, head)
         if isinstance(decl, ast.Data):
             if len(path.parts) > 1:
                 return (f"'{head}' is a {decl.kind} and has no member '{path.parts[1]}'", None)
             if decl.kind not in allow:
-                return (f"a {decl.kind} cannot be used here", None)
+                if "param" in allow:
+                    return (f"'{head}' is a var; only consts and params can be given here", None)
+                return (f"'{head}' is a {decl.kind}, known only at run time; a compile-time constant "
+                        "is needed here", "use literals and consts here")
             info = self.data.get(head)
-            return Symbol(decl.kind, info.type if info else T.INT32, None, info, head)
+            return Symbol(decl.kind, info.type if info else None, None, info, head)
         if isinstance(decl, ast.DeviceInstance):
             if "device_data" not in allow:
-                return ("device data cannot be used here", None)
+                return (f"'{path.text}' is device data, known only at run time; a compile-time "
+                        "constant is needed here", "use literals and consts here")
             datum = self.device_datum(path)
             if isinstance(datum, tuple):
                 return datum
@@ -187,7 +196,7 @@ class Checker:
                 return (f"'{path.text}' is a device input (application -> device) and cannot be read",
                         "read the var that drives it instead")
             return Symbol("device_data", datum.type, None, datum, path.text)
-        return (f"'{head}' is a {kind_name(decl)}, not a value", None)
+        return (f"'{head}' is {_a(kind_name(decl))}, not a value", None)
 
     def typer(self, resolve, runtime=True, used=None) -> ExprTyper:
         return ExprTyper(self.diags, resolve, runtime=runtime, symbols_used=used)
@@ -203,18 +212,25 @@ class Checker:
         decl = self.globals.get(name)
         if not isinstance(decl, ast.Const):
             return None
-        if name in self._const_in_progress:
-            self.error(decl.name_span, f"const '{name}' is defined in terms of itself")
+        if name in self._const_failed:
             return None
-        self._const_in_progress.add(name)
+        if name in self._const_in_progress:
+            cycle = self._const_in_progress[self._const_in_progress.index(name):] + [name]
+            self.error(decl.name_span, f"const '{name}' is defined in terms of itself"
+                                       + (f" ({' -> '.join(cycle)})" if len(cycle) > 2 else ""))
+            self._const_failed.update(cycle)
+            return None
+        self._const_in_progress.append(name)
         t = self.resolve_type(decl.type)
         info = None
         if t is not None:
             v = self.const_typer().expect_const(decl.value, t, f"const '{name}'")
-            if v.type is not None:
+            if v.type is not None and name not in self._const_failed:
                 info = ConstInfo(decl, t, v.const)
                 self.consts[name] = info
-        self._const_in_progress.discard(name)
+        self._const_in_progress.pop()
+        if info is None:
+            self._const_failed.add(name)
         return info
 
     def check_data(self, decl: ast.Data) -> None:
@@ -368,7 +384,7 @@ class Checker:
         self.top_devices[decl.name] = decl
         args = self.device_args(dtype, decl.args, decl.span, self.const_typer())
         if args is not None:
-            self._elaborate(decl.name, dtype, args, decl.span, depth=0)
+            self._elaborate(decl.name, dtype, args, decl.span, ())
 
     def device_args(self, dtype: ast.DeviceType, actuals, span: Span, typer: ExprTyper):
         values: dict[str, object] = {}
@@ -386,6 +402,7 @@ class Checker:
                 continue
             t = self.resolve_type(formal.type, allow_string=True)
             if t is None:
+                values[a.name] = None
                 ok = False
                 continue
             v = typer.expect_const(a.value, t, f"device parameter '{a.name}'")
@@ -412,10 +429,9 @@ class Checker:
             return self.global_symbol(path, allow=("const",))
         return self.typer(resolve, runtime=False)
 
-    def _elaborate(self, path: str, dtype: ast.DeviceType, args: dict, span: Span, depth: int) -> None:
-        if depth > _MAX_DEVICE_DEPTH:
-            self.error(span, f"device type '{dtype.name}' contains itself (through its parts)")
-            return
+    def _elaborate(self, path: str, dtype: ast.DeviceType, args: dict, span: Span, outer: tuple) -> None:
+        """``span`` is the instance or part in the model's own files that
+        stands for this device; ``outer`` the device types around it."""
         typer = self._device_typer(dtype, args)
         if dtype.driver is not None:
             ports = {}
@@ -429,6 +445,7 @@ class Checker:
             for r in dtype.claims:
                 claim = self.eval_claim(r, typer, path)
                 if claim is not None:
+                    claim.span = span  # the device's declaration, not the device type's claim
                     claims.append(claim)
                     self.claims.append(claim)
             device = PrimitiveDevice(path, dtype, dtype.driver, args, ports, claims, span)
@@ -440,12 +457,15 @@ class Checker:
             ptype = self.lookup(part.type_name, part.type_span, (ast.DeviceType,), "device type")
             if ptype is None:
                 continue
-            if ptype is dtype:
-                self.error(part.type_span, f"device type '{dtype.name}' contains itself")
+            if ptype is dtype or ptype in outer:
+                cycle = [t.name for t in (*outer, dtype)][[*outer, dtype].index(ptype):] + [ptype.name]
+                self.error(part.type_span, f"device type '{ptype.name}' contains itself"
+                                           + (f" ({' -> '.join(cycle)})" if len(cycle) > 2 else ""))
                 continue
             part_args = self.device_args(ptype, part.args, part.span, typer)
             if part_args is not None:
-                self._elaborate(f"{path}.{part.name}", ptype, part_args, part.span, depth + 1)
+                part_span = span if _in_library(part.span) else part.span
+                self._elaborate(f"{path}.{part.name}", ptype, part_args, part_span, (*outer, dtype))
         for export in dtype.exports:
             target = self.device_data.get(f"{path}.{export.target.text}")
             if target is None:
@@ -599,7 +619,7 @@ class Checker:
             if t is None:
                 return None
             if not T.satisfies_bound(t, tp.bound):
-                self.error(ref.span, f"'{t}' is not a {tp.bound} type, as '{atype.name}' requires of {tp.name}",
+                self.error(ref.span, f"'{t}' is not {_a(tp.bound)} type, as '{atype.name}' requires of {tp.name}",
                            f"{tp.name} must be {T.BOUNDS[tp.bound]}")
                 return None
             bound[tp.name] = t
@@ -687,6 +707,7 @@ class Checker:
         formals = {p.name: p for p in atype.params}
         sizing = _sizing_params(atype)
         args: dict[str, ArgValue] = {}
+        given: set[str] = set()
         ok = True
         for a in inst.args:
             formal = formals.get(a.name)
@@ -695,9 +716,10 @@ class Checker:
                            did_you_mean(a.name, formals))
                 ok = False
                 continue
-            if a.name in args:
+            if a.name in given:
                 self.error(a.name_span, f"parameter '{a.name}' is given twice")
                 continue
+            given.add(a.name)
             t = bind(formal.type)
             if t is None:
                 ok = False
@@ -718,7 +740,7 @@ class Checker:
             params = tuple(sorted({sym.name for _, sym in used if sym.kind == "param"}))
             args[a.name] = ArgValue(t, v.const, None if v.is_const else a.value, params)
         for name, formal in formals.items():
-            if name in args:
+            if name in given:
                 continue
             if formal.default is None:
                 self.error(inst.type_span, f"'{inst.name}' needs parameter '{name}' of actor type '{atype.name}'",
@@ -816,7 +838,7 @@ class Checker:
                 self.error(path.span, f"'{path.text}' is {what} and cannot be an edge's {side}")
                 return None
             return Endpoint("device", datum, None, datum.type, datum.port.rate, path)
-        self.error(path.part_spans[0], f"'{head}' is a {kind_name(decl)}; an edge joins actor ports, vars, "
+        self.error(path.part_spans[0], f"'{head}' is {_a(kind_name(decl))}; an edge joins actor ports, vars, "
                                        "params, channels and device data")
         return None
 
@@ -905,7 +927,7 @@ class Checker:
                 return
             t, writers = datum.type, datum.writers
         else:
-            what = f"a {kind_name(head)}" if head is not None else "not declared"
+            what = _a(kind_name(head)) if head is not None else "not declared"
             hint = None if head is not None else did_you_mean(target.parts[0], [
                 n for n, d in self.globals.items() if isinstance(d, ast.Data) and d.kind == "var"])
             self.error(target.span, f"cannot assign to '{target.text}': it is {what}; "
@@ -1194,6 +1216,11 @@ def _sizing_params(atype: ast.ActorType) -> set[str]:
         if st.type.size is not None:
             walk(st.type.size)
     return names
+
+
+def _in_library(span: Span) -> bool:
+    """Whether a span lies in a shipped library (``<std>``), which a user cannot edit."""
+    return span.file.startswith("<")
 
 
 def _module_dir(file: FsPath) -> FsPath:

@@ -22,7 +22,7 @@ class Symbol:
     """What a name in an expression stands for."""
 
     kind: str  # const param var device_data step_time step_active formal channel
-    type: T.ValueType
+    type: T.ValueType | None  # None: the declaration has an error, reported there
     value: object | None = None  # the compile-time value, if there is one
     target: object = None  # the resolved declaration, for later stages
     name: str = ""
@@ -143,6 +143,8 @@ class ExprTyper:
             self.diags.error(e.span, sym[0], sym[1])
             return ERROR
         self.symbols_used.append((e, sym))
+        if sym.type is None:  # its declaration has an error, reported there
+            return ERROR
         if sym.value is not None:
             return Value(sym.type, sym.value)
         if not self.runtime:

@@ -10,6 +10,7 @@ blanked block and the transformer puts the text back.
 from __future__ import annotations
 
 import functools
+import threading
 from fractions import Fraction
 from importlib import resources
 
@@ -21,6 +22,7 @@ from . import ast
 from .source import Diagnostic, ModelError, Span
 
 _DURATION_US = {"us": 1, "ms": 1000, "s": 1_000_000}
+_PARSE_LOCK = threading.Lock()
 
 
 def _grammar_text() -> str:
@@ -28,9 +30,57 @@ def _grammar_text() -> str:
 
 
 @functools.lru_cache(maxsize=1)
-def _parser() -> lark.Lark:
-    return lark.Lark(_grammar_text(), parser="lalr", lexer="contextual",
-                     propagate_positions=True, maybe_placeholders=False)
+def _ast_parser() -> tuple[lark.Lark, "_ToAst"]:
+    """A parser that builds the AST while parsing, with no intermediate tree
+    (about twice as fast on large models). Lark gives such callbacks no
+    positions, so every token is kept and :func:`_with_span` computes the
+    span from the children before dropping the punctuation and keyword
+    tokens the AST does not need. The transformer is told the file and its
+    inline C before each parse; parsing holds a lock."""
+    transformer = _ToAst("<string>", {})
+    return lark.Lark(_grammar_text(), parser="lalr", lexer="contextual", keep_all_tokens=True,
+                     maybe_placeholders=False, transformer=transformer), transformer
+
+
+@functools.lru_cache(maxsize=1)
+def _kept_terminals() -> frozenset[str]:
+    """The terminals the grammar names itself: their tokens reach the AST."""
+    import re
+
+    return frozenset(re.findall(r"^([A-Z_]+)\s*:", _grammar_text(), re.MULTILINE))
+
+
+class _Meta:
+    __slots__ = ("line", "column", "end_line", "end_column", "empty")
+
+    def __init__(self, first, last) -> None:
+        self.empty = first is None
+        if first is not None:
+            self.line, self.column = first
+            self.end_line, self.end_column = last
+
+
+def _bounds(item):
+    """(first, last) positions inside a child: a token, an AST node or a tuple."""
+    if isinstance(item, Token):
+        if item.line is None:
+            return None
+        return (item.line, item.column), (item.end_line, item.end_column)
+    span = getattr(item, "span", None)
+    if isinstance(span, Span):
+        return (span.line, span.column), (span.end_line, span.end_column)
+    if isinstance(item, tuple):
+        found = [b for b in map(_bounds, item) if b is not None]
+        if found:
+            return found[0][0], found[-1][1]
+    return None
+
+
+def _with_span(f, _data, children, _meta):
+    found = [b for b in map(_bounds, children) if b is not None]
+    meta = _Meta(found[0][0], found[-1][1]) if found else _Meta(None, None)
+    kept = _kept_terminals()
+    return f(meta, [c for c in children if not isinstance(c, Token) or c.type in kept])
 
 
 # ----------------------------------------------------------- inline C blocks
@@ -97,7 +147,7 @@ def _token_span(file: str, tok: Token) -> Span:
     return Span(file, tok.line, tok.column, tok.end_line, tok.end_column)
 
 
-@v_args(meta=True)
+@v_args(wrapper=_with_span)
 class _ToAst(Transformer):
     """Builds AST nodes bottom-up; every node gets the span of its rule."""
 
@@ -410,6 +460,9 @@ class _ToAst(Transformer):
         return ast.Interface(self._span(meta), "modbus", mode, resource, attrs)
 
     # expressions
+    def primary(self, meta, ch):  # "(" expr ")": the parentheses are dropped
+        return ch[0]
+
     def int_lit(self, meta, ch):
         return ast.IntLit(self._span(meta), int(str(ch[0]), 0))
 
@@ -470,7 +523,7 @@ def _describe_terminal(name: str) -> str:
     if name in _TERMINAL_WORDS:
         return _TERMINAL_WORDS[name]
     try:
-        pattern = _parser().get_terminal(name).pattern
+        pattern = _ast_parser()[0].get_terminal(name).pattern
     except KeyError:
         return name
     return f"'{pattern.value}'" if pattern.type == "str" else name.lower()
@@ -487,7 +540,7 @@ def _describe_token(tok: Token) -> str:
 def _syntax_error(err: UnexpectedInput, file: str, text: str) -> Diagnostic:
     message = None
     try:
-        label = err.match_examples(_parser().parse, _EXAMPLES, use_accepts=True)
+        label = err.match_examples(_ast_parser()[0].parse, _EXAMPLES, use_accepts=True)
         message = label
     except Exception:  # match_examples re-parses the examples; never let that hide the real error
         message = None
@@ -522,13 +575,14 @@ def _syntax_error(err: UnexpectedInput, file: str, text: str) -> Diagnostic:
 def parse_text(text: str, file: str = "<string>") -> ast.Module:
     """Parse model text into an :class:`ast.Module`; raise :class:`ModelError`."""
     blanked, blocks = blank_inline_c(text, file)
-    try:
-        tree = _parser().parse(blanked)
-    except UnexpectedInput as err:
-        raise ModelError([_syntax_error(err, file, blanked)]) from None
-    try:
-        return _ToAst(file, blocks).transform(tree)
-    except VisitError as err:
-        if isinstance(err.orig_exc, ModelError):
-            raise err.orig_exc from None
-        raise
+    parser, transformer = _ast_parser()
+    with _PARSE_LOCK:
+        transformer.file, transformer.blocks = file, blocks
+        try:
+            return parser.parse(blanked)
+        except UnexpectedInput as err:
+            raise ModelError([_syntax_error(err, file, blanked)]) from None
+        except VisitError as err:
+            if isinstance(err.orig_exc, ModelError):
+                raise err.orig_exc from None
+            raise

@@ -1,0 +1,222 @@
+"""Loop nesting for a fixed lexical order: DPPO and what it works on.
+
+A *nesting* of a lexical order ``order[0..m-1]`` is a binary bracketing,
+stored as ``splits[(lo, hi)] = k``: the range ``lo..hi`` runs as a loop of
+``g(lo, hi)`` iterations (``g`` the gcd of the counts of its nodes) over the
+part ``lo..k`` followed by the part ``k+1..hi``.  Under the non-shared buffer
+model an edge from position ``a`` to ``b > a`` then needs ``w / g`` tokens of
+buffer (``w`` its traffic per iteration) where ``lo..hi`` is the range whose
+split separates ``a`` from ``b``; an edge running backwards (possible only
+for an edge whose delay covers the whole traffic) needs just its delay.
+
+DPPO (Bhattacharyya, Murthy & Lee 1996) finds the cheapest nesting by
+dynamic programming over all ranges in O(m^3) time and O(m^2) space.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Callable, Sequence
+
+from .schedule import Node, repeat
+
+Splits = dict[tuple[int, int], int]
+
+
+class RangeGcd:
+    """gcd of any range of a list in O(1), from a sparse table.
+
+    Overlapping halves are fine because gcd is idempotent.
+    """
+
+    def __init__(self, values: Sequence[int]) -> None:
+        self._levels = [list(values)]
+        width = 1
+        while 2 * width <= len(values):
+            previous = self._levels[-1]
+            self._levels.append(
+                [math.gcd(previous[i], previous[i + width]) for i in range(len(values) - 2 * width + 1)]
+            )
+            width *= 2
+
+    def __call__(self, lo: int, hi: int) -> int:
+        level = (hi - lo + 1).bit_length() - 1
+        row = self._levels[level]
+        return math.gcd(row[lo], row[hi - (1 << level) + 1])
+
+
+def dppo(counts: Sequence[int], edges: Sequence[tuple[int, int, int]]) -> tuple[int, Splits]:
+    """Cheapest nesting of ``counts`` (positions 0..m-1) and its cost.
+
+    ``edges`` are ``(a, b, w)`` with ``a < b``: traffic ``w`` from position
+    ``a`` to ``b``.  Backward edges cost the same in every nesting, so the
+    caller leaves them out.
+    """
+    m = len(counts)
+    if m < 2:
+        return 0, {}
+    # out_prefix[a][t]: traffic from a to positions < t; in_prefix[b][t]:
+    # traffic into b from positions < t.  They make the traffic across a
+    # split an O(1) update when the split point moves by one.
+    out_prefix = [[0] * (m + 1) for _ in range(m)]
+    in_prefix = [[0] * (m + 1) for _ in range(m)]
+    for a, b, w in edges:
+        out_prefix[a][b + 1] += w
+        in_prefix[b][a + 1] += w
+    for rows in (out_prefix, in_prefix):
+        for row in rows:
+            for t in range(1, m + 1):
+                row[t] += row[t - 1]
+
+    gcds = [[0] * m for _ in range(m)]
+    for i in range(m):
+        gcds[i][i] = g = counts[i]
+        for j in range(i + 1, m):
+            g = math.gcd(g, counts[j])
+            gcds[i][j] = g
+
+    best = [[0] * m for _ in range(m)]
+    split = [[0] * m for _ in range(m)]
+    for length in range(1, m):
+        for i in range(m - length):
+            j = i + length
+            g = gcds[i][j]
+            row_i = best[i]
+            crossing = out_prefix[i][j + 1] - out_prefix[i][i + 1]
+            chosen, chosen_cost = i, row_i[i] + best[i + 1][j] + crossing // g
+            for k in range(i + 1, j):
+                # Node k moves from the right part to the left part.
+                out_k, in_k = out_prefix[k], in_prefix[k]
+                crossing += (out_k[j + 1] - out_k[k + 1]) - (in_k[k] - in_k[i])
+                cost = row_i[k] + best[k + 1][j] + crossing // g
+                if cost < chosen_cost:
+                    chosen, chosen_cost = k, cost
+            best[i][j] = chosen_cost
+            split[i][j] = chosen
+
+    splits: Splits = {}
+    pending = [(0, m - 1)]
+    while pending:
+        lo, hi = pending.pop()
+        if lo < hi:
+            k = split[lo][hi]
+            splits[(lo, hi)] = k
+            pending.append((lo, k))
+            pending.append((k + 1, hi))
+    return best[0][m - 1], splits
+
+
+def forward_edges(
+    order: Sequence[int], edges: Sequence[tuple[int, int, int]]
+) -> list[tuple[int, int, int]]:
+    """Node-level edges ``(u, v, w)`` as position-level forward edges."""
+    position = {node: p for p, node in enumerate(order)}
+    result = []
+    for u, v, w in edges:
+        a, b = position[u], position[v]
+        if a < b:
+            result.append((a, b, w))
+    return result
+
+
+def optimize_nesting(
+    counts: Sequence[int],
+    edges: Sequence[tuple[int, int, int]],
+    hierarchy: Splits,
+    window: int,
+) -> Splits:
+    """DPPO on every maximal range of ``hierarchy`` with at most ``window`` nodes.
+
+    ``counts`` and ``edges`` are by position.  Ranges above the window keep
+    the hierarchy's split, so the cost is O(m * window^2) instead of O(m^3);
+    with ``window >= m`` this is plain DPPO.  Each window is solved
+    optimally, so the result never costs more than ``hierarchy``.
+    """
+    m = len(counts)
+    if m < 2:
+        return {}
+    outgoing: list[list[tuple[int, int]]] = [[] for _ in range(m)]
+    for a, b, w in edges:
+        outgoing[a].append((b, w))
+    splits: Splits = {}
+    pending = [(0, m - 1)]
+    while pending:
+        lo, hi = pending.pop()
+        if lo == hi:
+            continue
+        if hi - lo + 1 <= window:
+            local_edges = [
+                (a - lo, b - lo, w) for a in range(lo, hi + 1) for b, w in outgoing[a] if b <= hi
+            ]
+            _, local = dppo(counts[lo:hi + 1], local_edges)
+            for (i, j), k in local.items():
+                splits[(i + lo, j + lo)] = k + lo
+            continue
+        k = hierarchy[(lo, hi)]
+        splits[(lo, hi)] = k
+        pending.append((lo, k))
+        pending.append((k + 1, hi))
+    return splits
+
+
+def nesting_cost(
+    counts: Sequence[int], edges: Sequence[tuple[int, int, int]], splits: Splits
+) -> int:
+    """Buffer cost of forward ``edges`` (by position) under ``splits``."""
+    if len(counts) < 2:
+        return 0
+    gcd = RangeGcd(counts)
+    top = len(counts) - 1
+    total = 0
+    for a, b, w in edges:
+        lo, hi = 0, top
+        while True:
+            k = splits[(lo, hi)]
+            if b <= k:
+                hi = k
+            elif a > k:
+                lo = k + 1
+            else:
+                total += w // gcd(lo, hi)
+                break
+    return total
+
+
+def nested_items(
+    counts: Sequence[int],
+    splits: Splits,
+    leaf_items: Callable[[int], list[Node]],
+) -> list[Node]:
+    """The schedule items of one iteration for a nesting.
+
+    ``leaf_items(p)`` gives the items of one firing of the node at position
+    ``p`` (one actor firing, or a cluster's own iteration).  Counts must have
+    gcd 1 overall, as repetition counts of one level do.
+    """
+    m = len(counts)
+    if m == 0:
+        return []
+    gcd = RangeGcd(counts)
+    # Post-order over ranges with an explicit stack; each finished range
+    # leaves (items per iteration of its own loop, its gcd) on `results`.
+    results: list[tuple[list[Node], int]] = []
+    stack: list[tuple[int, int, bool]] = [(0, m - 1, False)]
+    while stack:
+        lo, hi, children_done = stack.pop()
+        if lo == hi:
+            results.append((leaf_items(lo), counts[lo]))
+            continue
+        if not children_done:
+            k = splits[(lo, hi)]
+            stack.append((lo, hi, True))
+            stack.append((k + 1, hi, False))
+            stack.append((lo, k, False))
+            continue
+        right_items, right_gcd = results.pop()
+        left_items, left_gcd = results.pop()
+        g = gcd(lo, hi)
+        results.append(
+            (repeat(left_gcd // g, left_items) + repeat(right_gcd // g, right_items), g)
+        )
+    items, g = results.pop()
+    return repeat(g, items)

@@ -1,0 +1,1 @@
+"""Host tools: transports, the debug protocol client, `easylab-debug` and `easylab-service`."""

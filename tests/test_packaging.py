@@ -1,0 +1,67 @@
+"""The wheel installs a working `easylab` that needs nothing from the source tree."""
+
+from __future__ import annotations
+
+import os
+import shutil
+import subprocess
+import sys
+import venv
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def _run(cmd, **kw):
+    proc = subprocess.run(cmd, capture_output=True, text=True, timeout=600, **kw)
+    assert proc.returncode == 0, f"{cmd} failed:\n{proc.stdout}\n{proc.stderr}"
+    return proc
+
+
+@pytest.fixture(scope="module")
+def installed(tmp_path_factory):
+    """A fresh virtual environment with the project installed from its wheel."""
+    tmp = tmp_path_factory.mktemp("wheel")
+    # Build from a copy so no build artefact lands in the work tree.
+    src = tmp / "src"
+    shutil.copytree(ROOT, src, ignore=shutil.ignore_patterns(".venv", "build", ".git", "__pycache__",
+                                                             "*.egg-info", ".pytest_cache", ".hypothesis"))
+    dist = tmp / "dist"
+    _run([sys.executable, "-m", "pip", "wheel", "--no-deps", "--no-build-isolation", "-q", "-w", str(dist), str(src)])
+    wheels = list(dist.glob("easylab-*.whl"))
+    assert len(wheels) == 1
+    env_dir = tmp / "venv"
+    venv.create(env_dir, with_pip=True)
+    python = env_dir / "bin" / "python"
+    _run([str(python), "-m", "pip", "install", "-q", str(wheels[0])])
+    return env_dir, tmp
+
+
+def test_wheel_checks_and_draws_an_example_outside_the_tree(installed):
+    env_dir, tmp = installed
+    work = tmp / "elsewhere"
+    work.mkdir()
+    model = work / "pt100_sensor.elab"
+    shutil.copy(ROOT / "examples" / "pt100_sensor.elab", model)
+    clean_env = {k: v for k, v in os.environ.items() if k not in ("PYTHONPATH",)}
+    exe = env_dir / "bin" / "easylab"
+    out = _run([str(exe), "check", model.name], cwd=work, env=clean_env)
+    assert "pt100_sensor.elab: ok" in out.stdout
+    if shutil.which("dot"):
+        _run([str(exe), "graph", model.name, "-o", "pt100.svg"], cwd=work, env=clean_env)
+        assert "Acquire" in (work / "pt100.svg").read_text()
+    where = _run([str(env_dir / "bin" / "python"), "-c",
+                  "import easylab, importlib.resources as r; print(easylab.__file__); "
+                  "print(r.files('easylab.stdlib').joinpath('std.elab').is_file())"],
+                 cwd=work, env=clean_env).stdout.split()
+    assert str(env_dir) in where[0], "easylab must be imported from the installed wheel"
+    assert where[1] == "True"
+
+
+def test_wheel_carries_the_package_data(installed):
+    env_dir, _ = installed
+    site = next((env_dir / "lib").glob("python3*/site-packages/easylab"))
+    for rel in ("elab.lark", "stdlib/std.elab", "stdlib/actors/pt100_linearize.c"):
+        assert (site / rel).is_file(), rel
