@@ -83,6 +83,12 @@ class ExprTyper:
             return v
         if not self.assignable(v, target, e.span, what):
             return ERROR
+        if v.const is not None and target is T.FLOAT32 and abs(v.const) > T.FLOAT32_MAX:
+            self.diags.error(e.span, f"{what}: {float(v.const):g} is beyond the range of 'float32'")
+            return ERROR
+        if v.const is not None and target is T.TIME and not 0 <= v.const <= T.TIME_MAX_US:
+            self.diags.error(e.span, f"{what}: a 'time' is from 0 to {T.TIME_MAX_US // 1000} ms")
+            return ERROR
         if v.untyped and target is T.FLOAT32:
             return Value(target, Fraction(v.const))
         return Value(target, v.const)

@@ -5,6 +5,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from pathlib import Path
 
+from .analysis import analyze_model
 from .checker import check
 from .loader import load
 from .model import CheckedModel
@@ -24,8 +25,11 @@ class FrontEndResult:
         return "\n".join(d.render(self.sources) for d in self.diagnostics.sorted())
 
 
-def check_file(path: str | Path) -> FrontEndResult:
-    """Parse and check a model file and its imports.
+def check_file(path: str | Path, schedule: str | None = None) -> FrontEndResult:
+    """Parse, check and analyse a model file and its imports.
+
+    ``schedule`` overrides every dataflow's schedule kind (``sas`` or
+    ``min-buffer``).
 
     Raises OSError (FileNotFoundError, UnicodeDecodeError as ValueError) only
     for the root file itself; every problem inside a model is a diagnostic.
@@ -34,10 +38,10 @@ def check_file(path: str | Path) -> FrontEndResult:
     diags = Diagnostics()
     loaded = load(Path(path), sources, diags)
     model = None
+    # After a syntax error anywhere the namespace is partial: checking it
+    # would only add misleading follow-on errors.
     if loaded is not None and not diags.has_errors:
         model = check(loaded.modules, loaded.root, diags)
-    elif loaded is not None:
-        # Syntax errors in an import: still check names in what did parse? No:
-        # a partial namespace gives misleading follow-on errors.
-        pass
+    if model is not None:
+        analyze_model(model, diags, schedule)
     return FrontEndResult(model if not diags.has_errors else None, diags, sources)

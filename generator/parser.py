@@ -10,6 +10,7 @@ blanked block and the transformer puts the text back.
 from __future__ import annotations
 
 import functools
+import re
 import threading
 from fractions import Fraction
 from importlib import resources
@@ -19,7 +20,7 @@ from lark import Token, Transformer, v_args
 from lark.exceptions import UnexpectedCharacters, UnexpectedEOF, UnexpectedInput, UnexpectedToken, VisitError
 
 from . import ast
-from .source import Diagnostic, ModelError, Span
+from .source import Diagnostic, ModelError, Span, did_you_mean, note
 
 _DURATION_US = {"us": 1, "ms": 1000, "s": 1_000_000}
 _PARSE_LOCK = threading.Lock()
@@ -165,9 +166,32 @@ class _ToAst(Transformer):
     def _tspan(self, tok: Token) -> Span:
         return _token_span(self.file, tok)
 
-    @staticmethod
-    def _string(tok: Token) -> str:
-        return bytes(tok[1:-1], "utf-8").decode("unicode_escape")
+    _ESCAPES = {"n": "\n", "t": "\t", "r": "\r", "0": "\0", '"': '"', "\\": "\\"}
+
+    def _string(self, tok: Token) -> str:
+        """The text of a string literal; its escapes are those of C's simple ones."""
+        def escape(m: re.Match) -> str:
+            if m.group(1) not in self._ESCAPES:
+                col = tok.column + 1 + m.start()
+                raise ModelError([Diagnostic(Span(self.file, tok.line, col, tok.line, col + 2),
+                                             f"unknown escape '\\{m.group(1)}' in a string",
+                                             "the escapes are \\n \\t \\r \\0 \\\" and \\\\")])
+            return self._ESCAPES[m.group(1)]
+        return re.sub(r"\\(.)", escape, tok[1:-1])
+
+    def _number(self, tok: Token) -> int | Fraction:
+        """The value of an INT or REAL token. Leading zeros are decimal; a
+        literal no type can hold is an error (and never reaches int())."""
+        text = str(tok)
+        if len(text) > 40:
+            raise ModelError([Diagnostic(self._tspan(tok), f"number '{text[:20]}...' is too long for any type")])
+        if tok.type == "INT":
+            base = {"0x": 16, "0b": 2}.get(text[:2].lower(), 10)
+            return int(text[2:] if base != 10 else text, base)
+        exponent = text.lower().partition("e")[2]
+        if exponent and abs(int(exponent)) > 400:
+            raise ModelError([Diagnostic(self._tspan(tok), f"real number '{text}' is out of range")])
+        return Fraction(text)
 
     def _named(self, meta, name_tok: Token) -> dict:
         return {"span": self._span(meta), "name": str(name_tok), "name_span": self._tspan(name_tok)}
@@ -247,7 +271,7 @@ class _ToAst(Transformer):
         return ("service", ast.ServiceAttr(self._span(meta), str(ch[0]), address), self._span(meta))
 
     def address(self, meta, ch):
-        return int(str(ch[0]), 0)
+        return self._number(ch[0])
 
     def persist_attr(self, meta, ch):
         return ("persist", True, self._span(meta))
@@ -447,7 +471,7 @@ class _ToAst(Transformer):
 
     def iface_attr(self, meta, ch):
         key, value = ch
-        v: int | str = int(str(value), 0) if value.type == "INT" else str(value)
+        v: int | str = self._number(value) if value.type == "INT" else str(value)
         return ast.InterfaceAttr(self._span(meta), str(key), v, self._tspan(value))
 
     def debug_iface(self, meta, ch):
@@ -464,14 +488,14 @@ class _ToAst(Transformer):
         return ch[0]
 
     def int_lit(self, meta, ch):
-        return ast.IntLit(self._span(meta), int(str(ch[0]), 0))
+        return ast.IntLit(self._span(meta), self._number(ch[0]))
 
     def real_lit(self, meta, ch):
-        return ast.RealLit(self._span(meta), Fraction(str(ch[0])), str(ch[0]))
+        return ast.RealLit(self._span(meta), self._number(ch[0]), str(ch[0]))
 
     def duration_lit(self, meta, ch):
         number, unit = ch
-        value = Fraction(int(str(number), 0)) if number.type == "INT" else Fraction(str(number))
+        value = Fraction(self._number(number))
         return ast.DurationLit(self._span(meta), value * _DURATION_US[str(unit)], f"{number} {unit}")
 
     def true_lit(self, meta, ch):
@@ -502,21 +526,60 @@ _TERMINAL_WORDS = {
     "C_CODE": "an inline C block '{{ ... }}'", "$END": "the end of the file",
 }
 
-# Common mistakes, recognised by the parser state they fail in.
+# Common mistakes, recognised by the parser state they fail in and the kind
+# of token found there.
+_EQUALS_IN_EXPRESSION = "'=' in an expression"
+_INITIAL_VALUE_LATE = "the initial value '= ...' comes right after the type, before the attributes"
+_RANGE_FORM = "a range is written low..high, as in 'range 0..100'"
 _EXAMPLES = {
     "an edge needs '->' between its source and its destination": [
         "dataflow D { a.y b.x }", "dataflow D { a b }", "dataflow D { a.y = b.x }"],
     "a declaration needs ':' and a type, as in 'var speed: int16'": [
-        "var x = 1", "param p = 1", "var x", "const C = 1"],
-    "a duration needs a unit: us, ms or s": [
-        "task t period 10 { }", "task t period 10 offset 1 ms { }"],
+        "var x = 1", "param p = 1", "var x", "const C = 1", "var x int16", "var x: = 1", "const C: = 1"],
     "a transition needs 'when' and a guard, as in 'transition A -> B when go'": [
         "chart C { step A {} transition A -> B }", "chart C { step A {} transition A -> B step X {} }"],
-    "compare with '==': '=' only assigns": [
-        "chart C { transition A -> B when x = 1 }", "task t period 1 ms { } param p: int16 range x = 1..2"],
-    "edges and actor instances belong inside a 'dataflow { ... }'": [
-        "a.y -> b.x", "x = Foo()"],
+    _EQUALS_IN_EXPRESSION: [  # told apart by _equals_message
+        "chart C { transition A -> B when x = 1 }", "chart C { transition A -> B when 1 = 1 }",
+        "chart C { transition A -> B when x.y = 1 }"],
+    _INITIAL_VALUE_LATE: [
+        "param p: int16 unit \"u\" = 3", "param p: int16 persist = 3", "param p: int16 service rw = 3"],
+    _RANGE_FORM: [
+        "param p: int16 range 1 }", "param p: int16 range x y"],
 }
+
+# Where a top-level declaration may start: the keywords that begin one.
+_DECLARATION_KEYWORDS = ("model", "import", "const", "param", "var", "channel", "device", "actor",
+                         "dataflow", "chart", "task", "debug", "modbus")
+_OPERATORS = {"EQ", "NE", "LE", "GE", "LT", "GT", "OR", "AND", "PLUS", "MINUS", "STAR", "SLASH", "PERCENT"}
+_OPERAND_STARTS = {"INT", "REAL", "STRING", "NAME", "LPAR", "MINUS", "NOT", "TRUE", "FALSE"}
+
+
+@functools.lru_cache(maxsize=1)
+def _example_errors() -> tuple:
+    """(label, parser state, token type) of every example mistake."""
+    found = []
+    for label, examples in _EXAMPLES.items():
+        for example in examples:
+            try:
+                _ast_parser()[0].parse(example)
+            except (UnexpectedToken, UnexpectedEOF) as err:
+                found.append((label, err.state.position, err.token.type))
+            except (UnexpectedInput, ModelError):
+                pass
+    return tuple(found)
+
+
+def _match_example(err: UnexpectedInput) -> str | None:
+    """The label of the example mistake that fails in the same parser state
+    on the same kind of token. (Lark's ``match_examples`` also compares the
+    depth of the parser stack, which depends on how many declarations or
+    statements come before the mistake, so it misses most real ones.)"""
+    if not isinstance(err, (UnexpectedToken, UnexpectedEOF)) or err.state is None:
+        return None
+    for label, position, token_type in _example_errors():
+        if position == err.state.position and token_type == err.token.type:
+            return label
+    return None
 
 
 def _describe_terminal(name: str) -> str:
@@ -529,6 +592,26 @@ def _describe_terminal(name: str) -> str:
     return f"'{pattern.value}'" if pattern.type == "str" else name.lower()
 
 
+def _describe_expected(accepts) -> str:
+    """The terminals a parser state accepts, in words, operators summarised."""
+    accepts = set(accepts)
+    words = []
+    if len(accepts & _OPERAND_STARTS) >= 5:
+        words.append("an expression")
+        accepts -= _OPERAND_STARTS
+    if len(accepts & _OPERATORS) >= 5:
+        words.append("an operator")
+        accepts -= _OPERATORS
+    declaration = "DATAFLOW" in accepts
+    if declaration:
+        accepts -= {k.upper() for k in _DECLARATION_KEYWORDS} | {"$END"}
+    names = sorted({_describe_terminal(t) for t in accepts}, key=lambda w: (not w[0].isalpha(), w))
+    words.extend(names)
+    if declaration:
+        words.append("a declaration")
+    return ", ".join(words[:8]) + (", ..." if len(words) > 8 else "")
+
+
 def _describe_token(tok: Token) -> str:
     if tok.type == "$END":
         return "end of the file"
@@ -537,39 +620,59 @@ def _describe_token(tok: Token) -> str:
     return f"'{tok}'"
 
 
+def _end_span(file: str, text: str) -> Span:
+    lines = text.splitlines() or [""]
+    line, col = len(lines), len(lines[-1]) + 1
+    return Span(file, line, col, line, col + 1)
+
+
+def _equals_message(text: str, tok: Token) -> str:
+    """What a '=' inside an expression means: a comparison, or a param or
+    var whose initial value or range is misplaced."""
+    line = text[text.rfind("\n", 0, tok.start_pos) + 1:tok.start_pos]
+    if re.match(r"\s*(param|var)\b", line):
+        after_range = re.split(r"\brange\b", line)
+        return _RANGE_FORM if len(after_range) > 1 and ".." not in after_range[-1] else _INITIAL_VALUE_LATE
+    return "compare with '==': '=' only assigns"
+
+
 def _syntax_error(err: UnexpectedInput, file: str, text: str) -> Diagnostic:
-    message = None
-    try:
-        label = err.match_examples(_ast_parser()[0].parse, _EXAMPLES, use_accepts=True)
-        message = label
-    except Exception:  # match_examples re-parses the examples; never let that hide the real error
-        message = None
+    message = _match_example(err)
+    if message == _EQUALS_IN_EXPRESSION:
+        message = _equals_message(text, err.token)
+    hint = None
+    position = err.token.start_pos if isinstance(err, UnexpectedToken) else err.pos_in_stream
+    if position is not None and text.startswith("/*", position):
+        line, col = _position(text, position)
+        return Diagnostic(Span(file, line, col, line, col + 2), "comment '/*' is never closed by '*/'")
     if isinstance(err, UnexpectedCharacters):
         line, col = err.line, err.column
+        span = Span(file, line, col, line, col + 1)
+        if text.startswith('"', err.pos_in_stream):
+            return Diagnostic(span, "string is never closed: a string ends with '\"' on the same line")
         found = f"character '{text[err.pos_in_stream]}'" if err.pos_in_stream < len(text) else "end of file"
         base = f"unexpected {found}"
-        span = Span(file, line, col, line, col + 1)
     elif isinstance(err, UnexpectedToken):
         tok = err.token
-        if tok.type == "$END":
-            lines = text.splitlines() or [""]
-            line, col = len(lines), len(lines[-1]) + 1
-            span = Span(file, line, col, line, col + 1)
-        else:
-            span = _token_span(file, tok)
-        expected = sorted({_describe_terminal(t) for t in err.accepts or err.expected})
+        span = _end_span(file, text) if tok.type == "$END" else _token_span(file, tok)
+        accepts = err.accepts or err.expected
         base = f"unexpected {_describe_token(tok)}"
-        if expected and not message:
-            shown = ", ".join(expected[:8]) + (", ..." if len(expected) > 8 else "")
-            base += f", expected {shown}"
+        if not message and tok.type == "NAME" and "DATAFLOW" in accepts:
+            # a name where a declaration starts: a misspelt keyword, or a
+            # dataflow statement outside a dataflow
+            if re.match(r"[ \t]*(\.|->|=[ \t]*[A-Za-z_]\w*[ \t]*[<(])", text[tok.end_pos:]):
+                message = "edges and actor instances belong inside a 'dataflow { ... }'"
+            else:
+                return Diagnostic(span, f"{base}, expected a declaration ({', '.join(_DECLARATION_KEYWORDS)})",
+                                  did_you_mean(str(tok), _DECLARATION_KEYWORDS))
+        if accepts and not message:
+            base += f", expected {_describe_expected(accepts)}"
     else:  # UnexpectedEOF
-        lines = text.splitlines() or [""]
-        line, col = len(lines), len(lines[-1]) + 1
-        span = Span(file, line, col, line, col + 1)
+        span = _end_span(file, text)
         base = "unexpected end of the file"
     if message:
-        return Diagnostic(span, f"{base}: {message}" if not isinstance(err, UnexpectedEOF) else message)
-    return Diagnostic(span, base)
+        return Diagnostic(span, f"{base}: {message}", hint)
+    return Diagnostic(span, base, hint)
 
 
 def parse_text(text: str, file: str = "<string>") -> ast.Module:

@@ -54,6 +54,11 @@ TIME = ValueType("time", "uint32_t", 32, False, True, False)
 # Compile-time only: pin names, units, actor options.
 STRING = ValueType("string", "const char *", 0)
 
+# The largest finite float32, (2 - 2**-23) * 2**127.
+FLOAT32_MAX = (2 ** 24 - 1) * 2 ** 104
+# The largest `time` (a uint32 count of milliseconds), in microseconds.
+TIME_MAX_US = (2 ** 32 - 1) * 1000
+
 SCALARS: dict[str, ValueType] = {t.name: t for t in (BOOL, INT8, UINT8, INT16, UINT16, INT32, UINT32, FLOAT32, TIME)}
 ALL_TYPES: dict[str, ValueType] = {**SCALARS, "string": STRING}
 INTEGERS = (INT8, UINT8, INT16, UINT16, INT32, UINT32)

@@ -116,8 +116,12 @@ class Executor:
                 self.runs[-1][1] += count
             else:
                 self.runs.append([a, count])
-        # No need to requeue ``a``: a maximal batch leaves it waiting for a
-        # producer or a consumer, and their firings requeue it.
+        # A maximal batch leaves ``a`` waiting for a producer (whose firing
+        # requeues it) or for output space.  In the second case look again,
+        # so that it is recorded in ``space_blocked`` if it stays blocked.
+        if self.capacities is not None and self.remaining[a] and not queued[a]:
+            queued[a] = True
+            queue.append(a)
 
     def run(self) -> bool:
         """Fire until nothing is enabled; True when the iteration completed."""

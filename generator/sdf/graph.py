@@ -146,5 +146,10 @@ class SdfGraph:
         return graph
 
     def __repr__(self) -> str:
-        title = f" {self.name!r}" if self.name else ""
-        return f"<SdfGraph{title}: {len(self._actors)} actors, {len(self._edges)} edges>"
+        if len(self._edges) > 40:
+            title = f" {self.name!r}" if self.name else ""
+            return f"<SdfGraph{title}: {len(self._actors)} actors, {len(self._edges)} edges>"
+        # Small graphs print as a constructor call, handy in test failures.
+        edges = ", ".join(repr(edge) for edge in self._edges)
+        name = f", name={self.name!r}" if self.name else ""
+        return f"SdfGraph({self._actors!r}, [{edges}]{name})"

@@ -1,0 +1,135 @@
+"""Benchmark of the SDF library on random consistent graphs.
+
+Generates seeded random graphs of 100, 1,000 and 10,000 actors, chain-like
+and tree-like, with back edges whose delay covers one iteration, and times
+each analysis step: repetition vector, deadlock check, the single-appearance
+schedule (APGAN/RPMC + DPPO) and the flat minimum-buffer schedule.  Prints a
+table and writes ``<out_dir>/sdf.json``.
+
+    python bench/bench_sdf.py [out_dir]     (default: bench/results)
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import platform
+import random
+import sys
+import time
+from pathlib import Path
+
+if __package__ in (None, ""):
+    # Run as a script from a source checkout: make `easylab` importable.
+    _root = Path(__file__).resolve().parent.parent
+    try:
+        import easylab  # noqa: F401
+    except ImportError:  # pragma: no cover - depends on the environment
+        import importlib.util
+
+        spec = importlib.util.spec_from_file_location(
+            "easylab", _root / "generator" / "__init__.py",
+            submodule_search_locations=[str(_root / "generator")],
+        )
+        module = importlib.util.module_from_spec(spec)
+        sys.modules["easylab"] = module
+        spec.loader.exec_module(module)
+
+from easylab.sdf import SdfGraph, analyze, check_deadlock, repetition_vector
+
+SIZES = (100, 1_000, 10_000)
+SHAPES = ("chain", "tree")
+SEED = 20240601
+# Firing counts per actor come from these, so every edge's rates stay small
+# (at most 12 before scaling) while counts along a path vary.
+COUNTS = (1, 2, 3, 4, 6, 8, 12)
+
+
+def random_graph(actors: int, shape: str, rng: random.Random) -> SdfGraph:
+    """A consistent, live graph: a chain or a random tree of forward edges,
+    a few extra forward edges, and back edges with a whole iteration's
+    worth of initial tokens."""
+    counts = [rng.choice(COUNTS) for _ in range(actors)]
+    graph = SdfGraph([f"n{i}" for i in range(actors)], name=f"{shape}-{actors}")
+
+    def connect(u: int, v: int, delay_for_traffic: bool) -> None:
+        g = math.gcd(counts[u], counts[v])
+        prod, cons = counts[v] // g, counts[u] // g
+        scale = rng.randint(1, max(1, 12 // max(prod, cons)))
+        prod, cons = prod * scale, cons * scale
+        delay = counts[v] * cons + rng.randint(0, 3) if delay_for_traffic else rng.choice((0, 0, 0, 1))
+        graph.add_edge(f"n{u}", f"n{v}", prod, cons, delay)
+
+    for v in range(1, actors):
+        u = v - 1 if shape == "chain" else rng.randint(max(0, v - 50), v - 1)
+        connect(u, v, False)
+    for _ in range(actors // 20):
+        u = rng.randrange(actors - 1)
+        connect(u, rng.randint(u + 1, min(actors - 1, u + 10)), False)
+    for _ in range(actors // 20):
+        u = rng.randrange(1, actors)
+        connect(u, rng.randint(max(0, u - 10), u - 1), True)
+    return graph
+
+
+def measure(graph: SdfGraph) -> dict:
+    """Time each analysis step on ``graph``; return the figures."""
+    row = {"graph": graph.name, "actors": len(graph.actors), "edges": len(graph.edges)}
+    start = time.perf_counter()
+    repetitions = repetition_vector(graph)
+    row["repetitions_s"] = time.perf_counter() - start
+    row["firings"] = sum(repetitions.values())
+    start = time.perf_counter()
+    check_deadlock(graph, repetitions)
+    row["deadlock_s"] = time.perf_counter() - start
+    start = time.perf_counter()
+    sas = analyze(graph, "sas")
+    row["sas_s"] = time.perf_counter() - start
+    start = time.perf_counter()
+    flat = analyze(graph, "min-buffer")
+    row["min_buffer_s"] = time.perf_counter() - start
+    row.update(
+        sas_method=sas.method,
+        sas_total=sas.buffer_total,
+        flat_sas_total=sas.flat_sas_total,
+        sas_lower_bound=sas.sas_lower_bound,
+        min_buffer_total=flat.buffer_total,
+        edge_lower_bound=flat.edge_lower_bound,
+        min_buffer_gap=flat.edge_bound_gap,
+        min_buffer_optimal=flat.optimal,
+    )
+    return row
+
+
+def main(out_dir: str | Path = "bench/results", sizes=SIZES, seed: int = SEED) -> list[dict]:
+    """Run the benchmark, print a table, write ``out_dir/sdf.json``."""
+    rng = random.Random(seed)
+    rows = [measure(random_graph(size, shape, rng)) for size in sizes for shape in SHAPES]
+    header = (
+        f"{'graph':<12} {'actors':>6} {'edges':>6} {'firings':>8} {'reps s':>7} {'dead s':>7} "
+        f"{'SAS s':>7} {'minbuf s':>8} {'flatSAS':>9} {'SAS':>8} {'SAS lb':>8} {'minbuf':>7} {'edge lb':>7}"
+    )
+    print(header)
+    print("-" * len(header))
+    for r in rows:
+        print(
+            f"{r['graph']:<12} {r['actors']:>6} {r['edges']:>6} {r['firings']:>8} "
+            f"{r['repetitions_s']:>7.3f} {r['deadlock_s']:>7.3f} {r['sas_s']:>7.3f} {r['min_buffer_s']:>8.3f} "
+            f"{r['flat_sas_total'] if r['flat_sas_total'] is not None else '-':>9} {r['sas_total']:>8} "
+            f"{r['sas_lower_bound']:>8} {r['min_buffer_total']:>7} {r['edge_lower_bound']:>7}"
+        )
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    report = {
+        "benchmark": "sdf",
+        "seed": seed,
+        "python": platform.python_version(),
+        "note": "times in seconds; SAS and min-buffer times include repetitions, deadlock check and verification",
+        "results": rows,
+    }
+    (out / "sdf.json").write_text(json.dumps(report, indent=2) + "\n")
+    return rows
+
+
+if __name__ == "__main__":
+    main(sys.argv[1] if len(sys.argv) > 1 else "bench/results")
