@@ -15,7 +15,7 @@ from pathlib import Path as FsPath
 from . import ast
 from . import types as T
 from .expressions import ERROR, ExprTyper, Symbol, Value
-from .model import (ActorInstanceInfo, ArgValue, ChannelInfo, ChartInfo, CheckedModel, Claim, ConstInfo,
+from .model import (ActionInfo, ActorInstanceInfo, ArgValue, ChannelInfo, ChartInfo, CheckedModel, Claim, ConstInfo,
                     DataflowInfo, DataInfo, DeviceDatum, DevicePort, EdgeInfo, Endpoint, InterfaceInfo,
                     PrimitiveDevice, StepInfo, TaskInfo, TransitionInfo, Writer)
 from .source import Diagnostics, Span, did_you_mean, note
@@ -738,7 +738,8 @@ class Checker:
                     ok = False
                     continue
             params = tuple(sorted({sym.name for _, sym in used if sym.kind == "param"}))
-            args[a.name] = ArgValue(t, v.const, None if v.is_const else a.value, params)
+            args[a.name] = ArgValue(t, v.const, None if v.is_const else a.value, params,
+                                    None if v.is_const else v.node)
         for name, formal in formals.items():
             if name in given:
                 continue
@@ -769,6 +770,8 @@ class Checker:
         port_types, port_rates, state_types = {}, {}, {}
         for port in atype.ports:
             port_types[port.name] = bind(port.type)
+            if port_types[port.name] is None:
+                return None  # an unknown type, reported with the actor type
             rate = self.eval_rate(port.rate, typer) if port.rate is not None else 1
             if rate is None:
                 return None
@@ -784,6 +787,8 @@ class Checker:
                                              f"(in '{inst.name}')")
                     return None
                 size = v.const
+            if bind(st.type) is None:
+                return None  # an unknown type, reported with the actor type
             state_types[st.name] = (bind(st.type), size)
         return ActorInstanceInfo(inst, atype, dict(bindings), args, port_types, port_rates, state_types)
 
@@ -880,10 +885,13 @@ class Checker:
                         break
             info.transitions.append(TransitionInfo(t, idx, srcs, dsts))
         for s in steps.values():
-            for action in (*s.decl.entry, *s.decl.exit):
-                self.check_assignment(action, info)
+            for action in s.decl.entry:
+                s.entry_actions.extend(self.check_assignment(action, info))
+            for action in s.decl.exit:
+                s.exit_actions.extend(self.check_assignment(action, info))
         for tr in info.transitions:
             v = self.typer(lambda p: self.chart_symbol(p, info)).check(tr.decl.guard)
+            tr.guard = v.node
             if v.type is not None and v.type is not T.BOOL:
                 self.error(tr.decl.guard.span, f"a transition guard must be a bool, not '{v.type}'",
                            "compare it, e.g. x > 0")
@@ -905,26 +913,26 @@ class Checker:
                           path.text)
         return self.global_symbol(path)
 
-    def check_assignment(self, action: ast.Assign, chart: ChartInfo) -> None:
+    def check_assignment(self, action: ast.Assign, chart: ChartInfo) -> list[ActionInfo]:
         target = action.target
         head = self.globals.get(target.parts[0])
         if isinstance(head, ast.Data) and len(target.parts) == 1:
             if head.kind == "param":
                 self.error(target.span, f"param '{head.name}' cannot be assigned by a chart",
                            "params are written only through the debug and service interfaces; use a var")
-                return
+                return []
             data = self.data.get(head.name)
             if data is None:
-                return
+                return []
             t, writers = data.type, data.writers
         elif isinstance(head, ast.DeviceInstance):
             datum = self.device_datum(target)
             if isinstance(datum, tuple):
                 self.error(target.span, *datum)
-                return
+                return []
             if datum.port.direction != "in":
                 self.error(target.span, f"'{target.text}' is a device output; only device inputs can be assigned")
-                return
+                return []
             t, writers = datum.type, datum.writers
         else:
             what = _a(kind_name(head)) if head is not None else "not declared"
@@ -932,9 +940,12 @@ class Checker:
                 n for n, d in self.globals.items() if isinstance(d, ast.Data) and d.kind == "var"])
             self.error(target.span, f"cannot assign to '{target.text}': it is {what}; "
                                     "an action assigns a var or a device input", hint)
-            return
-        self.typer(lambda p: self.chart_symbol(p, chart)).expect(action.value, t, f"'{target.text}'")
+            return []
+        v = self.typer(lambda p: self.chart_symbol(p, chart)).expect(action.value, t, f"'{target.text}'")
         writers.append(Writer(chart, action.span))
+        if v.type is None:
+            return []
+        return [ActionInfo(action, datum if isinstance(head, ast.DeviceInstance) else data, v.node)]
 
     def check_chart_structure(self, chart: ChartInfo) -> None:
         """Reachability and parallel branches (docs/language.md, 'charts').

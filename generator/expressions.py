@@ -13,6 +13,7 @@ from fractions import Fraction
 from typing import Callable
 
 from . import ast
+from . import irexpr as I
 from . import types as T
 from .source import Diagnostics, Span
 
@@ -35,6 +36,7 @@ class Value:
     type: T.ValueType | None
     const: object | None = None
     untyped: bool = False  # an integer constant that may still adapt to context
+    node: I.IExpr | None = None  # the typed IR expression (see easylab.irexpr)
 
     @property
     def is_const(self) -> bool:
@@ -48,6 +50,20 @@ Resolver = Callable[[ast.Path], "Symbol | tuple[str, str | None]"]  # a Symbol, 
 def _trunc_div(a: int, b: int) -> int:
     q = abs(a) // abs(b)
     return q if (a >= 0) == (b >= 0) else -q
+
+
+def const_node(t: T.ValueType, value) -> I.Const:
+    """The IR constant of a compile-time value (time: microseconds -> ms)."""
+    if t is T.TIME:
+        ms = Fraction(value) / 1000
+        return I.Const(t, int(ms) if ms.denominator == 1 else ms)
+    if t is T.FLOAT32:
+        return I.Const(t, float(value))
+    return I.Const(t, value)
+
+
+def _const(t: T.ValueType, value, untyped: bool = False) -> Value:
+    return Value(t, value, untyped, const_node(t, value))
 
 
 def _describe(v: Value) -> str:
@@ -89,9 +105,9 @@ class ExprTyper:
         if v.const is not None and target is T.TIME and not 0 <= v.const <= T.TIME_MAX_US:
             self.diags.error(e.span, f"{what}: a 'time' is from 0 to {T.TIME_MAX_US // 1000} ms")
             return ERROR
-        if v.untyped and target is T.FLOAT32:
-            return Value(target, Fraction(v.const))
-        return Value(target, v.const)
+        if v.is_const:
+            return _const(target, Fraction(v.const) if target is T.FLOAT32 else v.const)
+        return Value(target, None, False, I.convert(v.node, target))
 
     def expect_const(self, e: ast.Expr, target: T.ValueType | None, what: str) -> Value:
         """Like :meth:`expect` (or :meth:`check` when ``target`` is None) but
@@ -129,19 +145,23 @@ class ExprTyper:
     # ------------------------------------------------------------- literals
 
     def _IntLit(self, e: ast.IntLit) -> Value:
-        return Value(T.smallest_int_type(e.value), e.value, untyped=True)
+        return _const(T.smallest_int_type(e.value), e.value, untyped=True)
 
     def _RealLit(self, e: ast.RealLit) -> Value:
-        return Value(T.FLOAT32, e.value)
+        return _const(T.FLOAT32, e.value)
 
     def _DurationLit(self, e: ast.DurationLit) -> Value:
-        return Value(T.TIME, e.microseconds)
+        if self.runtime and e.microseconds % 1000 != 0:
+            self.diags.error(e.span, f"'{e.text}' is not a whole number of milliseconds, "
+                                     "which run-time 'time' values count")
+            return ERROR
+        return _const(T.TIME, e.microseconds)
 
     def _BoolLit(self, e: ast.BoolLit) -> Value:
-        return Value(T.BOOL, e.value)
+        return _const(T.BOOL, e.value)
 
     def _StringLit(self, e: ast.StringLit) -> Value:
-        return Value(T.STRING, e.value)
+        return _const(T.STRING, e.value)
 
     def _Path(self, e: ast.Path) -> Value:
         sym = self.resolve(e)
@@ -152,12 +172,13 @@ class ExprTyper:
         if sym.type is None:  # its declaration has an error, reported there
             return ERROR
         if sym.value is not None:
-            return Value(sym.type, sym.value)
+            return _const(sym.type, sym.value)
         if not self.runtime:
             self.diags.error(e.span, f"'{e.text}' is a {_KIND_WORDS.get(sym.kind, sym.kind)}, "
                                      "known only at run time; a compile-time constant is needed here")
             return ERROR
-        return Value(sym.type)
+        kind = sym.kind if sym.kind in ("step_time", "step_active") else "item"
+        return Value(sym.type, None, False, I.Ref(sym.type, kind, sym.target, e.text))
 
     # ------------------------------------------------------------- operators
 
@@ -169,7 +190,9 @@ class ExprTyper:
             if v.type is not T.BOOL:
                 self.diags.error(e.span, f"'not' needs a bool operand, not {_describe(v)}")
                 return ERROR
-            return Value(T.BOOL, None if v.const is None else not v.const)
+            if v.is_const:
+                return _const(T.BOOL, not v.const)
+            return Value(T.BOOL, None, False, I.Unary(T.BOOL, "not", v.node))
         if not v.type.is_numeric:
             self.diags.error(e.span, f"unary '-' needs a number, not {_describe(v)}")
             return ERROR
@@ -178,9 +201,9 @@ class ExprTyper:
             if rtype is None:
                 self.diags.error(e.span, f"cannot negate a '{v.type}'")
                 return ERROR
-            return Value(rtype)
+            return Value(rtype, None, False, I.Unary(rtype, "neg", I.convert(v.node, rtype)))
         if v.untyped:
-            return Value(T.smallest_int_type(-v.const), -v.const, untyped=True)
+            return _const(T.smallest_int_type(-v.const), -v.const, untyped=True)
         return self._fold(e.span, v.type, -v.const)
 
     def _Binary(self, e: ast.Binary) -> Value:
@@ -193,10 +216,9 @@ class ExprTyper:
                 if v.type is not T.BOOL:
                     self.diags.error(side.span, f"'{op}' needs bool operands, not {_describe(v)}")
                     return ERROR
-            const = None
             if left.is_const and right.is_const:
-                const = (left.const and right.const) if op == "and" else (left.const or right.const)
-            return Value(T.BOOL, const)
+                return _const(T.BOOL, (left.const and right.const) if op == "and" else (left.const or right.const))
+            return Value(T.BOOL, None, False, I.Binary(T.BOOL, op, left.node, right.node, T.BOOL))
         operand_type = self._common(e, left, right)
         if operand_type is None:
             return ERROR
@@ -204,11 +226,12 @@ class ExprTyper:
             if operand_type in (T.BOOL, T.STRING) and op not in ("==", "!="):
                 self.diags.error(e.span, f"'{op}' does not order '{operand_type}' values")
                 return ERROR
-            const = None
             if left.is_const and right.is_const:
                 a, b = left.const, right.const
-                const = {"==": a == b, "!=": a != b, "<": a < b, "<=": a <= b, ">": a > b, ">=": a >= b}[op]
-            return Value(T.BOOL, const)
+                return _const(T.BOOL, {"==": a == b, "!=": a != b, "<": a < b, "<=": a <= b,
+                                       ">": a > b, ">=": a >= b}[op])
+            return Value(T.BOOL, None, False, I.Binary(T.BOOL, op, I.convert(left.node, operand_type),
+                                                       I.convert(right.node, operand_type), operand_type))
         if operand_type is T.TIME and op not in ("+", "-"):
             self.diags.error(e.span, f"'{op}' is not defined on 'time' values (only + and -)")
             return ERROR
@@ -216,7 +239,9 @@ class ExprTyper:
             self.diags.error(e.span, f"'{op}' needs numbers, not '{operand_type}'")
             return ERROR
         if not (left.is_const and right.is_const):
-            return Value(operand_type)
+            return Value(operand_type, None, False,
+                         I.Binary(operand_type, op, I.convert(left.node, operand_type),
+                                  I.convert(right.node, operand_type), operand_type))
         a, b = left.const, right.const
         if op in ("/", "%") and b == 0:
             self.diags.error(e.right.span, "division by zero in a constant expression")
@@ -230,7 +255,7 @@ class ExprTyper:
             result = {"+": lambda: a + b, "-": lambda: a - b, "*": lambda: a * b,
                       "/": lambda: _trunc_div(a, b), "%": lambda: a - b * _trunc_div(a, b)}[op]()
         if left.untyped and right.untyped:
-            return Value(T.smallest_int_type(result), result, untyped=True)
+            return _const(T.smallest_int_type(result), result, untyped=True)
         return self._fold(e.span, operand_type, result)
 
     def _common(self, e: ast.Binary, left: Value, right: Value) -> T.ValueType | None:
@@ -264,7 +289,7 @@ class ExprTyper:
         if t.is_integer and t is not T.TIME and not T.fits(value, t):
             self.diags.error(span, f"constant {value} overflows '{t}' ({t.min}..{t.max})")
             return ERROR
-        return Value(t, value)
+        return _const(t, value)
 
 
 _KIND_WORDS = {

@@ -45,3 +45,18 @@ def check_file(path: str | Path, schedule: str | None = None) -> FrontEndResult:
     if model is not None:
         analyze_model(model, diags, schedule)
     return FrontEndResult(model if not diags.has_errors else None, diags, sources)
+
+
+def lower_file(path: str | Path, schedule: str | None = None):
+    """Front end, analyses and lowering: (IR program or None, FrontEndResult)."""
+    from .ir import lower
+    from .timing import compute_timing
+
+    result = check_file(path, schedule)
+    if result.model is None:
+        return None, result
+    timing = compute_timing(result.model, result.diagnostics)
+    if timing is None or result.diagnostics.has_errors:
+        result.model = None
+        return None, result
+    return lower(result.model, timing), result

@@ -136,6 +136,7 @@ class ArgValue:
     const: object | None
     expr: ast.Expr | None
     params: tuple[str, ...] = ()
+    node: object = None  # the typed IR expression (easylab.irexpr) when not constant
 
 
 @dataclass
@@ -185,10 +186,22 @@ class StepInfo:
     index: int
     branch: tuple  # the parallel branch: ((transition index, branch index), ...)
     runs: list[DataflowInfo]
+    entry_actions: list["ActionInfo"] = field(default_factory=list)
+    exit_actions: list["ActionInfo"] = field(default_factory=list)
 
     @property
     def name(self) -> str:
         return self.decl.name
+
+
+@dataclass
+class ActionInfo:
+    """``target = value`` of an entry or exit action; ``target`` is a DataInfo
+    or DeviceDatum, ``value`` a typed IR expression of the target's type."""
+
+    decl: ast.Assign
+    target: object
+    value: object
 
 
 @dataclass
@@ -197,6 +210,7 @@ class TransitionInfo:
     index: int
     sources: list[StepInfo]
     targets: list[StepInfo]
+    guard: object = None  # typed IR expression (bool)
 
 
 @dataclass

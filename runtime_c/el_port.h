@@ -1,0 +1,46 @@
+/* EasyLab runtime: the port interface every board implements.
+ *
+ * A board provides these functions (in boards/<board>/) and nothing else is
+ * board-specific in the runtime. Logical time counts ticks of the model's
+ * base period (EL_TICK_US microseconds, generated); tick counters wrap at
+ * 2^32 and are compared wrap-safely.
+ */
+#ifndef EL_PORT_H
+#define EL_PORT_H
+
+#include "el_types.h"
+
+/* Start the clock, UARTs and whatever the board needs; called once at boot
+ * before any device is opened. argc/argv are the host board's command line
+ * (boards without one pass 0 and a null pointer). Returns false to stop. */
+bool el_port_init(int argc, char **argv);
+
+/* Block until logical tick `tick` has come (real-time boards), or return at
+ * once (virtual time). Returns false when the board wants the run to end
+ * (host: --duration reached). */
+bool el_port_wait_tick(uint32_t tick);
+
+/* The real-time tick counter, for lateness (overrun) accounting. In virtual
+ * time it is the logical tick being processed. */
+uint32_t el_port_real_tick(void);
+
+/* Critical sections around data shared with interrupts. Nestable through
+ * the saved state. */
+typedef uint8_t el_irq_state_t;
+el_irq_state_t el_port_irq_save(void);
+void el_port_irq_restore(el_irq_state_t state);
+
+/* Called by the dispatcher once per logical instant, after publication,
+ * interface writes and device reads: the host board records its trace
+ * here. `tick` is the absolute logical tick (64-bit: traces run long). */
+void el_port_instant(uint64_t tick);
+
+/* Non-volatile storage for `persist` params: `size` bytes at `offset`.
+ * Return false on failure (reported by the caller). */
+bool el_port_nv_read(uint16_t offset, void *data, uint16_t size);
+bool el_port_nv_write(uint16_t offset, const void *data, uint16_t size);
+
+/* Called once when the run ends (host: --duration); MCU ports never return. */
+void el_port_shutdown(void);
+
+#endif /* EL_PORT_H */
