@@ -75,10 +75,14 @@ class Device:
 
 @dataclass
 class Port:
+    """An actor port; ``array`` when declared with ``rate`` (an array in C
+    even when the rate is 1)."""
+
     name: str
     direction: str
     type: T.ValueType
     rate: int
+    array: bool
 
 
 @dataclass
@@ -350,7 +354,8 @@ class _Lowering:
                          sort_keys=True)
         if key in self.spec_keys:
             return self.spec_keys[key]
-        ports = [Port(p.name, p.direction, inst.port_types[p.name], inst.port_rates[p.name]) for p in atype.ports]
+        ports = [Port(p.name, p.direction, inst.port_types[p.name], inst.port_rates[p.name], p.rate is not None)
+                 for p in atype.ports]
         states = [(s.name, *inst.state_types[s.name]) for s in atype.states]
         impl = None
         if atype.impl is not None:
@@ -385,7 +390,7 @@ class _Lowering:
         instance_ids = []
         for name, inst in df.instances.items():
             spec = self.spec_for(inst)
-            runtime_args = {n: a.node for n, a in inst.args.items() if a.const is None}
+            runtime_args = {n: self.expr(a.node) for n, a in inst.args.items() if a.const is None}
             iid = len(self.instances)
             self.instances.append(ActorInstance(iid, did, name, spec, runtime_args, location(inst.decl.name_span)))
             instance_ids.append(iid)
@@ -423,13 +428,13 @@ class _Lowering:
         for s in chart.steps.values():
             slot = branches.setdefault(s.branch, len(branches))
             steps.append(Step(s.index, s.name, slot, s.decl.initial,
-                              [Action(self.item_of[id(a.target)], a.value, location(a.decl.span))
+                              [Action(self.item_of[id(a.target)], self.expr(a.value), location(a.decl.span))
                                for a in s.entry_actions],
-                              [Action(self.item_of[id(a.target)], a.value, location(a.decl.span))
+                              [Action(self.item_of[id(a.target)], self.expr(a.value), location(a.decl.span))
                                for a in s.exit_actions],
                               [self.df_index[d.name] for d in s.runs], location(s.decl.name_span)))
-        transitions = [Transition(t.index, [s.index for s in t.sources], [s.index for s in t.targets], t.guard,
-                                  location(t.decl.span)) for t in chart.transitions]
+        transitions = [Transition(t.index, [s.index for s in t.sources], [s.index for s in t.targets],
+                                  self.expr(t.guard), location(t.decl.span)) for t in chart.transitions]
         task = self.task_index.get(chart.task.name) if chart.task else None
         period_ms = int(chart.task.period_us) // 1000 if chart.task and chart.task.period_us % 1000 == 0 else None
         return Chart(len(self.charts), chart.name, steps, transitions, max(1, len(branches)),
@@ -494,11 +499,22 @@ class _Lowering:
         return tasks
 
     def _refs(self, node) -> set[int]:
-        out = set()
-        for r in I.refs(node):
-            if r.kind == "item":
-                out.add(self.item_of[id(r.target)])
-        return out
+        return {r.target for r in I.refs(node) if r.kind == "item"}
+
+    def expr(self, node: I.IExpr) -> I.IExpr:
+        """The IR form of a checked expression: references become ids (an
+        item id, or a step id within its chart)."""
+        if isinstance(node, I.Ref):
+            if node.kind == "item":
+                return I.Ref(node.type, "item", self.item_of[id(node.target)], node.name)
+            return I.Ref(node.type, node.kind, node.target.index, node.name)
+        if isinstance(node, I.Unary):
+            return I.Unary(node.type, node.op, self.expr(node.arg))
+        if isinstance(node, I.Convert):
+            return I.Convert(node.type, self.expr(node.arg))
+        if isinstance(node, I.Binary):
+            return I.Binary(node.type, node.op, self.expr(node.left), self.expr(node.right), node.operand_type)
+        return node
 
 
 def lower(model: CheckedModel, timing: Timing) -> Program:

@@ -32,9 +32,10 @@ class Const(IExpr):
 class Ref(IExpr):
     """A value read at run time.
 
-    ``kind`` is ``item`` (a param, var or device datum: ``target`` is its
-    checked-model object), ``step_time`` or ``step_active`` (``target`` is
-    the StepInfo).
+    ``kind`` is ``item`` (a param, var or device datum) or ``step_time`` /
+    ``step_active`` (of a step of the chart the expression is in). In the
+    checked model ``target`` is the DataInfo, DeviceDatum or StepInfo; in
+    the IR it is the item id or the step id.
     """
 
     kind: str

@@ -28,6 +28,25 @@ typedef uint32_t el_time_t;
 /* Saturate v into [lo, hi]. Arguments are evaluated more than once. */
 #define EL_CLAMP(v, lo, hi) ((v) < (lo) ? (lo) : ((v) > (hi) ? (hi) : (v)))
 
+/* Inline helpers: `static inline` where the compiler has it (C99). */
+#if defined(__STDC_VERSION__) && __STDC_VERSION__ >= 199901L
+#define EL_INLINE static inline
+#else
+#define EL_INLINE static
+#endif
+
+/* Saturation as functions, so that generic actor code never compares a
+ * narrow type with a bound it cannot reach (which compilers warn about). */
+EL_INLINE int64_t el_clamp_i64(int64_t v, int64_t lo, int64_t hi)
+{
+    return v < lo ? lo : (v > hi ? hi : v);
+}
+
+EL_INLINE float el_clamp_f32(float v, float lo, float hi)
+{
+    return v < lo ? lo : (v > hi ? hi : v);
+}
+
 /* Compare with an operator given as a compile-time string ("<", "<=", ...):
  * the compiler folds the string tests away. */
 #define EL_COMPARE(op, a, b) \
@@ -41,6 +60,9 @@ typedef uint32_t el_time_t;
 #endif
 #ifndef EL_ROM_READ_U16
 #define EL_ROM_READ_U16(p) (*(const uint16_t *)(p))
+#endif
+#ifndef EL_ROM_READ_U32
+#define EL_ROM_READ_U32(p) (*(const uint32_t *)(p))
 #endif
 #ifndef EL_ROM_READ_U8
 #define EL_ROM_READ_U8(p) (*(const uint8_t *)(p))

@@ -1,0 +1,70 @@
+"""``easylab build``: generate C for a board and compile it with the board's
+toolchain into build/<model>/<board>/."""
+
+from __future__ import annotations
+
+import shutil
+import subprocess
+from dataclasses import dataclass
+from pathlib import Path
+
+from . import cgen
+from .boards import Board, load_board, runtime_dir, templates_dir
+from .ir import Program
+
+
+class BuildError(Exception):
+    """A build that cannot go on; the message is one clear line (or the
+    compiler's output)."""
+
+
+@dataclass
+class BuildResult:
+    out_dir: Path
+    executable: Path
+    sources: list[Path]
+
+
+def generate(program: Program, board: Board, out_dir: Path) -> list[Path]:
+    """Write the generated sources; returns their paths."""
+    try:
+        out_dir.mkdir(parents=True, exist_ok=True)
+        files = cgen.render(program, board, templates_dir())
+        written = []
+        for name, text in files.items():
+            path = out_dir / name
+            if not path.exists() or path.read_text(encoding="utf-8") != text:
+                path.write_text(text, encoding="utf-8")
+            written.append(path)
+        return written
+    except OSError as err:
+        raise BuildError(f"cannot write to {out_dir}: {err.strerror or err}") from None
+
+
+def compile_host_like(program: Program, board: Board, out_dir: Path, generated: list[Path],
+                      extra_cflags: list[str] | None = None, cc: str | None = None) -> Path:
+    """Compile and link the generated code, the runtime and the board's port."""
+    compiler = cc or board.cc
+    if shutil.which(compiler) is None:
+        package = board.debian_package or compiler
+        raise BuildError(f"the C compiler '{compiler}' of board '{board.name}' is not installed "
+                         f"(Debian package: {package})")
+    runtime = sorted(runtime_dir().glob("*.c"))
+    board_sources = [board.path / s for s in board.sources]
+    includes = [f"-I{runtime_dir()}", f"-I{out_dir}"] + [f"-I{board.path / d}" for d in board.include_dirs]
+    exe = out_dir / program.name
+    cmd = [compiler, *board.cflags, *(extra_cflags or []), *includes, "-o", str(exe),
+           *map(str, generated + runtime + board_sources), *board.ldflags]
+    proc = subprocess.run(cmd, capture_output=True, text=True)
+    if proc.returncode != 0:
+        raise BuildError(f"{compiler} failed:\n{proc.stdout}{proc.stderr}".rstrip())
+    return exe
+
+
+def build(program: Program, board_name: str, out_dir: Path, extra_cflags: list[str] | None = None,
+          cc: str | None = None) -> BuildResult:
+    """Generate and compile ``program`` for a board."""
+    board = load_board(board_name)
+    generated = generate(program, board, out_dir)
+    exe = compile_host_like(program, board, out_dir, generated, extra_cflags, cc)
+    return BuildResult(out_dir, exe, generated)

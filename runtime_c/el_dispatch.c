@@ -1,0 +1,69 @@
+/* EasyLab runtime: the LET dispatcher (see el_dispatch.h). */
+#include "el_dispatch.h"
+#include "el_model.h"
+#include "el_port.h"
+
+static uint64_t el_now;
+
+uint64_t el_now_tick(void)
+{
+    return el_now;
+}
+
+void el_run(int argc, char **argv)
+{
+    uint64_t base = 0u;
+    uint32_t pending = 0u; /* released, not yet published */
+    uint16_t i;
+    uint8_t task;
+
+    if (!el_port_init(argc, argv)) {
+        return;
+    }
+    el_gen_boot();
+    for (;;) {
+        for (i = 0u; i < el_instant_count; i++) {
+            uint32_t publish = EL_ROM_READ_U32(&el_instants[i].publish);
+            uint32_t release = EL_ROM_READ_U32(&el_instants[i].release);
+            el_now = base + EL_ROM_READ_U32(&el_instants[i].tick);
+            if (!el_port_wait_tick((uint32_t)el_now)) {
+                el_gen_shutdown();
+                el_port_shutdown();
+                return;
+            }
+            /* Outputs due now become visible before the inputs of tasks
+             * released now are read. */
+            for (task = 0u; task < el_task_count; task++) {
+                uint32_t bit = (uint32_t)1u << task;
+                if ((publish & pending & bit) != 0u) {
+                    el_gen_publish(task);
+                    pending &= ~bit;
+                }
+            }
+            if (release != 0u) {
+                el_gen_read_devices(release);
+                for (task = 0u; task < el_task_count; task++) {
+                    if ((release & ((uint32_t)1u << task)) != 0u) {
+                        el_gen_release(task);
+                    }
+                }
+            }
+            el_port_instant(el_now);
+            for (task = 0u; task < el_task_count; task++) {
+                uint32_t bit = (uint32_t)1u << task;
+                if ((release & bit) != 0u) {
+                    uint32_t late;
+                    el_gen_body(task);
+                    pending |= bit;
+                    /* Lateness never changes the published values; it is
+                     * counted so that it is never silent. */
+                    late = el_port_real_tick() - (uint32_t)el_now;
+                    if (late > EL_ROM_READ_U32(&el_task_deadline_ticks[task]) && el_overruns[task] < UINT16_MAX) {
+                        el_overruns[task]++;
+                    }
+                }
+            }
+        }
+        base += el_hyperperiod_ticks;
+    }
+}

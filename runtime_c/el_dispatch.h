@@ -1,0 +1,56 @@
+/* EasyLab runtime: the LET dispatcher and what generated code provides it.
+ *
+ * The dispatcher walks the generated table of instants over the
+ * hyperperiod. At each instant: publish the outputs of the tasks whose
+ * deadline it is (if they were released), read the devices of the tasks
+ * released now (once per device), latch the released tasks' inputs, let
+ * the board record the instant, then run the released tasks' bodies. The
+ * bodies only touch task-local copies, so the order and speed of execution
+ * never shows in the published values (docs/ir.md, "tasks").
+ */
+#ifndef EL_DISPATCH_H
+#define EL_DISPATCH_H
+
+#include "el_types.h"
+
+/* One entry of the dispatch table (generated, in ROM where possible). */
+typedef struct {
+    uint32_t tick;    /* within the hyperperiod */
+    uint32_t publish; /* tasks whose deadline it is (bit i = task i) */
+    uint32_t release; /* tasks released now */
+} el_instant_t;
+
+/* ---- provided by the generated model.c ---------------------------------- */
+extern const el_instant_t el_instants[] EL_ROM;
+extern const uint16_t el_instant_count;
+extern const uint32_t el_task_deadline_ticks[] EL_ROM;
+void el_gen_boot(void);                        /* open/start devices, actor start() */
+void el_gen_shutdown(void);                    /* actor stop(), stop/close devices */
+void el_gen_read_devices(uint32_t released);   /* read() of devices those tasks use */
+void el_gen_release(uint8_t task);             /* latch inputs into the task's copy */
+void el_gen_body(uint8_t task);                /* run the task's dataflows and charts */
+void el_gen_publish(uint8_t task);             /* outputs, channels, device write() */
+
+/* ---- provided by the runtime --------------------------------------------- */
+
+/* Boot, then dispatch until the board's el_port_wait_tick says stop. */
+void el_run(int argc, char **argv);
+
+/* The absolute logical tick of the instant being processed. */
+uint64_t el_now_tick(void);
+
+/* Copy n elements (any type) from src to dst. */
+#define EL_COPY(dst, src, n) \
+    do { uint16_t el_copy_i_; for (el_copy_i_ = 0u; el_copy_i_ < (uint16_t)(n); el_copy_i_++) \
+        { (dst)[el_copy_i_] = (src)[el_copy_i_]; } } while (0)
+
+/* Circular SDF buffers (non-single-appearance schedules): take or put n
+ * tokens at index idx of a ring of `size`, wrapping. */
+#define EL_RING_GET(ring, idx, size, dst, n) \
+    do { uint16_t el_ring_i_; for (el_ring_i_ = 0u; el_ring_i_ < (uint16_t)(n); el_ring_i_++) { \
+        (dst)[el_ring_i_] = (ring)[(idx)]; (idx) = (uint16_t)((idx) + 1u == (size) ? 0u : (idx) + 1u); } } while (0)
+#define EL_RING_PUT(ring, idx, size, src, n) \
+    do { uint16_t el_ring_i_; for (el_ring_i_ = 0u; el_ring_i_ < (uint16_t)(n); el_ring_i_++) { \
+        (ring)[(idx)] = (src)[el_ring_i_]; (idx) = (uint16_t)((idx) + 1u == (size) ? 0u : (idx) + 1u); } } while (0)
+
+#endif /* EL_DISPATCH_H */
