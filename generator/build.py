@@ -13,6 +13,10 @@ from .boards import Board, load_board, runtime_dir, templates_dir
 from .ir import Program
 
 
+# Which Debian package provides a compiler, for the message when it is missing.
+_DEBIAN_PACKAGES = {"gcc": "gcc", "cc": "gcc", "clang": "clang", "avr-gcc": "gcc-avr", "sdcc": "sdcc"}
+
+
 class BuildError(Exception):
     """A build that cannot go on; the message is one clear line (or the
     compiler's output)."""
@@ -46,7 +50,7 @@ def compile_host_like(program: Program, board: Board, out_dir: Path, generated: 
     """Compile and link the generated code, the runtime and the board's port."""
     compiler = cc or board.cc
     if shutil.which(compiler) is None:
-        package = board.debian_package or compiler
+        package = _DEBIAN_PACKAGES.get(Path(compiler).name, board.debian_package or compiler)
         raise BuildError(f"the C compiler '{compiler}' of board '{board.name}' is not installed "
                          f"(Debian package: {package})")
     runtime = sorted(runtime_dir().glob("*.c"))
@@ -62,8 +66,9 @@ def compile_host_like(program: Program, board: Board, out_dir: Path, generated: 
 
 
 def build(program: Program, board_name: str, out_dir: Path, extra_cflags: list[str] | None = None,
-          cc: str | None = None) -> BuildResult:
-    """Generate and compile ``program`` for a board."""
+          cc: str | None = None, release: bool = False) -> BuildResult:
+    """Generate and compile ``program`` for a board. A release build has no
+    debug interface (the debug server is linked into debug builds only)."""
     board = load_board(board_name)
     generated = generate(program, board, out_dir)
     exe = compile_host_like(program, board, out_dir, generated, extra_cflags, cc)

@@ -85,6 +85,32 @@ def cmd_analyze(args) -> int:
         raise CliError(f"{args.file}: {err.strerror or err}") from None
 
 
+def cmd_build(args) -> int:
+    import shlex
+
+    from .boards import BoardError
+    from .build import BuildError, build
+    from .frontend import lower_file
+
+    try:
+        program, result = lower_file(args.file, schedule=args.schedule)
+    except FileNotFoundError:
+        raise CliError(f"{args.file}: no such file") from None
+    except (IsADirectoryError, UnicodeDecodeError):
+        raise CliError(f"{args.file}: not a model file") from None
+    if program is None:
+        print(result.report(), file=sys.stderr)
+        return EXIT_MODEL_ERROR
+    out = Path(args.output) if args.output else Path("build") / program.name / args.board
+    try:
+        built = build(program, args.board, out, extra_cflags=shlex.split(args.cflags or ""), cc=args.cc,
+                      release=args.release)
+    except (BuildError, BoardError) as err:
+        raise CliError(str(err)) from None
+    print(built.executable)
+    return EXIT_OK
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="easylab",
@@ -118,6 +144,20 @@ def build_parser() -> argparse.ArgumentParser:
                    help="schedule kind (default: the dataflow's own choice, else sas)")
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.set_defaults(func=cmd_analyze)
+
+    p = sub.add_parser("build", help="generate C for a board and compile it",
+                       description="Generate C from a model for a board and compile it with the board's "
+                                   "toolchain into build/<model>/<board>/ (or -o DIR). The path of the "
+                                   "program built is printed on the last line.")
+    p.add_argument("file", metavar="FILE", help="model file (.elab)")
+    p.add_argument("--board", default="host", help="target board (default: host)")
+    p.add_argument("--release", action="store_true", help="a release build: no debug interface")
+    p.add_argument("--schedule", choices=("sas", "min-buffer"),
+                   help="schedule kind of every dataflow (default: each dataflow's own, else sas)")
+    p.add_argument("-o", "--output", metavar="DIR", help="output folder")
+    p.add_argument("--cc", metavar="CC", help="use this C compiler instead of the board's")
+    p.add_argument("--cflags", metavar="FLAGS", help="extra compiler flags, e.g. \"-fsanitize=address,undefined\"")
+    p.set_defaults(func=cmd_build)
     return parser
 
 

@@ -1,0 +1,161 @@
+"""Generated code against hand-written C: instructions per activation.
+
+For pt100_sensor's Acquire and cd_to_dat's Convert, a harness includes the
+generated model.c (so its static functions are reachable) and the
+hand-written reference of bench/handwritten/, runs both N activations on
+the same inputs, checks that they compute the same values, and counts the
+instructions of each loop with valgrind's callgrind (exact and repeatable,
+unlike wall-clock time). Run: python bench/bench_codegen.py [out_dir]
+"""
+
+from __future__ import annotations
+
+import json
+import re
+import shutil
+import subprocess
+import sys
+import tempfile
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+HANDWRITTEN = ROOT / "bench" / "handwritten"
+CFLAGS = ["-std=c99", "-O2", "-Wall", "-Wextra", "-Werror", "-Wno-unused-function"]
+
+CASES = {
+    "pt100_sensor Acquire": {
+        "model": "examples/pt100_sensor.elab", "dataflow": "Acquire", "handwritten": "pt100_acquire.c",
+        "activations": 2000,
+        "generated": """
+            {task}.{raw} = (uint16_t)(250u + (i % 150u));
+            {task}.{gain} = 1000; {task}.{offset} = 0; {task}.{high} = 800;
+            {task}.ch0_n = 0u; /* what the task's release does for the channel */
+            {fn}();
+            check += (uint32_t)(uint16_t){task}.{temperature} + (uint32_t){task}.{alarm};""",
+        "hand": """
+            hw_acquire((uint16_t)(250u + (i % 150u)), 1000, 0, 800);
+            check += (uint32_t)(uint16_t)hw_temperature + (uint32_t)hw_alarm;""",
+        "decls": "extern int16_t hw_temperature; extern bool hw_alarm; "
+                 "void hw_acquire(uint16_t, int16_t, int16_t, int16_t);",
+        "names": {"raw": "sensor.raw", "gain": "cal_gain", "offset": "cal_offset", "high": "alarm_high",
+                  "temperature": "temperature", "alarm": "alarm"},
+    },
+    "cd_to_dat Convert": {
+        "model": "examples/cd_to_dat.elab", "dataflow": "Convert", "handwritten": "cd_to_dat_convert.c",
+        "activations": 200,
+        "generated": """
+            {fn}();
+            check += {task}.{checksum};""",
+        "hand": """
+            hw_convert();
+            check += hw_checksum;""",
+        "decls": "extern uint32_t hw_checksum; void hw_convert(void);",
+        "names": {"checksum": "checksum"},
+    },
+}
+
+HARNESS = """
+#include "model.c"
+#include <stdio.h>
+#include <stdlib.h>
+{decls}
+void el_sim_open(uint8_t d) {{ (void)d; }}
+void el_sim_start(uint8_t d) {{ (void)d; }}
+void el_sim_read(uint8_t d) {{ (void)d; }}
+void el_sim_write(uint8_t d) {{ (void)d; }}
+void el_sim_stop(uint8_t d) {{ (void)d; }}
+void el_sim_close(uint8_t d) {{ (void)d; }}
+
+__attribute__((noinline)) uint32_t bench_generated(uint32_t n)
+{{
+    uint32_t i, check = 0u;
+    for (i = 0u; i < n; i++) {{ {generated}
+    }}
+    return check;
+}}
+
+__attribute__((noinline)) uint32_t bench_handwritten(uint32_t n)
+{{
+    uint32_t i, check = 0u;
+    for (i = 0u; i < n; i++) {{ {hand}
+    }}
+    return check;
+}}
+
+int main(int argc, char **argv)
+{{
+    uint32_t n = (uint32_t)strtoul(argv[1], 0, 10);
+    uint32_t a = 0u, b = 0u;
+    if (argc > 2 && argv[2][0] == 'g') a = bench_generated(n);
+    if (argc > 2 && argv[2][0] == 'h') b = bench_handwritten(n);
+    if (argc > 2 && argv[2][0] == 'c') {{ a = bench_generated(n); b = bench_handwritten(n);
+        if (a != b) {{ printf("MISMATCH %lu %lu\\n", (unsigned long)a, (unsigned long)b); return 1; }} }}
+    printf("%lu %lu\\n", (unsigned long)a, (unsigned long)b);
+    return 0;
+}}
+"""
+
+
+def _instructions(exe: Path, n: int, which: str, fn: str, tmp: Path) -> int:
+    out = tmp / f"callgrind.{which}.out"
+    subprocess.run(["valgrind", "--tool=callgrind", f"--callgrind-out-file={out}", "--collect-atstart=no",
+                    f"--toggle-collect={fn}", str(exe), str(n), which], check=True, capture_output=True)
+    text = out.read_text()
+    m = re.search(r"^(?:summary|totals):\s+(\d+)", text, re.MULTILINE)
+    return int(m.group(1))
+
+
+def measure(name: str, case: dict, tmp: Path) -> dict:
+    """Instructions per activation of the generated and hand-written code."""
+    sys.path.insert(0, str(ROOT))
+    from easylab import cgen
+    from easylab.boards import load_board, runtime_dir, templates_dir
+    from easylab.frontend import lower_file
+
+    program, result = lower_file(ROOT / case["model"])
+    if program is None:
+        raise SystemExit(result.report())
+    board = load_board("host")
+    work = tmp / re.sub(r"\W+", "_", name)
+    work.mkdir()
+    (work / "model.c").write_text(cgen.render(program, board, templates_dir())["model.c"])
+    view = cgen.build_view(program, board)
+    df = next(d for d in program.dataflows if d.name == case["dataflow"])
+    fields = {k: view.items[program.item(v).id].local for k, v in case["names"].items()}
+    fmt = dict(fields, task=f"el_t{df.task}", fn=f"el_df{df.id}_{cgen.ident(df.name)}")
+    harness = HARNESS.format(decls=case["decls"], generated=case["generated"].format(**fmt), hand=case["hand"])
+    (work / "harness.c").write_text(harness)
+    exe = work / "bench"
+    subprocess.run(["gcc", *CFLAGS, f"-I{runtime_dir()}", f"-I{ROOT / 'boards' / 'host'}", f"-I{work}",
+                    "-o", str(exe), str(work / "harness.c"), str(runtime_dir() / "el_arith.c"),
+                    str(HANDWRITTEN / case["handwritten"]), "-lm"], check=True)
+    n = case["activations"]
+    same = subprocess.run([str(exe), str(n), "c"], capture_output=True, text=True)
+    if same.returncode != 0:
+        raise SystemExit(f"{name}: generated and hand-written code disagree: {same.stdout}{same.stderr}")
+    generated = _instructions(exe, n, "g", "bench_generated", work)
+    handwritten = _instructions(exe, n, "h", "bench_handwritten", work)
+    return {"case": name, "activations": n, "generated_per_activation": round(generated / n, 1),
+            "handwritten_per_activation": round(handwritten / n, 1),
+            "ratio": round(generated / handwritten, 3)}
+
+
+def main(out_dir: Path) -> list[dict]:
+    if shutil.which("valgrind") is None:
+        raise SystemExit("valgrind is not installed (Debian package: valgrind)")
+    rows = []
+    with tempfile.TemporaryDirectory() as tmp:
+        for name, case in CASES.items():
+            rows.append(measure(name, case, Path(tmp)))
+    out_dir.mkdir(parents=True, exist_ok=True)
+    (out_dir / "codegen.json").write_text(json.dumps(rows, indent=2) + "\n")
+    print("generated C against hand-written C (x86-64, gcc -O2, callgrind instructions per activation)")
+    print(f"  {'dataflow':24} {'generated':>10} {'hand-written':>13} {'ratio':>6}")
+    for r in rows:
+        print(f"  {r['case']:24} {r['generated_per_activation']:>10} {r['handwritten_per_activation']:>13} "
+              f"{r['ratio']:>6}")
+    return rows
+
+
+if __name__ == "__main__":
+    main(Path(sys.argv[1] if len(sys.argv) > 1 else "bench/results"))
