@@ -25,12 +25,12 @@ from .graph import SdfEdge, SdfGraph
 from .options import SdfOptions
 from .repetitions import repetition_vector
 from .schedule import Fire, Loop, Node, Schedule, repeat
-from .sdf3 import load_sdf3
+from .sdf3 import MAX_SDF3_BYTES, XmlLocation, load_sdf3
 
 __all__ = [
     "SCHEDULE_KINDS", "Analysis", "analyze",
     "edge_lower_bound", "min_edge_bound", "sas_edge_bound", "sas_lower_bound", "verify",
     "DeadlockError", "GraphError", "InconsistentGraphError", "ScheduleError", "Sdf3Error", "SdfError",
     "check_deadlock", "SdfEdge", "SdfGraph", "SdfOptions", "repetition_vector",
-    "Fire", "Loop", "Node", "Schedule", "repeat", "load_sdf3",
+    "Fire", "Loop", "Node", "Schedule", "repeat", "MAX_SDF3_BYTES", "XmlLocation", "load_sdf3",
 ]

@@ -7,6 +7,7 @@ from typing import Iterator
 
 from ._indexed import IndexedGraph
 from .buffers import check_schedule, edge_lower_bound, sas_lower_bound
+from .errors import ScheduleError
 from .execution import execute_iteration
 from .graph import SdfEdge, SdfGraph
 from .minbuffer import min_buffer_schedule
@@ -16,6 +17,8 @@ from .sas import best_sas, flat_sas
 from .schedule import Schedule
 
 SCHEDULE_KINDS = ("sas", "min-buffer")
+# The text report shows at most this much of a schedule; JSON has it all.
+_REPORT_SCHEDULE_CHARS = 600
 
 
 @dataclass
@@ -90,7 +93,13 @@ class Analysis:
             + (", ".join(f"{actor}={count}" for actor, count in self.repetitions.items()) or "-")
         )
         lines.append(f"  schedule ({kind}, {self.method}):")
-        lines.append(f"    {self.schedule_text or '(empty)'}")
+        text = self.schedule_text or "(empty)"
+        if len(text) > _REPORT_SCHEDULE_CHARS:
+            text = (
+                text[:_REPORT_SCHEDULE_CHARS]
+                + f" ... ({len(text) - _REPORT_SCHEDULE_CHARS} more characters)"
+            )
+        lines.append(f"    {text}")
         rows = [("edge", "rates", "delay", "buffer")]
         for edge, size in self.buffers + self.self_loops:
             note = " (self-loop)" if edge.is_self_loop else ""
@@ -144,11 +153,17 @@ def analyze(
         chosen, method = result.schedule, result.method
         single_appearance, optimal = result.single_appearance, None
     else:
+        firings = sum(repetitions)
+        if firings > options.max_flat_firings:
+            raise ScheduleError(
+                f"a flat schedule of this graph has {firings} firings per iteration, more "
+                f"than the limit of {options.max_flat_firings}; use the single-appearance schedule"
+            )
         found = min_buffer_schedule(
             ig, repetitions, options.exact_max_firings, options.exact_max_evaluations
         )
         chosen = Schedule.from_runs((ig.names[a], count) for a, count in found.runs)
-        method = "capacity search (proven optimal)" if found.optimal else "capacity-growing heuristic"
+        method = found.method
         single_appearance, optimal = chosen.is_single_appearance, found.optimal
 
     sizes = check_schedule(ig, chosen, repetitions)

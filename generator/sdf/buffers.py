@@ -22,15 +22,16 @@ from .schedule import Fire, Schedule
 
 
 class _Summary:
-    """Per-edge token change, lowest and highest relative level; firings."""
+    """Per open edge: token change, lowest and highest level relative to the
+    start of the subtree; and how many firing nodes of each actor it holds."""
 
-    __slots__ = ("change", "low", "high", "fired")
+    __slots__ = ("change", "low", "high", "appearances")
 
     def __init__(self) -> None:
         self.change: dict[int, int] = {}
         self.low: dict[int, int] = {}
         self.high: dict[int, int] = {}
-        self.fired: dict[int, int] = {}
+        self.appearances: dict[int, int] = {}
 
     def _extend(self, e: int, low: int, high: int, change: int) -> None:
         # Append a segment whose levels relative to its own start are given.
@@ -50,13 +51,13 @@ class _Summary:
             # Each firing takes ``cons`` first, then returns ``prod``.
             net = ig.prod[e] - ig.cons[e]
             self._extend(e, min(0, (count - 1) * net) - ig.cons[e], max(0, count * net), count * net)
-        self.fired[a] = self.fired.get(a, 0) + count
+        self.appearances[a] = self.appearances.get(a, 0) + 1
 
     def append(self, later: "_Summary") -> None:
         for e, change in later.change.items():
             self._extend(e, later.low[e], later.high[e], change)
-        for a, count in later.fired.items():
-            self.fired[a] = self.fired.get(a, 0) + count
+        for a, count in later.appearances.items():
+            self.appearances[a] = self.appearances.get(a, 0) + count
 
     def repeat(self, count: int) -> None:
         for e, change in self.change.items():
@@ -64,13 +65,37 @@ class _Summary:
             self.low[e] += min(0, drift)
             self.high[e] += max(0, drift)
             self.change[e] = count * change
-        for a in self.fired:
-            self.fired[a] *= count
 
 
-def _summarize(ig: IndexedGraph, schedule: Schedule) -> _Summary:
-    # Post-order over the tree with an explicit stack of
-    # [items, next index, summary so far, loop count].
+def _edge_levels(ig: IndexedGraph, schedule: Schedule) -> dict[int, tuple[int, int, int]]:
+    """Per touched edge: (change, low, high) over the whole schedule.
+
+    Post-order over the tree with an explicit stack.  An edge is *closed* in
+    a subtree that holds every firing node of both its actors: nothing else
+    touches it, so its extremes are final there and it is dropped from the
+    summaries above.  On a single-appearance schedule every edge travels up
+    only to the loop enclosing both its actors, which keeps deep nestings
+    linear.
+    """
+    total_appearances: dict[int, int] = {}
+    for node in schedule.fire_nodes():
+        if node.actor not in ig.index:
+            raise ScheduleError(f"the schedule fires unknown actor {node.actor!r}")
+        a = ig.index[node.actor]
+        total_appearances[a] = total_appearances.get(a, 0) + 1
+
+    closed: dict[int, tuple[int, int, int]] = {}
+
+    def close_finished(summary: _Summary) -> None:
+        done = [
+            e for e in summary.change
+            if summary.appearances.get(ig.src[e]) == total_appearances[ig.src[e]]
+            and summary.appearances.get(ig.dst[e]) == total_appearances[ig.dst[e]]
+        ]
+        for e in done:
+            closed[e] = (summary.change.pop(e), summary.low.pop(e), summary.high.pop(e))
+
+    # Frames: [items, next index, summary so far, loop count].
     stack = [[schedule.body, 0, _Summary(), 1]]
     while True:
         frame = stack[-1]
@@ -79,16 +104,15 @@ def _summarize(ig: IndexedGraph, schedule: Schedule) -> _Summary:
             frame[1] = index + 1
             node = items[index]
             if isinstance(node, Fire):
-                if node.actor not in ig.index:
-                    raise ScheduleError(f"the schedule fires unknown actor {node.actor!r}")
                 summary.fire(ig, ig.index[node.actor], node.count)
             else:
                 stack.append([node.body, 0, _Summary(), node.count])
             continue
         stack.pop()
         summary.repeat(count)
+        close_finished(summary)
         if not stack:
-            return summary
+            return closed
         stack[-1][2].append(summary)
 
 
@@ -101,30 +125,30 @@ def check_schedule(
     count, an edge would go negative, or an edge does not return to its
     initial tokens.
     """
-    summary = _summarize(ig, schedule)
+    levels = _edge_levels(ig, schedule)
+    fired = schedule.firing_counts()
     for a, name in enumerate(ig.names):
-        fired = summary.fired.get(a, 0)
-        if fired != repetitions[a]:
+        if fired.get(name, 0) != repetitions[a]:
             raise ScheduleError(
-                f"actor {name} fires {fired} times, but one iteration fires it "
+                f"actor {name} fires {fired.get(name, 0)} times, but one iteration fires it "
                 f"{repetitions[a]} times"
             )
     sizes = []
     for e, edge in enumerate(ig.edges):
-        low = ig.delay[e] + summary.low.get(e, 0)
-        if low < 0:
+        change, low, high = levels.get(e, (0, 0, 0))
+        if ig.delay[e] + low < 0:
             raise ScheduleError(
-                f"edge {edge.describe()} would need {-low} more tokens than it has: "
+                f"edge {edge.describe()} would need {-(ig.delay[e] + low)} more tokens than it has: "
                 f"{edge.dst} fires before {edge.src} has produced enough",
                 [edge],
             )
-        if summary.change.get(e, 0):
+        if change:
             raise ScheduleError(
                 f"edge {edge.describe()} ends the iteration with "
-                f"{ig.delay[e] + summary.change[e]} tokens instead of {ig.delay[e]}",
+                f"{ig.delay[e] + change} tokens instead of {ig.delay[e]}",
                 [edge],
             )
-        sizes.append(ig.delay[e] + summary.high.get(e, 0))
+        sizes.append(ig.delay[e] + high)
     return sizes
 
 

@@ -6,8 +6,9 @@ improves:
 
 * APGAN, acyclic pairwise grouping of adjacent nodes: repeatedly merge the
   adjacent pair with the largest gcd of repetition counts whose merge keeps
-  the graph acyclic.  Merging reshapes reachability, so each step costs a
-  graph search; we use it on graphs of up to a few hundred nodes.
+  the graph acyclic.  With a lazily updated heap of pairs and small-into-large
+  merging it runs in O(E log E) plus the acyclicity searches, which are
+  bounded (see :func:`apgan`), so it scales to 10,000 actors.
 * RPMC, recursive partitioning by minimum cuts: split the nodes in two, all
   precedence edges crossing forwards, so that the traffic crossing is least
   while each side keeps between a quarter and three quarters of the nodes;
@@ -23,6 +24,7 @@ a whole iteration, so they may run either way).
 
 from __future__ import annotations
 
+import heapq
 import math
 from typing import Sequence
 
@@ -152,11 +154,21 @@ def _best_prefix_cut(
     return best
 
 
-def apgan(dag: LevelDag) -> tuple[list[int], Splits]:
-    """APGAN's lexical order and the nesting its clustering implies."""
+def apgan(dag: LevelDag, search_limit: int) -> tuple[list[int], Splits]:
+    """APGAN's lexical order and the nesting its clustering implies.
+
+    Candidate pairs (precedence-adjacent clusters) sit in a heap ranked by
+    the gcd of their counts, then the traffic between them, then priority;
+    entries are re-ranked lazily when popped, since merges only ever lower a
+    pair's gcd.  A merge keeps the id of the cluster with more neighbours and
+    moves the other's adjacency over (small into large), so merging costs
+    the smaller degree.  Whether a merge would close a cycle is a
+    depth-first search for another path; it gives up after ``search_limit``
+    nodes and then conservatively skips the pair (exact on graphs of up to
+    that many nodes).
+    """
     if dag.size < 2:
         return list(range(dag.size)), {}
-    # Cluster state, indexed by cluster id; the first dag.size ids are nodes.
     count = list(dag.counts)
     priority = list(dag.priority)
     tree: list[object] = list(range(dag.size))   # int leaf or (left, right)
@@ -169,51 +181,68 @@ def apgan(dag: LevelDag) -> tuple[list[int], Splits]:
     for u, v, w, precedence in dag.edges:
         if precedence:
             traffic[(u, v)] = traffic.get((u, v), 0) + w
-    alive = set(range(dag.size))
+    alive = [True] * dag.size
 
-    while True:
-        candidates = sorted(
-            (
-                (-math.gcd(count[u], count[v]), -traffic.get((u, v), 0),
-                 min(priority[u], priority[v]), u, v)
-                for u in alive for v in succ[u]
-            )
-        )
-        merged = False
-        for *_, u, v in candidates:
-            if _other_path(succ, u, v):
-                continue
-            w = len(count)
-            count.append(math.gcd(count[u], count[v]))
-            priority.append(min(priority[u], priority[v]))
-            tree.append((tree[u], tree[v]))
-            succ.append((succ[u] | succ[v]) - {u, v})
-            pred.append((pred[u] | pred[v]) - {u, v})
-            for x in succ[w]:
-                pred[x] -= {u, v}
-                pred[x].add(w)
-                traffic[(w, x)] = traffic.pop((u, x), 0) + traffic.pop((v, x), 0)
-            for x in pred[w]:
-                succ[x] -= {u, v}
-                succ[x].add(w)
-                traffic[(x, w)] = traffic.pop((x, u), 0) + traffic.pop((x, v), 0)
-            alive -= {u, v}
-            alive.add(w)
-            merged = True
-            break
-        if not merged:
-            break
+    def rank(u: int, v: int) -> tuple[int, int, int, int, int]:
+        return (-math.gcd(count[u], count[v]), -traffic.get((u, v), 0),
+                min(priority[u], priority[v]), u, v)
 
-    # What is left has no precedence between clusters: chain it by priority.
-    roots = sorted(alive, key=priority.__getitem__)
-    top = tree[roots[0]]
-    for root in roots[1:]:
+    heap = [rank(u, v) for u in range(dag.size) for v in succ[u]]
+    heapq.heapify(heap)
+    while heap:
+        entry = heapq.heappop(heap)
+        u, v = entry[3], entry[4]
+        if not (alive[u] and alive[v] and v in succ[u]):
+            continue
+        current = rank(u, v)
+        if current != entry:
+            heapq.heappush(heap, current)
+            continue
+        if _other_path(succ, pred, u, v, search_limit):
+            # Stays invalid until a cluster on the other path merges into
+            # u or v, and such a merge pushes the pair again.
+            continue
+        succ[u].discard(v)
+        pred[v].discard(u)
+        traffic.pop((u, v), None)
+        big, small = (u, v) if len(succ[u]) + len(pred[u]) >= len(succ[v]) + len(pred[v]) else (v, u)
+        for x in succ[small]:
+            pred[x].discard(small)
+            pred[x].add(big)
+            succ[big].add(x)
+            traffic[(big, x)] = traffic.get((big, x), 0) + traffic.pop((small, x), 0)
+        for x in pred[small]:
+            succ[x].discard(small)
+            succ[x].add(big)
+            pred[big].add(x)
+            traffic[(x, big)] = traffic.get((x, big), 0) + traffic.pop((x, small), 0)
+        count[big] = math.gcd(count[u], count[v])
+        priority[big] = min(priority[u], priority[v])
+        tree[big] = (tree[u], tree[v])
+        alive[small] = False
+        moved_succ, moved_pred = succ[small], pred[small]
+        succ[small] = pred[small] = set()
+        for x in moved_succ:
+            heapq.heappush(heap, rank(big, x))
+        for x in moved_pred:
+            heapq.heappush(heap, rank(x, big))
+
+    # Clusters left over (none on fully searched graphs) in topological order.
+    roots = [c for c in range(dag.size) if alive[c]]
+    order = topological_order(roots, [sorted(s) for s in succ], priority)
+    top = tree[order[0]]
+    for root in order[1:]:
         top = (top, tree[root])
     return _layout(top)
 
 
-def _other_path(succ: list[set[int]], u: int, v: int) -> bool:
-    """Whether ``v`` is reachable from ``u`` other than by a direct edge."""
+def _other_path(succ: list[set[int]], pred: list[set[int]], u: int, v: int, limit: int) -> bool:
+    """Whether ``v`` is reachable from ``u`` other than by the direct edge.
+
+    Answers True (unsafe) when the search exceeds ``limit`` nodes.
+    """
+    if len(succ[u]) == 1 or len(pred[v]) == 1:
+        return False   # any other path would need another edge out of u / into v
     stack = [x for x in succ[u] if x != v]
     seen = set(stack)
     while stack:
@@ -222,6 +251,8 @@ def _other_path(succ: list[set[int]], u: int, v: int) -> bool:
             if y == v:
                 return True
             if y not in seen:
+                if len(seen) >= limit:
+                    return True
                 seen.add(y)
                 stack.append(y)
     return False

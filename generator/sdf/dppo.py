@@ -4,10 +4,11 @@ A *nesting* of a lexical order ``order[0..m-1]`` is a binary bracketing,
 stored as ``splits[(lo, hi)] = k``: the range ``lo..hi`` runs as a loop of
 ``g(lo, hi)`` iterations (``g`` the gcd of the counts of its nodes) over the
 part ``lo..k`` followed by the part ``k+1..hi``.  Under the non-shared buffer
-model an edge from position ``a`` to ``b > a`` then needs ``w / g`` tokens of
-buffer (``w`` its traffic per iteration) where ``lo..hi`` is the range whose
-split separates ``a`` from ``b``; an edge running backwards (possible only
-for an edge whose delay covers the whole traffic) needs just its delay.
+model an edge from position ``a`` to ``b > a`` then needs its delay plus
+``w / g`` tokens of buffer (``w`` its traffic per iteration) where ``lo..hi``
+is the range whose split separates ``a`` from ``b``; an edge running
+backwards (possible only for an edge whose delay covers the whole traffic)
+needs just its delay.
 
 DPPO (Bhattacharyya, Murthy & Lee 1996) finds the cheapest nesting by
 dynamic programming over all ranges in O(m^3) time and O(m^2) space.
@@ -23,26 +24,32 @@ from .schedule import Node, repeat
 Splits = dict[tuple[int, int], int]
 
 
-class RangeGcd:
-    """gcd of any range of a list in O(1), from a sparse table.
+class SparseTable:
+    """Any range ``lo..hi`` of a list folded by an idempotent ``combine``, in O(1).
 
-    Overlapping halves are fine because gcd is idempotent.
+    Overlapping halves are fine because ``combine(x, x) == x`` (gcd, min).
     """
 
-    def __init__(self, values: Sequence[int]) -> None:
+    def __init__(self, values: Sequence, combine: Callable) -> None:
+        self._combine = combine
         self._levels = [list(values)]
         width = 1
         while 2 * width <= len(values):
             previous = self._levels[-1]
             self._levels.append(
-                [math.gcd(previous[i], previous[i + width]) for i in range(len(values) - 2 * width + 1)]
+                [combine(previous[i], previous[i + width]) for i in range(len(values) - 2 * width + 1)]
             )
             width *= 2
 
-    def __call__(self, lo: int, hi: int) -> int:
+    def __call__(self, lo: int, hi: int):
         level = (hi - lo + 1).bit_length() - 1
         row = self._levels[level]
-        return math.gcd(row[lo], row[hi - (1 << level) + 1])
+        return self._combine(row[lo], row[hi - (1 << level) + 1])
+
+
+def range_gcd(values: Sequence[int]) -> SparseTable:
+    """gcd of any range of ``values`` in O(1)."""
+    return SparseTable(values, math.gcd)
 
 
 def dppo(counts: Sequence[int], edges: Sequence[tuple[int, int, int]]) -> tuple[int, Splits]:
@@ -162,23 +169,32 @@ def optimize_nesting(
 def nesting_cost(
     counts: Sequence[int], edges: Sequence[tuple[int, int, int]], splits: Splits
 ) -> int:
-    """Buffer cost of forward ``edges`` (by position) under ``splits``."""
-    if len(counts) < 2:
+    """Buffer cost of forward ``edges`` (by position) under ``splits``.
+
+    Every split point ``k`` belongs to exactly one range; an edge ``a -> b``
+    is separated by the shallowest range whose split point lies in
+    ``a..b-1``, found with a range-minimum query over split depths.  So the
+    cost is O(m log m + edges) however deep the nesting.
+    """
+    m = len(counts)
+    if m < 2:
         return 0
-    gcd = RangeGcd(counts)
-    top = len(counts) - 1
+    depth = [0] * (m - 1)
+    span = [(0, 0)] * (m - 1)
+    pending = [(0, m - 1, 0)]
+    while pending:
+        lo, hi, level = pending.pop()
+        if lo < hi:
+            k = splits[(lo, hi)]
+            depth[k], span[k] = level, (lo, hi)
+            pending.append((lo, k, level + 1))
+            pending.append((k + 1, hi, level + 1))
+    shallowest = SparseTable(range(m - 1), lambda i, j: i if depth[i] <= depth[j] else j)
+    gcd = range_gcd(counts)
     total = 0
     for a, b, w in edges:
-        lo, hi = 0, top
-        while True:
-            k = splits[(lo, hi)]
-            if b <= k:
-                hi = k
-            elif a > k:
-                lo = k + 1
-            else:
-                total += w // gcd(lo, hi)
-                break
+        lo, hi = span[shallowest(a, b - 1)]
+        total += w // gcd(lo, hi)
     return total
 
 
@@ -190,13 +206,13 @@ def nested_items(
     """The schedule items of one iteration for a nesting.
 
     ``leaf_items(p)`` gives the items of one firing of the node at position
-    ``p`` (one actor firing, or a cluster's own iteration).  Counts must have
+    ``p`` (one actor firing, or a cluster's own iteration) as a new list.  Counts must have
     gcd 1 overall, as repetition counts of one level do.
     """
     m = len(counts)
     if m == 0:
         return []
-    gcd = RangeGcd(counts)
+    gcd = range_gcd(counts)
     # Post-order over ranges with an explicit stack; each finished range
     # leaves (items per iteration of its own loop, its gcd) on `results`.
     results: list[tuple[list[Node], int]] = []
@@ -215,8 +231,10 @@ def nested_items(
         right_items, right_gcd = results.pop()
         left_items, left_gcd = results.pop()
         g = gcd(lo, hi)
-        results.append(
-            (repeat(left_gcd // g, left_items) + repeat(right_gcd // g, right_items), g)
-        )
+        # Lists on `results` are owned here, so a part that needs no loop of
+        # its own is extended in place (deep nestings stay linear).
+        items = left_items if left_gcd == g else repeat(left_gcd // g, left_items)
+        items.extend(right_items if right_gcd == g else repeat(right_gcd // g, right_items))
+        results.append((items, g))
     items, g = results.pop()
     return repeat(g, items)

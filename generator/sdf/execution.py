@@ -18,8 +18,8 @@ from .errors import DeadlockError, GraphError
 from .graph import SdfGraph
 from .repetitions import compute_repetitions
 
-# Above this many edges we only size the missing tokens for the first edge of
-# a deadlocked cycle instead of trying every edge (each try is a search).
+# On deadlocked cycles longer than this, only the first edge's missing tokens
+# are sized instead of every edge's (each is a binary search).
 _MISSING_TOKEN_EDGES_TRIED = 8
 
 
@@ -30,8 +30,10 @@ class Executor:
     edge may hold: a producer fires only when the results fit.  That is the
     same as adding, for each edge, a reverse "space" edge carrying
     ``capacity - tokens`` tokens, so the executor still decides liveness of
-    the bounded graph exactly.  ``runs`` records the firings as
-    ``(actor, count)`` pairs when ``record`` is set.
+    the bounded graph exactly.  A caller may raise capacities while the
+    run is stopped, then :meth:`wake` the producer and :meth:`run` again.
+    ``runs`` records the firings as ``[actor, count]`` pairs when ``record``
+    is set; ``peak`` is the most tokens each edge has held.
     """
 
     def __init__(
@@ -48,9 +50,6 @@ class Executor:
         self.remaining = list(repetitions)
         self.capacities = capacities
         self.runs: list[list[int]] | None = [] if record else None
-        # Actors that have their input data but wait for output space; the
-        # minimum-buffer scheduler enlarges capacities for one of them.
-        self.space_blocked: set[int] = set()
         self._queue = deque(range(ig.actor_count))
         self._queued = [True] * ig.actor_count
 
@@ -86,10 +85,7 @@ class Executor:
         """How many firings of ``a`` can happen back to back right now."""
         limit = self.data_limit(a)
         if limit and self.capacities is not None:
-            fitting = self.space_limit(a, limit)
-            if fitting == 0:
-                self.space_blocked.add(a)
-            limit = fitting
+            limit = self.space_limit(a, limit)
         return limit
 
     def fire(self, a: int, count: int) -> None:
@@ -116,12 +112,8 @@ class Executor:
                 self.runs[-1][1] += count
             else:
                 self.runs.append([a, count])
-        # A maximal batch leaves ``a`` waiting for a producer (whose firing
-        # requeues it) or for output space.  In the second case look again,
-        # so that it is recorded in ``space_blocked`` if it stays blocked.
-        if self.capacities is not None and self.remaining[a] and not queued[a]:
-            queued[a] = True
-            queue.append(a)
+        # No need to requeue ``a``: a maximal batch leaves it waiting for a
+        # producer or a consumer, and their firings requeue it.
 
     def run(self) -> bool:
         """Fire until nothing is enabled; True when the iteration completed."""
@@ -135,7 +127,7 @@ class Executor:
         return self.finished
 
     def wake(self, a: int) -> None:
-        """Put ``a`` back on the worklist (after its capacities changed)."""
+        """Put ``a`` back on the worklist (after its output capacities grew)."""
         if not self._queued[a]:
             self._queued[a] = True
             self._queue.append(a)
@@ -212,39 +204,44 @@ def check_deadlock(graph: SdfGraph, repetitions: dict[str, int] | None = None) -
     execute_iteration(ig, counts)
 
 
-def cycle_is_live(ig: IndexedGraph, cycle: list[int], extra: dict[int, int]) -> bool:
-    """Whether the directed ``cycle`` alone, with ``extra`` tokens, completes.
+def least_extra_tokens(ig: IndexedGraph, edge: int, step: int = 1) -> int:
+    """Fewest extra initial tokens on ``edge`` for ``ig`` to complete an iteration.
 
-    ``extra`` maps edges of the cycle to additional initial tokens.
+    The answer is a positive multiple of ``step``.  ``ig`` is meant to be
+    small, typically one cycle.  Liveness only grows with tokens, so this is
+    a binary search; tokens for a whole iteration's consumption on ``edge``
+    always suffice when ``ig`` is a cycle (the rest is then a chain).
     """
-    actors = [ig.src[e] for e in cycle]
-    sub = ig.subgraph(actors, cycle)
-    tokens = [ig.delay[e] + extra.get(e, 0) for e in cycle]
-    return Executor(sub, compute_repetitions(sub), initial_tokens=tokens).run()
+    repetitions = compute_repetitions(ig)
+    needed = max(1, repetitions[ig.dst[edge]] * ig.cons[edge] - ig.delay[edge])
+    low, high = 1, -(-needed // step)
 
+    def completes(steps: int) -> bool:
+        tokens = list(ig.delay)
+        tokens[edge] += steps * step
+        return Executor(ig, repetitions, initial_tokens=tokens).run()
 
-def missing_tokens(ig: IndexedGraph, cycle: list[int], edge: int) -> int:
-    """Fewest extra initial tokens on ``edge`` that let ``cycle`` complete.
-
-    Liveness only grows with tokens, so this is a binary search.  Tokens for a
-    whole iteration's consumption on one edge always suffice: the rest of the
-    cycle is then a chain.
-    """
-    actors = [ig.src[e] for e in cycle]
-    sub = ig.subgraph(actors, cycle)
-    local = compute_repetitions(sub)
-    position = cycle.index(edge)
-    low, high = 1, max(1, local[sub.dst[position]] * ig.cons[edge] - ig.delay[edge])
     while low < high:
         middle = (low + high) // 2
-        if cycle_is_live(ig, cycle, {edge: middle}):
+        if completes(middle):
             high = middle
         else:
             low = middle + 1
-    return low
+    return low * step
+
+
+def missing_tokens(ig: IndexedGraph, cycle: list[int], edge: int) -> int:
+    """Fewest extra initial tokens on ``edge`` that let directed ``cycle`` complete."""
+    sub = ig.subgraph([ig.src[e] for e in cycle], cycle)
+    return least_extra_tokens(sub, cycle.index(edge))
 
 
 def deadlock_error(ig: IndexedGraph, cycle: list[int]) -> DeadlockError:
+    """The DeadlockError for a directed ``cycle`` of edges lacking tokens.
+
+    Sizes the missing tokens for each edge of the cycle (only the first for
+    long cycles) and names the edge that needs the fewest.
+    """
     tried = cycle if len(cycle) <= _MISSING_TOKEN_EDGES_TRIED else cycle[:1]
     best_edge, best_count = tried[0], None
     for e in tried:

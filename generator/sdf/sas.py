@@ -163,16 +163,18 @@ def _plan_dag(dag: LevelDag, options: SdfOptions) -> tuple[list[int], Splits, st
         return [0], {}, None
     traffic = dag.traffic_edges()
     topological = dag.topological_order()
-    candidates = []
-    if dag.size <= options.apgan_max_nodes:
-        candidates.append(("apgan", *apgan(dag)))
-    candidates.append(("rpmc", *bisection(dag, topological, reorder=True)))
-    candidates.append(("topological", *bisection(dag, topological, reorder=False)))
+    candidates = [
+        ("apgan", *apgan(dag, options.apgan_search_limit)),
+        ("rpmc", *bisection(dag, topological, reorder=True)),
+        # The flat SAS's own order: keeps the result at or below the flat SAS.
+        ("topological", *bisection(dag, topological, reorder=False)),
+    ]
+    window = dag.size if dag.size <= options.dppo_max_nodes else options.dppo_window
     best = None
     for name, order, hierarchy in candidates:
         counts = [dag.counts[node] for node in order]
         edges = forward_edges(order, traffic)
-        splits = optimize_nesting(counts, edges, hierarchy, options.dppo_window)
+        splits = optimize_nesting(counts, edges, hierarchy, window)
         cost = nesting_cost(counts, edges, splits)
         if best is None or cost < best[0]:
             best = (cost, order, splits, f"{name}+dppo")
@@ -188,7 +190,7 @@ def _level_items(ig: IndexedGraph, level: _Level, items: list) -> list[Node]:
         node = level.order[position]
         child = level.node_child[node]
         if child is not None:
-            return items[child]
+            return list(items[child])
         return [Fire(ig.names[level.node_actor[node]], 1)]
 
     counts = [level.node_counts[node] for node in level.order]

@@ -12,7 +12,10 @@ actor name is a single letter the items are written side by side, e.g.
 spaces, e.g. ``(7 (3 src b) (2 c))``.  A loop count is always followed by a
 name or ``(``, so both forms read back unambiguously.
 
-Every traversal here is iterative: trees may be deep and wide.
+Every traversal here is iterative: trees may be deep and wide.  The
+schedulers never build loops of one iteration, so in their schedules the
+nesting depth is at most log2 of the largest repetition count, plus one;
+recursive code over those trees is safe for realistic graphs.
 """
 
 from __future__ import annotations
@@ -144,6 +147,12 @@ class Schedule:
                 inner = multiplier * node.count
                 stack.extend((child, inner) for child in reversed(node.body))
 
+    def fire_nodes(self) -> Iterator[Fire]:
+        """Every ``Fire`` node once, in text order (loops not unrolled)."""
+        for node, _ in self._nodes():
+            if isinstance(node, Fire):
+                yield node
+
     def firing_counts(self) -> dict[str, int]:
         """How often each actor fires in the whole schedule."""
         counts: dict[str, int] = {}
@@ -155,9 +164,8 @@ class Schedule:
     def appearances(self) -> dict[str, int]:
         """How often each actor's name appears in the schedule text."""
         counts: dict[str, int] = {}
-        for node, _ in self._nodes():
-            if isinstance(node, Fire):
-                counts[node.actor] = counts.get(node.actor, 0) + 1
+        for node in self.fire_nodes():
+            counts[node.actor] = counts.get(node.actor, 0) + 1
         return counts
 
     @property

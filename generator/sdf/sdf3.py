@@ -209,7 +209,10 @@ def _build_graph(source: str, root: _Element) -> SdfGraph:
         (src, src_port, prod), (dst, dst_port, cons) = ends
         delay = _integer(source, channel, "initialTokens", 0, default=0)
         channel_name = channel.attributes.get("name")
-        label = f"{channel_name} ({src} -> {dst})" if channel_name else f"{src}.{src_port} -> {dst}.{dst_port}"
+        if channel_name:
+            label = f"{channel_name} ({src} -> {dst})"
+        else:
+            label = f"{src}.{src_port} -> {dst}.{dst_port}"
         try:
             graph.add_edge(src, dst, prod, cons, delay, name=label, loc=XmlLocation(source, channel.line))
         except GraphError as error:  # pragma: no cover - values were checked above

@@ -40,7 +40,8 @@ def consistent_graphs(draw, max_actors: int = 30, cyclic: bool = False, delays: 
         # Mostly connected; now and then a new component starts.
         if draw(st.integers(0, 9)) == 0:
             continue
-        parent = draw(st.integers(max(0, i - 4), i - 1)) if draw(st.booleans()) else draw(st.integers(0, i - 1))
+        nearby = draw(st.booleans())   # chains and bushy trees
+        parent = draw(st.integers(max(0, i - 4) if nearby else 0, i - 1))
         prod, cons = balanced_rates(draw, q[parent], q[i])
         graph.add_edge(f"a{parent}", f"a{i}", prod, cons, draw(st.sampled_from((0, 0, 0, 1, 3))))
     extra = draw(st.integers(0, n // 2 + 1)) if n > 1 else 0

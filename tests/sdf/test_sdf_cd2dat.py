@@ -23,7 +23,7 @@ def graphs():
     yield "sdf3-text", load_sdf3((DATA / "cd2dat.xml").read_text()), False
 
 
-@pytest.mark.parametrize("label, graph, with_g", list(graphs()), ids=lambda x: x if isinstance(x, str) else "")
+@pytest.mark.parametrize("label, graph, with_g", list(graphs()), ids=[g[0] for g in graphs()])
 def test_cd2dat_figures(label, graph, with_g):
     expected_reps = {"A": 147, "B": 147, "C": 98, "D": 28, "E": 32, "F": 160}
     if with_g:
