@@ -40,6 +40,7 @@ void el_run(int argc, char **argv)
                     pending &= ~bit;
                 }
             }
+            el_port_inputs(el_now);
             if (release != 0u) {
                 el_gen_read_devices(release);
                 for (task = 0u; task < el_task_count; task++) {

@@ -30,6 +30,12 @@ typedef uint8_t el_irq_state_t;
 el_irq_state_t el_port_irq_save(void);
 void el_port_irq_restore(el_irq_state_t state);
 
+/* Called by the dispatcher once per logical instant, after the outputs due
+ * then are published and before devices are read and inputs latched: where
+ * writes from outside (debug and service interfaces, the host board's
+ * stimulus for params and vars) take effect. */
+void el_port_inputs(uint64_t tick);
+
 /* Called by the dispatcher once per logical instant, after publication,
  * interface writes and device reads: the host board records its trace
  * here. `tick` is the absolute logical tick (64-bit: traces run long). */

@@ -1,0 +1,113 @@
+/* EasyLab host board: declarations shared by the board's own files only
+ * (host_port.c, host_options.c, host_stimulus.c, host_trace.c,
+ * host_nvram.c). Generated code includes el_board.h, never this.
+ *
+ * The host board is a POSIX program: unlike the runtime it may use the
+ * heap, but only for data whose size comes from a file or from the model's
+ * tables (stimulus events, trace columns), every allocation checked.
+ */
+#ifndef HOST_INTERNAL_H
+#define HOST_INTERNAL_H
+
+#include "el_types.h"
+#include "el_model.h"
+#include "el_port.h"
+#include "el_board.h"
+
+/* Longest line of a stimulus CSV file, in bytes, without its line end.
+ * Longer lines are reported as errors, never truncated. */
+#define EL_HOST_LINE_MAX 65536u
+
+/* Most events (non-empty value cells) of a stimulus file: 64 Mi events of
+ * 16 bytes, 1 GiB; a bigger file is reported, not loaded. */
+#define EL_HOST_STIMULUS_MAX_EVENTS (64ul * 1024ul * 1024ul)
+
+/* ---- messages (host_port.c) ---- */
+
+/* The program name used in messages: argv[0] without its directory. */
+extern const char *el_host_prog;
+
+/* "PROG: message\n" on stderr. */
+void el_host_error(const char *fmt, ...)
+#if defined(__GNUC__)
+    __attribute__((format(printf, 1, 2)))
+#endif
+    ;
+
+/* ---- settings from the command line (host_options.c) ---- */
+
+typedef struct {
+    bool fast;                  /* --fast: virtual time */
+    bool has_duration;          /* --duration given */
+    uint64_t duration_us;       /* --duration, in microseconds */
+    const char *stimulus_path;  /* --stimulus, or NULL */
+    const char *trace_path;     /* --trace, or NULL */
+    const char *nvram_path;     /* --nvram, or NULL */
+} el_host_settings_t;
+
+extern el_host_settings_t el_host_settings;
+
+/* One command-line option. To add one: write its handler (in the file of
+ * the feature, declared here), add a row to el_host_options[] in
+ * host_options.c, and act on what the handler stored in el_port_init. */
+typedef struct {
+    const char *name;      /* "--trace" */
+    const char *arg_name;  /* "FILE" for `--trace FILE` / `--trace=FILE`; NULL for a flag */
+    const char *help;      /* one line for --help */
+    bool repeatable;       /* may be given more than once */
+    /* Store the option (arg is NULL for a flag). Returns false after
+     * reporting the error with el_host_error. */
+    bool (*handle)(const char *arg);
+} el_host_option_t;
+
+extern const el_host_option_t el_host_options[];
+extern const size_t el_host_option_count;
+
+/* Results of el_host_parse_args. */
+#define EL_HOST_ARGS_RUN 0    /* run the model */
+#define EL_HOST_ARGS_DONE 1   /* --help was printed: exit with status 0 */
+#define EL_HOST_ARGS_ERROR 2  /* an error was reported: exit with status 2 */
+int el_host_parse_args(int argc, char **argv);
+
+/* Parse a duration with a unit ("10s", "500ms", "250us", "1.5s", "2m",
+ * "1h"; a space may separate number and unit) into exact microseconds.
+ * On error returns false and sets *why to a message. */
+bool el_host_parse_duration(const char *text, uint64_t *us, const char **why);
+
+/* Write the params and vars a stimulus sets by now (host_stimulus.c). */
+void el_host_stimulus_inputs(void);
+
+/* ---- the model's tables (host_port.c) ---- */
+
+/* Bytes of one value of an EL_T_ type (0 for an unknown type). */
+size_t el_host_type_size(uint8_t type);
+/* The language's name of an EL_T_ type: "int16", "float32", ... */
+const char *el_host_type_name(uint8_t type);
+
+/* Logical time, in microseconds, of the instant being processed: the tick
+ * last accepted by el_port_wait_tick times el_tick_us (0 before). */
+uint64_t el_host_now_us(void);
+
+/* ---- stimulus (host_stimulus.c) ---- */
+
+/* Load and check a stimulus file; errors are reported as FILE:LINE: ...
+ * Returns false on error (nothing loaded). */
+bool el_host_stimulus_load(const char *path);
+void el_host_stimulus_free(void);
+
+/* ---- trace (host_trace.c) ---- */
+
+/* Create the trace file (.csv or .vcd) and write its header. */
+bool el_host_trace_open(const char *path);
+/* Record the values at logical tick `tick`. */
+void el_host_trace_instant(uint64_t tick);
+/* Flush and close; false if writing failed (reported). No-op if closed. */
+bool el_host_trace_close(void);
+
+/* ---- non-volatile storage (host_nvram.c) ---- */
+
+/* Use the file at `path` (NULL: an in-memory store). */
+bool el_host_nv_open(const char *path);
+void el_host_nv_close(void);
+
+#endif /* HOST_INTERNAL_H */
