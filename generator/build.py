@@ -29,11 +29,11 @@ class BuildResult:
     sources: list[Path]
 
 
-def generate(program: Program, board: Board, out_dir: Path) -> list[Path]:
-    """Write the generated sources; returns their paths."""
+def generate(program: Program, board: Board, out_dir: Path, release: bool = False) -> list[Path]:
+    """Write the generated files (C sources, maps); returns their paths."""
     try:
         out_dir.mkdir(parents=True, exist_ok=True)
-        files = cgen.render(program, board, templates_dir())
+        files = cgen.render(program, board, templates_dir(), release)
         written = []
         for name, text in files.items():
             path = out_dir / name
@@ -54,6 +54,7 @@ def compile_host_like(program: Program, board: Board, out_dir: Path, generated: 
         raise BuildError(f"the C compiler '{compiler}' of board '{board.name}' is not installed "
                          f"(Debian package: {package})")
     runtime = sorted(runtime_dir().glob("*.c"))
+    generated = [p for p in generated if p.suffix == ".c"]
     board_sources = [board.path / s for s in board.sources]
     includes = [f"-I{runtime_dir()}", f"-I{out_dir}"] + [f"-I{board.path / d}" for d in board.include_dirs]
     exe = out_dir / program.name
@@ -70,6 +71,6 @@ def build(program: Program, board_name: str, out_dir: Path, extra_cflags: list[s
     """Generate and compile ``program`` for a board. A release build has no
     debug interface (the debug server is linked into debug builds only)."""
     board = load_board(board_name)
-    generated = generate(program, board, out_dir)
+    generated = generate(program, board, out_dir, release)
     exe = compile_host_like(program, board, out_dir, generated, extra_cflags, cc)
     return BuildResult(out_dir, exe, generated)

@@ -668,8 +668,18 @@ def _environment(template_dir: Path) -> jinja2.Environment:
     return env
 
 
-def render(program: Program, board, template_dir: Path) -> dict[str, str]:
-    """The generated C files: {file name: text}. Deterministic."""
+# Further outputs beside model.c (the interfaces' tables and maps): each
+# producer takes (program, board, jinja environment, view, release) and
+# returns {file name: text}; .c files are compiled with the firmware.
+PRODUCERS: list = []
+
+
+def render(program: Program, board, template_dir: Path, release: bool = False) -> dict[str, str]:
+    """The generated files: {file name: text}. Deterministic: the same
+    program gives byte-identical files."""
     view = build_view(program, board)
     env = _environment(template_dir)
-    return {"model.c": env.get_template("model.c.j2").render(m=view)}
+    files = {"model.c": env.get_template("model.c.j2").render(m=view, release=release)}
+    for produce in PRODUCERS:
+        files.update(produce(program, board, env, view, release))
+    return files

@@ -20,6 +20,15 @@ bool el_port_init(int argc, char **argv);
  * (host: --duration reached). */
 bool el_port_wait_tick(uint32_t tick);
 
+/* Serve the interfaces for at most `max_ms` milliseconds (less if something
+ * arrives): the wait of a program halted by its debugger, while logical
+ * time stands still. */
+void el_port_idle(uint16_t max_ms);
+
+/* Let real time resume from the current tick (after a halt), instead of
+ * catching up with the ticks missed meanwhile. */
+void el_port_resync(void);
+
 /* The real-time tick counter, for lateness (overrun) accounting. In virtual
  * time it is the logical tick being processed. */
 uint32_t el_port_real_tick(void);

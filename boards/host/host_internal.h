@@ -22,6 +22,19 @@
  * 16 bytes, 1 GiB; a bigger file is reported, not loaded. */
 #define EL_HOST_STIMULUS_MAX_EVENTS (64ul * 1024ul * 1024ul)
 
+/* Most descriptors (listening sockets, connections, ptys) served at once. */
+#define EL_HOST_MAX_WATCHED 32u
+
+/* ---- descriptors served between instants (host_port.c) ---- */
+
+/* Called when `fd` is readable or closed (revents as poll() sets them). */
+typedef void (*el_host_fd_handler_t)(int fd, short revents, void *ctx);
+
+/* Serve `fd` between instants (while waiting in real time, at every
+ * instant in virtual time, and while halted: el_port_idle). */
+bool el_host_watch_fd(int fd, el_host_fd_handler_t handler, void *ctx);
+void el_host_unwatch_fd(int fd);
+
 /* ---- messages (host_port.c) ---- */
 
 /* The program name used in messages: argv[0] without its directory. */
