@@ -46,19 +46,22 @@ def generate(program: Program, board: Board, out_dir: Path, release: bool = Fals
 
 
 def compile_host_like(program: Program, board: Board, out_dir: Path, generated: list[Path],
-                      extra_cflags: list[str] | None = None, cc: str | None = None) -> Path:
+                      extra_cflags: list[str] | None = None, cc: str | None = None, release: bool = False) -> Path:
     """Compile and link the generated code, the runtime and the board's port."""
     compiler = cc or board.cc
     if shutil.which(compiler) is None:
         package = _DEBIAN_PACKAGES.get(Path(compiler).name, board.debian_package or compiler)
         raise BuildError(f"the C compiler '{compiler}' of board '{board.name}' is not installed "
                          f"(Debian package: {package})")
-    runtime = sorted(runtime_dir().glob("*.c"))
+    # A release build has no debug code at all: the debug server's files
+    # (runtime_c/el_debug*.c) are left out and EL_RELEASE is defined.
+    runtime = sorted(p for p in runtime_dir().glob("*.c") if not (release and p.name.startswith("el_debug")))
     generated = [p for p in generated if p.suffix == ".c"]
     board_sources = [board.path / s for s in board.sources]
     includes = [f"-I{runtime_dir()}", f"-I{out_dir}"] + [f"-I{board.path / d}" for d in board.include_dirs]
     exe = out_dir / program.name
-    cmd = [compiler, *board.cflags, *(extra_cflags or []), *includes, "-o", str(exe),
+    mode = ["-DEL_RELEASE=1"] if release else ["-DEL_DEBUG=1"]
+    cmd = [compiler, *board.cflags, *mode, *(extra_cflags or []), *includes, "-o", str(exe),
            *map(str, generated + runtime + board_sources), *board.ldflags]
     proc = subprocess.run(cmd, capture_output=True, text=True)
     if proc.returncode != 0:
@@ -72,5 +75,5 @@ def build(program: Program, board_name: str, out_dir: Path, extra_cflags: list[s
     debug interface (the debug server is linked into debug builds only)."""
     board = load_board(board_name)
     generated = generate(program, board, out_dir, release)
-    exe = compile_host_like(program, board, out_dir, generated, extra_cflags, cc)
+    exe = compile_host_like(program, board, out_dir, generated, extra_cflags, cc, release)
     return BuildResult(out_dir, exe, generated)

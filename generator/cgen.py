@@ -239,7 +239,8 @@ class CModel:
     device_reads: list[tuple[int, str]]  # (reader task mask, read call)
     instants: list[tuple[int, int, int]]
     deadlines: list[int]
-    publish_switch: list[tuple[int, str]] = field(default_factory=list)
+    interface_boot: list[str] = field(default_factory=list)  # C statements: start the interfaces
+    interface_poll: list[str] = field(default_factory=list)  # C statements: serve them when idle
 
 
 class _Builder:
@@ -673,11 +674,20 @@ def _environment(template_dir: Path) -> jinja2.Environment:
 # returns {file name: text}; .c files are compiled with the firmware.
 PRODUCERS: list = []
 
+# The interfaces' glue in model.c: each hook takes (program, board, release)
+# and returns (boot statements, idle statements) for el_gen_interfaces_boot
+# and el_gen_interfaces_poll.
+INTERFACE_HOOKS: list = []
+
 
 def render(program: Program, board, template_dir: Path, release: bool = False) -> dict[str, str]:
     """The generated files: {file name: text}. Deterministic: the same
     program gives byte-identical files."""
     view = build_view(program, board)
+    for hook in INTERFACE_HOOKS:
+        boot, poll = hook(program, board, release)
+        view.interface_boot.extend(boot)
+        view.interface_poll.extend(poll)
     env = _environment(template_dir)
     files = {"model.c": env.get_template("model.c.j2").render(m=view, release=release)}
     for produce in PRODUCERS:

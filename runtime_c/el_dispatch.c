@@ -10,6 +10,11 @@ uint64_t el_now_tick(void)
     return el_now;
 }
 
+void el_idle(void)
+{
+    el_gen_interfaces_poll();
+}
+
 void el_run(int argc, char **argv)
 {
     uint64_t base = 0u;
@@ -21,6 +26,7 @@ void el_run(int argc, char **argv)
         return;
     }
     el_gen_boot();
+    el_gen_interfaces_boot();
     for (;;) {
         for (i = 0u; i < el_instant_count; i++) {
             uint32_t publish = EL_ROM_READ_U32(&el_instants[i].publish);

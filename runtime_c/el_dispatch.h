@@ -30,11 +30,18 @@ void el_gen_read_devices(uint32_t released);   /* read() of devices those tasks 
 void el_gen_release(uint8_t task);             /* latch inputs into the task's copy */
 void el_gen_body(uint8_t task);                /* run the task's dataflows and charts */
 void el_gen_publish(uint8_t task);             /* outputs, channels, device write() */
+void el_gen_interfaces_boot(void);             /* start the debug and service interfaces */
+void el_gen_interfaces_poll(void);             /* serve them (from el_idle) */
 
 /* ---- provided by the runtime --------------------------------------------- */
 
 /* Boot, then dispatch until the board's el_port_wait_tick says stop. */
 void el_run(int argc, char **argv);
+
+/* Serve the interfaces: ports call it while they wait between instants
+ * (MCU ports in their wait loop; the host board after serving its
+ * descriptors). */
+void el_idle(void);
 
 /* The absolute logical tick of the instant being processed. */
 uint64_t el_now_tick(void);

@@ -14,6 +14,7 @@
 #endif
 
 #include "host_internal.h"
+#include "el_dispatch.h"
 
 #include <errno.h>
 #include <poll.h>
@@ -282,6 +283,7 @@ static void serve_fds(int timeout_ms)
             ts.tv_nsec = (long)(timeout_ms % 1000) * 1000000L;
             (void)nanosleep(&ts, NULL);
         }
+        el_idle();
         return;
     }
     for (i = 0; i < n; i++) {
@@ -291,12 +293,13 @@ static void serve_fds(int timeout_ms)
         fds[i].revents = 0;
     }
     r = poll(fds, (nfds_t)n, timeout_ms);
-    if (r <= 0)
-        return;
-    for (i = 0; i < n; i++) {
-        if (fds[i].revents != 0)
-            copy[i].handler(copy[i].fd, fds[i].revents, copy[i].ctx);
+    if (r > 0) {
+        for (i = 0; i < n; i++) {
+            if (fds[i].revents != 0)
+                copy[i].handler(copy[i].fd, fds[i].revents, copy[i].ctx);
+        }
     }
+    el_idle();
 }
 
 void el_port_idle(uint16_t max_ms)
