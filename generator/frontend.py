@@ -7,6 +7,7 @@ from pathlib import Path
 
 from .analysis import analyze_model
 from .checker import check
+from .timing import compute_timing
 from .loader import load
 from .model import CheckedModel
 from .source import Diagnostics, SourceCache
@@ -19,6 +20,7 @@ class FrontEndResult:
     model: CheckedModel | None
     diagnostics: Diagnostics
     sources: SourceCache
+    timing: object = None  # easylab.timing.Timing when the model is good
 
     def report(self) -> str:
         """All diagnostics, rendered with source excerpts."""
@@ -42,21 +44,20 @@ def check_file(path: str | Path, schedule: str | None = None) -> FrontEndResult:
     # would only add misleading follow-on errors.
     if loaded is not None and not diags.has_errors:
         model = check(loaded.modules, loaded.root, diags)
+    timing = None
     if model is not None:
         analyze_model(model, diags, schedule)
-    return FrontEndResult(model if not diags.has_errors else None, diags, sources)
+        if not diags.has_errors:
+            timing = compute_timing(model, diags)
+    ok = not diags.has_errors
+    return FrontEndResult(model if ok else None, diags, sources, timing if ok else None)
 
 
 def lower_file(path: str | Path, schedule: str | None = None):
     """Front end, analyses and lowering: (IR program or None, FrontEndResult)."""
     from .ir import lower
-    from .timing import compute_timing
 
     result = check_file(path, schedule)
     if result.model is None:
         return None, result
-    timing = compute_timing(result.model, result.diagnostics)
-    if timing is None or result.diagnostics.has_errors:
-        result.model = None
-        return None, result
-    return lower(result.model, timing), result
+    return lower(result.model, result.timing), result
