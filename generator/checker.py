@@ -18,7 +18,7 @@ from .expressions import ERROR, ExprTyper, Symbol, Value
 from .model import (ActionInfo, ActorInstanceInfo, ArgValue, ChannelInfo, ChartInfo, CheckedModel, Claim, ConstInfo,
                     DataflowInfo, DataInfo, DeviceDatum, DevicePort, EdgeInfo, Endpoint, InterfaceInfo,
                     PrimitiveDevice, StepInfo, TaskInfo, TransitionInfo, Writer)
-from .source import Diagnostics, Span, did_you_mean, note
+from .source import Diagnostics, Span, closest, did_you_mean, note
 
 _KIND_NAMES = {
     ast.Const: "const", ast.Channel: "channel", ast.DeviceType: "device type",
@@ -26,6 +26,13 @@ _KIND_NAMES = {
     ast.Chart: "chart", ast.Task: "task",
 }
 _MAX_RATE = 65535
+# Names an actor's C code cannot see under their own name (docs/language.md §5).
+C_RESERVED = frozenset("""
+    auto break case char const continue default do double else enum extern float for goto if inline int long
+    register restrict return short signed sizeof static struct switch typedef union unsigned void volatile while
+    _Bool _Complex _Imaginary bool true false int8_t uint8_t int16_t uint16_t int32_t uint32_t int64_t uint64_t
+    size_t NULL main
+""".split())
 
 
 def _a(noun: str) -> str:
@@ -63,6 +70,7 @@ class Checker:
         self.claims: list[Claim] = []
         self._const_in_progress: list[str] = []
         self._const_failed: set[str] = set()
+        self._addresses: dict[tuple[str, int], ast.Data] = {}
 
     # ================================================================ driver
 
@@ -271,6 +279,14 @@ class Checker:
             self.error(span, "only params can be 'persist'", "make it a param, or drop 'persist'")
         if decl.service is not None and decl.service.address is not None and not 0 <= decl.service.address <= 65535:
             self.error(decl.service.span, f"register address {decl.service.address} is outside 0..65535")
+        elif decl.service is not None and decl.service.address is not None:
+            key = (decl.service.access, decl.service.address)
+            other = self._addresses.setdefault(key, decl)
+            if other is not decl:
+                self.error(decl.service.span, f"register address {decl.service.address} ({decl.service.access}) "
+                                              f"is given to '{other.name}' and to '{decl.name}'",
+                           "give each item its own address, or leave the address out to have one assigned",
+                           [note(other.service.span, f"'{other.name}' has it here")])
         self.data[decl.name] = DataInfo(decl, t, initial, rng)
 
     def check_channel(self, decl: ast.Channel) -> None:
@@ -313,6 +329,10 @@ class Checker:
                            notes=[note(seen[name], "first declared here")])
             else:
                 seen[name] = span
+            if name in C_RESERVED or name.lower().startswith("el_"):
+                self.error(span, f"{what} '{name}' of actor type '{decl.name}' cannot be named like that: "
+                                 "the actor's C code sees it under its own name",
+                           "C keywords, C type names and names starting with el_ are reserved")
 
         tparams = {}
         for tp in decl.type_params:
@@ -388,6 +408,7 @@ class Checker:
 
     def device_args(self, dtype: ast.DeviceType, actuals, span: Span, typer: ExprTyper):
         values: dict[str, object] = {}
+        misspelt: set[str | None] = set()
         formals = {p.name: p for p in dtype.params}
         ok = True
         for a in actuals:
@@ -395,6 +416,7 @@ class Checker:
             if formal is None:
                 self.error(a.name_span, f"device type '{dtype.name}' has no parameter '{a.name}'",
                            did_you_mean(a.name, formals))
+                misspelt.add(closest(a.name, formals))  # not reported as missing as well
                 ok = False
                 continue
             if a.name in values:
@@ -408,6 +430,11 @@ class Checker:
             v = typer.expect_const(a.value, t, f"device parameter '{a.name}'")
             if v.type is None:
                 ok = False
+            choices = self.choice_values(formal, t) if v.type is not None else None
+            if choices is not None and v.const not in choices:
+                self.error(a.value.span, f"device parameter '{a.name}' must be one of "
+                                         f"{', '.join(_show(c, t) for c in choices)}")
+                ok = False
             values[a.name] = v.const
         for name, formal in formals.items():
             if name not in values:
@@ -415,10 +442,19 @@ class Checker:
                     t = self.resolve_type(formal.type, allow_string=True)
                     v = self.const_typer().expect_const(formal.default, t, f"the default of '{name}'") if t else ERROR
                     values[name] = v.const
-                else:
+                    ok = ok and v.type is not None
+                elif name not in misspelt:
                     self.error(span, f"device type '{dtype.name}' needs parameter '{name}'")
                     ok = False
         return values if ok else None
+
+    def choice_values(self, formal: ast.FormalParam, t: T.ValueType) -> list | None:
+        """The constants a parameter declared ``in (...)`` may take, or None
+        (no choices, or a choice in error, reported)."""
+        if formal.choices is None:
+            return None
+        values = [self.const_typer().expect_const(c, t, "a choice") for c in formal.choices]
+        return None if any(v.type is None for v in values) else [v.const for v in values]
 
     def _device_typer(self, dtype: ast.DeviceType, args: dict) -> ExprTyper:
         def resolve(path: ast.Path):
@@ -429,9 +465,10 @@ class Checker:
             return self.global_symbol(path, allow=("const",))
         return self.typer(resolve, runtime=False)
 
-    def _elaborate(self, path: str, dtype: ast.DeviceType, args: dict, span: Span, outer: tuple) -> None:
+    def _elaborate(self, path: str, dtype: ast.DeviceType, args: dict, span: Span, outer: tuple) -> bool:
         """``span`` is the instance or part in the model's own files that
-        stands for this device; ``outer`` the device types around it."""
+        stands for this device; ``outer`` the device types around it. False
+        when a part could not be elaborated (its error is reported)."""
         typer = self._device_typer(dtype, args)
         if dtype.driver is not None:
             ports = {}
@@ -452,34 +489,42 @@ class Checker:
             self.devices.append(device)
             for port in ports.values():
                 self.device_data.setdefault(f"{path}.{port.name}", DeviceDatum(device, port, f"{path}.{port.name}"))
-            return
+            return len(ports) == len(dtype.ports)
+        complete = True  # every part elaborated: its data can be re-exported
         for part in dtype.parts:
             ptype = self.lookup(part.type_name, part.type_span, (ast.DeviceType,), "device type")
+            complete = complete and ptype is not None
             if ptype is None:
                 continue
             if ptype is dtype or ptype in outer:
                 cycle = [t.name for t in (*outer, dtype)][[*outer, dtype].index(ptype):] + [ptype.name]
                 self.error(part.type_span, f"device type '{ptype.name}' contains itself"
                                            + (f" ({' -> '.join(cycle)})" if len(cycle) > 2 else ""))
+                complete = False
                 continue
             part_args = self.device_args(ptype, part.args, part.span, typer)
+            complete = complete and part_args is not None
             if part_args is not None:
                 part_span = span if _in_library(part.span) else part.span
-                self._elaborate(f"{path}.{part.name}", ptype, part_args, part_span, (*outer, dtype))
-        for export in dtype.exports:
+                complete = self._elaborate(f"{path}.{part.name}", ptype, part_args, part_span,
+                                           (*outer, dtype)) and complete
+        for export in dtype.exports if complete else ():
             target = self.device_data.get(f"{path}.{export.target.text}")
             if target is None:
                 self.error(export.target.span, f"'{export.target.text}' is not a data port of a part of "
                                                f"device type '{dtype.name}'")
+                complete = False
                 continue
             if target.port.direction != export.direction:
                 self.error(export.span, f"'{export.name}' is declared '{export.direction}' but "
                                         f"'{export.target.text}' is '{target.port.direction}'")
+                complete = False
                 continue
             alias = f"{path}.{export.name}"
             self.device_data[alias] = target
             if target.name == f"{path}.{export.target.text}":
                 target.name = alias  # the shortest name the model gives it
+        return complete
 
     def eval_claim(self, r: ast.Resource, typer: ExprTyper, owner: str) -> Claim | None:
         if r.index is None:
@@ -708,12 +753,14 @@ class Checker:
         sizing = _sizing_params(atype)
         args: dict[str, ArgValue] = {}
         given: set[str] = set()
+        misspelt: set[str | None] = set()
         ok = True
         for a in inst.args:
             formal = formals.get(a.name)
             if formal is None:
                 self.error(a.name_span, f"actor type '{atype.name}' has no parameter '{a.name}'",
                            did_you_mean(a.name, formals))
+                misspelt.add(closest(a.name, formals))  # not reported as missing as well
                 ok = False
                 continue
             if a.name in given:
@@ -731,17 +778,16 @@ class Checker:
             if v.type is None:
                 ok = False
                 continue
-            if formal.choices is not None and v.is_const:
-                choices = [self.const_typer().expect_const(c, t, "a choice").const for c in formal.choices]
-                if v.const not in choices:
-                    self.error(a.value.span, f"{what} must be one of {', '.join(_show(c, t) for c in choices)}")
-                    ok = False
-                    continue
+            choices = self.choice_values(formal, t) if v.is_const else None
+            if choices is not None and v.const not in choices:
+                self.error(a.value.span, f"{what} must be one of {', '.join(_show(c, t) for c in choices)}")
+                ok = False
+                continue
             params = tuple(sorted({sym.name for _, sym in used if sym.kind == "param"}))
             args[a.name] = ArgValue(t, v.const, None if v.is_const else a.value, params,
                                     None if v.is_const else v.node)
         for name, formal in formals.items():
-            if name in given:
+            if name in given or name in misspelt:
                 continue
             if formal.default is None:
                 self.error(inst.type_span, f"'{inst.name}' needs parameter '{name}' of actor type '{atype.name}'",
@@ -911,7 +957,11 @@ class Checker:
             kind = "step_" + path.parts[1]
             return Symbol(kind, T.TIME if path.parts[1] == "time" else T.BOOL, None, chart.steps[path.parts[0]],
                           path.text)
-        return self.global_symbol(path)
+        symbol = self.global_symbol(path)
+        if isinstance(symbol, tuple) and path.parts[0] not in self.globals and len(path.parts) > 1:
+            # `Idel.time`: a misspelt step rather than a misspelt global
+            return symbol[0], did_you_mean(path.parts[0], chart.steps) or symbol[1]
+        return symbol
 
     def check_assignment(self, action: ast.Assign, chart: ChartInfo) -> list[ActionInfo]:
         target = action.target
@@ -941,7 +991,8 @@ class Checker:
             self.error(target.span, f"cannot assign to '{target.text}': it is {what}; "
                                     "an action assigns a var or a device input", hint)
             return []
-        v = self.typer(lambda p: self.chart_symbol(p, chart)).expect(action.value, t, f"'{target.text}'")
+        v = self.typer(lambda p: self.chart_symbol(p, chart)).expect(action.value, t,
+                                                                    f"the value assigned to '{target.text}'")
         writers.append(Writer(chart, action.span))
         if v.type is None:
             return []
