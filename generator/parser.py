@@ -23,6 +23,7 @@ from . import ast
 from .source import Diagnostic, ModelError, Span, did_you_mean, note
 
 _DURATION_US = {"us": 1, "ms": 1000, "s": 1_000_000}
+_MAX_EXPRESSION_DEPTH = 100
 _PARSE_LOCK = threading.Lock()
 
 
@@ -124,7 +125,7 @@ def blank_inline_c(text: str, file: str) -> tuple[str, dict[int, str]]:
                     if depth == 0:
                         break
                 k += 1
-            if k >= n:
+            if k >= n or text[k - 1] != "}":  # the braces close, but not with '}}'
                 line, col = _position(text, i)
                 raise ModelError([Diagnostic(Span(file, line, col, line, col + 2),
                                              "inline C block '{{' is never closed by a balancing '}}'",
@@ -156,6 +157,7 @@ class _ToAst(Transformer):
         super().__init__()
         self.file = file
         self.blocks = blocks
+        self.depths: dict[int, int] = {}  # id(operator node) -> its nesting depth, for one parse
 
     # helpers
     def _span(self, meta) -> Span:
@@ -216,7 +218,7 @@ class _ToAst(Transformer):
         if extra_headers:
             d = extra_headers[0]
             raise ModelError([Diagnostic(d.span, "a file has at most one 'model' header",
-                                         f"the first is at {header.span}")])
+                                         notes=(note(header.span, "the first 'model' header"),))])
         return ast.Module(self.file, header, tuple(imports), tuple(decls), tuple(ifaces))
 
     def model_decl(self, meta, ch):
@@ -510,13 +512,23 @@ class _ToAst(Transformer):
     def path(self, meta, ch):
         return ast.Path(self._span(meta), tuple(str(t) for t in ch), tuple(self._tspan(t) for t in ch))
 
+    def _nested(self, node: ast.Expr, *operands: ast.Expr) -> ast.Expr:
+        """``node``, unless operators nest deeper than every later stage
+        (which walks expressions recursively) can take."""
+        depth = 1 + max(self.depths.get(id(o), 0) for o in operands)
+        if depth > _MAX_EXPRESSION_DEPTH:
+            raise ModelError([Diagnostic(node.span, f"expression nested more than {_MAX_EXPRESSION_DEPTH} "
+                                                    "operators deep", "split it up with consts")])
+        self.depths[id(node)] = depth
+        return node
+
     def binary(self, meta, ch):
         left, op, right = ch
-        return ast.Binary(self._span(meta), str(op), left, right)
+        return self._nested(ast.Binary(self._span(meta), str(op), left, right), left, right)
 
     def unary(self, meta, ch):
         op, operand = ch
-        return ast.Unary(self._span(meta), str(op), operand)
+        return self._nested(ast.Unary(self._span(meta), str(op), operand), operand)
 
 
 # ----------------------------------------------------------- syntax errors
@@ -535,7 +547,8 @@ _EXAMPLES = {
     "an edge needs '->' between its source and its destination": [
         "dataflow D { a.y b.x }", "dataflow D { a b }", "dataflow D { a.y = b.x }"],
     "a declaration needs ':' and a type, as in 'var speed: int16'": [
-        "var x = 1", "param p = 1", "var x", "const C = 1", "var x int16", "var x: = 1", "const C: = 1"],
+        "var x = 1", "param p = 1", "var x", "const C = 1", "var x int16", "var x: = 1", "const C: = 1",
+        "param p: = 1"],
     "a transition needs 'when' and a guard, as in 'transition A -> B when go'": [
         "chart C { step A {} transition A -> B }", "chart C { step A {} transition A -> B step X {} }"],
     _EQUALS_IN_EXPRESSION: [  # told apart by _equals_message
@@ -621,8 +634,8 @@ def _describe_token(tok: Token) -> str:
 
 
 def _end_span(file: str, text: str) -> Span:
-    lines = text.splitlines() or [""]
-    line, col = len(lines), len(lines[-1]) + 1
+    """Just after the last thing in the file (lines count '\n' only, as the lexer does)."""
+    line, col = _position(text, len(text.rstrip()))
     return Span(file, line, col, line, col + 1)
 
 
@@ -675,14 +688,34 @@ def _syntax_error(err: UnexpectedInput, file: str, text: str) -> Diagnostic:
     return Diagnostic(span, base, hint)
 
 
+_WORD = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")
+
+
+def _keyword_as_name(err: UnexpectedInput) -> bool:
+    """Make a keyword the parser cannot take here a name, if it can take one.
+
+    The contextual lexer lexes a word as a keyword wherever the LALR state
+    has an action for it, and merged LALR states have actions for keywords
+    that may follow an expression anywhere (``offset`` after a task's
+    period, ``step`` after a guard, ``in`` after a default). A word is a
+    keyword only where the grammar expects one (docs/language.md, §1).
+    """
+    tok = getattr(err, "token", None)
+    if (isinstance(err, UnexpectedToken) and tok.type != "NAME" and _WORD.fullmatch(tok)
+            and "NAME" in err.accepts):
+        err.interactive_parser.feed_token(tok.update(type="NAME"))
+        return True
+    return False
+
+
 def parse_text(text: str, file: str = "<string>") -> ast.Module:
     """Parse model text into an :class:`ast.Module`; raise :class:`ModelError`."""
     blanked, blocks = blank_inline_c(text, file)
     parser, transformer = _ast_parser()
     with _PARSE_LOCK:
-        transformer.file, transformer.blocks = file, blocks
+        transformer.file, transformer.blocks, transformer.depths = file, blocks, {}
         try:
-            return parser.parse(blanked)
+            return parser.parse(blanked, on_error=_keyword_as_name)
         except UnexpectedInput as err:
             raise ModelError([_syntax_error(err, file, blanked)]) from None
         except VisitError as err:

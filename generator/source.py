@@ -57,7 +57,9 @@ class SourceCache:
         self._texts: dict[str, list[str]] = {}
 
     def add(self, name: str, text: str) -> None:
-        self._texts[name] = text.splitlines()
+        # Lines end at '\n' only, as for the lexer (splitlines() would also
+        # split at form feeds and other separators and shift every line).
+        self._texts[name] = [line.removesuffix("\r") for line in text.split("\n")]
 
     def read(self, path: Path) -> str:
         """Read a model file as UTF-8 and remember it under its display name."""
@@ -123,9 +125,15 @@ def note(span: Span, message: str) -> Diagnostic:
     return Diagnostic(span, message, severity="note")
 
 
-def did_you_mean(name: str, candidates) -> str | None:
-    """A ``did you mean 'x'?`` hint for a misspelt name, or None."""
+def closest(name: str, candidates) -> str | None:
+    """The candidate a misspelt name most likely means, or None."""
     import difflib
 
     matches = difflib.get_close_matches(name, sorted(set(candidates)), n=1, cutoff=0.6)
-    return f"did you mean '{matches[0]}'?" if matches else None
+    return matches[0] if matches else None
+
+
+def did_you_mean(name: str, candidates) -> str | None:
+    """A ``did you mean 'x'?`` hint for a misspelt name, or None."""
+    match = closest(name, candidates)
+    return f"did you mean '{match}'?" if match else None
