@@ -39,7 +39,12 @@ def _check(path: str):
 def cmd_check(args) -> int:
     status = EXIT_OK
     for path in args.files:
-        result = _check(path)
+        try:
+            result = _check(path)
+        except CliError as err:  # one unreadable file: say so, check the others
+            print(f"easylab: error: {err}", file=sys.stderr)
+            status = EXIT_MODEL_ERROR
+            continue
         if result.model is None:
             print(result.report(), file=sys.stderr)
             count = len(result.diagnostics.sorted())
@@ -158,6 +163,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--cc", metavar="CC", help="use this C compiler instead of the board's")
     p.add_argument("--cflags", metavar="FLAGS", help="extra compiler flags, e.g. \"-fsanitize=address,undefined\"")
     p.set_defaults(func=cmd_build)
+
     return parser
 
 

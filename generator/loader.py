@@ -60,6 +60,7 @@ def _load_file(path: Path, sources: SourceCache, diags: Diagnostics,
         return loaded[key]
     name = _display_name(path) if importer is None or not _is_library(key) else f"<{key.stem}>"
     try:
+        _check_readable(path)
         text = path.read_text(encoding="utf-8-sig")  # an editor's byte order mark is no error
         if "\0" in text:  # valid UTF-8, but no text file has NUL bytes
             raise UnicodeDecodeError("utf-8", text.encode("utf-8"), text.index("\0"), text.index("\0") + 1,
@@ -100,6 +101,26 @@ def _load_file(path: Path, sources: SourceCache, diags: Diagnostics,
     stack.pop()
     order.append(module)
     return module
+
+
+MAX_MODEL_BYTES = 16 * 1024 * 1024
+
+
+class ModelFileError(OSError):
+    """A path that is not a model file one can read: a device, a pipe, a
+    file larger than MAX_MODEL_BYTES."""
+
+
+def _check_readable(path: Path) -> None:
+    import stat
+
+    info = path.stat()  # FileNotFoundError passes through
+    if stat.S_ISDIR(info.st_mode):
+        raise IsADirectoryError(21, "is a directory", str(path))
+    if not stat.S_ISREG(info.st_mode):
+        raise ModelFileError(f"not a regular file")
+    if info.st_size > MAX_MODEL_BYTES:
+        raise ModelFileError(f"{info.st_size} bytes: larger than a model file may be ({MAX_MODEL_BYTES} bytes)")
 
 
 def _is_library(path: Path) -> bool:
