@@ -220,3 +220,37 @@ def test_sdf3_errors_are_one_line(tmp_path):
     assert out.returncode == 1
     assert out.stderr.startswith(f"{bad}: error:")
     assert "Traceback" not in out.stderr
+
+
+WCET = """\
+model wcet
+var a: int16
+var b: int16
+dataflow A {
+    a -> b
+}
+dataflow B {
+    b -> a
+}
+task fast period 10 ms wcet 6 ms { run A }
+task slow period 20 ms wcet 9 ms { run B }
+"""
+
+
+def test_wcet_overload_is_not_schedulable(tmp_path):
+    err = check_errors(tmp_path, WCET)  # 6/10 + 9/20 = 105 %
+    assert "the tasks' wcet add up to 105% of the processor: not schedulable" in err
+
+
+def test_wcet_deadline_miss_names_the_task(tmp_path):
+    # Non-preemptive: the slow job (0..2 fast, 2..12 slow) blocks the fast
+    # job released at 10 ms until 12 ms; it ends at 14 ms, after 13 ms.
+    text = WCET.replace("wcet 6 ms", "deadline 3 ms wcet 2 ms").replace("wcet 9 ms", "wcet 10 ms")
+    err = check_errors(tmp_path, text)
+    assert "task 'fast' can miss its deadline" in err
+
+
+def test_wcet_that_fits_is_accepted(tmp_path):
+    path = tmp_path / "ok.elab"
+    path.write_text(WCET.replace("wcet 9 ms", "wcet 7 ms"))
+    assert easylab("check", path).returncode == 0
