@@ -1,0 +1,261 @@
+"""Stimulus CSV files, read as the host board reads them (boards/host/
+README.md, "Stimulus CSV"; host_stimulus.c): the same columns, values,
+errors (``FILE:LINE: message``) and step-function semantics.
+
+A device ``out`` datum's value holds from its row's time on: it is written
+whenever its device is read (at the release of a task that uses it). A
+param's or var's value is written once, like a debug or service write, in
+the "inputs" phase of the first instant at or after its row's time (after
+that instant's publications, before its releases). Columns are bound to
+items by name, so a stimulus follows a live replacement of the model.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from bisect import bisect_right
+from dataclasses import dataclass, field
+
+from .. import types as T
+from ..ir import Program
+from . import values as V
+
+LINE_MAX = 65536
+_FLOAT_MAX = float(T.FLOAT32_MAX)
+_DECIMAL = re.compile(r"[+-]?(\d+\.?\d*|\.\d+)([eE][+-]?\d+)?")
+_HEX = re.compile(r"[+-]?0[xX]([0-9a-fA-F]+\.?[0-9a-fA-F]*|\.[0-9a-fA-F]+)([pP][+-]?\d+)?")
+_SPECIAL = re.compile(r"[+-]?(inf|infinity|nan(\([0-9A-Za-z_]*\))?)", re.IGNORECASE)
+_INTEGER = re.compile(r"[+-]?\d+")
+_RANGES = {t.name: (t.min, t.max) for t in T.INTEGERS} | {"time": (0, V.TIME_MAX), "bool": (0, 1)}
+
+
+class StimulusError(Exception):
+    """A stimulus file that cannot be used; the message is the host board's
+    ``FILE:LINE: message`` (possibly followed by the valid columns)."""
+
+
+@dataclass
+class Column:
+    """One stimulus column: which item (by name) and elements it sets, and
+    its values over time (non-decreasing times, file order). ``written``
+    counts the values of a param or var column already written."""
+
+    name: str
+    item: str
+    type: T.ValueType  # the item's, which the values were read as
+    first: int
+    count: int  # elements set: 1, or the item's count for a whole-item column
+    times: list[int] = field(default_factory=list)
+    values: list = field(default_factory=list)
+    written: int = 0
+
+    def value_at(self, time_us: int):
+        """The latest value whose time is <= time_us (None before the first)."""
+        i = bisect_right(self.times, time_us)
+        return self.values[i - 1] if i else None
+
+
+def parse_strtod(text: str) -> float | None:
+    """``text`` read as C's ``strtod`` reads a whole cell, or None."""
+    if _DECIMAL.fullmatch(text):
+        return float(text)
+    if _HEX.fullmatch(text):
+        sign = -1.0 if text.startswith("-") else 1.0
+        return sign * float.fromhex(text.lstrip("+-"))
+    if _SPECIAL.fullmatch(text):
+        word = text.lstrip("+-").lower()
+        value = math.inf if word.startswith("inf") else math.nan
+        return -value if text.startswith("-") else value
+    return None
+
+
+class Stimulus:
+    """A loaded stimulus file."""
+
+    def __init__(self, path: str, columns: list[Column]):
+        self.path = path
+        self.columns = columns
+        self._by_device: dict[int, list[tuple[Column, int]]] = {}
+        self._inputs: list[tuple[Column, int]] = []
+        self.unbound: list[str] = []
+
+    def bind(self, program: Program) -> None:
+        """Attach the columns to a program's items by name (again after a
+        live replacement); columns whose item no longer exists, or changed
+        type or size, are listed in ``unbound`` and ignored."""
+        by_name = {i.name: i for i in program.items}
+        self._by_device, self._inputs, self.unbound = {}, [], []
+        for col in self.columns:
+            item = by_name.get(col.item)
+            if item is None or item.type != col.type or item.count < col.first + col.count \
+                    or item.kind == "dev_in":
+                self.unbound.append(col.name)
+            elif item.kind == "dev_out":
+                self._by_device.setdefault(item.device, []).append((col, item.id))
+            else:
+                self._inputs.append((col, item.id))
+
+    def read_device(self, device: int, time_us: int, published: list[list]) -> None:
+        """``el_sim_read``: the device's data with a column take the latest
+        value whose time is <= time_us."""
+        for col, item in self._by_device.get(device, ()):
+            self._apply(col, item, time_us, published)
+
+    def apply_inputs(self, time_us: int, published: list[list]) -> None:
+        """``el_port_inputs``: every param or var value whose row time is
+        <= time_us and that was not written yet is written, in file order."""
+        for col, item in self._inputs:
+            due = bisect_right(col.times, time_us)
+            if due > col.written:
+                col.written = due
+                self._store(col, item, col.values[due - 1], published)
+
+    def _apply(self, col: Column, item: int, time_us: int, published: list[list]) -> None:
+        value = col.value_at(time_us)
+        if value is not None:
+            self._store(col, item, value, published)
+
+    @staticmethod
+    def _store(col: Column, item: int, value, published: list[list]) -> None:
+        published[item][col.first:col.first + col.count] = [value] * col.count
+
+
+def load(path: str, program: Program) -> Stimulus:
+    """Read and check a stimulus file for ``program``. Raises StimulusError
+    (and OSError for an unreadable file)."""
+    with open(path, "rb") as f:
+        data = f.read()
+    reader = _Reader(path, program)
+    columns = reader.parse(data)
+    stimulus = Stimulus(path, columns)
+    stimulus.bind(program)
+    return stimulus
+
+
+class _Reader:
+    def __init__(self, path: str, program: Program):
+        self.path = path
+        self.program = program
+        self.line = 0
+        self.items = {i.name: i for i in program.items}
+
+    def error(self, message: str, list_columns: bool = False) -> StimulusError:
+        text = f"{self.path}:{self.line}: {message}"
+        if list_columns:
+            text += "\n" + self._valid_columns()
+        return StimulusError(text)
+
+    def _valid_columns(self) -> str:
+        names = []
+        for it in self.program.items:
+            if it.kind == "dev_in":
+                continue
+            names.append(it.name if it.count == 1 else f"{it.name} (or {it.name}[0] .. {it.name}[{it.count - 1}])")
+        if not names:
+            return "  valid columns: time_us (the model has no device `out` data, params or vars)"
+        return "  valid columns: time_us, " + ", ".join(names)
+
+    def parse(self, data: bytes) -> list[Column]:
+        columns: list[Column] | None = None
+        last_time = None
+        lines = data.split(b"\n")
+        if lines and lines[-1] == b"":
+            lines.pop()
+        for self.line, raw in enumerate(lines, start=1):
+            if raw.endswith(b"\r"):
+                raw = raw[:-1]
+            if len(raw) > LINE_MAX:
+                raise self.error(f"line longer than {LINE_MAX} bytes")
+            if b"\0" in raw:
+                raise self.error("NUL byte in line (not a text file?)")
+            if self.line == 1 and raw.startswith(b"\xef\xbb\xbf"):
+                raw = raw[3:]
+            text = raw.decode("utf-8", errors="surrogateescape")
+            if not text.strip(" \t"):
+                continue
+            cells = [c.strip(" \t") for c in text.split(",")]
+            if columns is None:
+                columns = self._header(cells)
+                continue
+            if len(cells) != len(columns) + 1:
+                raise self.error(f"{len(cells)} cells, expected {len(columns) + 1} as in the header")
+            if not cells[0].isdigit() or not cells[0].isascii():
+                raise self.error(f"bad time '{cells[0]}' (time_us: whole microseconds, 0 or more)")
+            time_us = int(cells[0])
+            if time_us >= 2 ** 64:
+                raise self.error(f"bad time '{cells[0]}' (time_us: whole microseconds, 0 or more)")
+            if last_time is not None and time_us < last_time:
+                raise self.error(f"time {cells[0]} is before the previous row's time {last_time} "
+                                 "(times must not decrease)")
+            last_time = time_us
+            for col, cell in zip(columns, cells[1:]):
+                if cell:
+                    col.times.append(time_us)
+                    col.values.append(self._value(cell, col.type, col.name))
+        if columns is None:
+            self.line = 1
+            raise self.error("empty file: the first line must be the header time_us,DATUM,...")
+        return columns
+
+    def _header(self, names: list[str]) -> list[Column]:
+        if names[0] != "time_us":
+            raise self.error(f"the first column must be time_us, not '{names[0]}'")
+        columns: list[Column] = []
+        for name in names[1:]:
+            col = self._column(name)
+            for other in columns:
+                if other.item == col.item and other.first < col.first + col.count \
+                        and col.first < other.first + other.count:
+                    raise self.error(f"columns '{other.name}' and '{name}' set the same datum")
+            columns.append(col)
+        return columns
+
+    def _column(self, name: str) -> Column:
+        if not name:
+            raise self.error("empty column name", True)
+        item, index = self.items.get(name), None
+        if item is None:
+            m = re.fullmatch(r"(.*)\[(\d+)\]", name)
+            if m and m.group(1) in self.items:
+                item, index = self.items[m.group(1)], int(m.group(2))
+        if item is None:
+            raise self.error(f"unknown column '{name}'", True)
+        if item.kind == "dev_in":
+            raise self.error(f"column '{name}': {item.name} is a device `in` datum; device `out` data, params "
+                             "and vars can be given a stimulus", True)
+        if index is not None and (item.count == 1 or index >= item.count):
+            elements = " (no index)" if item.count == 1 else "s"
+            raise self.error(f"column '{name}': {item.name} has {item.count} element{elements}", True)
+        return Column(name, item.name, item.type, index or 0, 1 if index is not None else item.count)
+
+    def _value(self, cell: str, t: T.ValueType, column: str):
+        if t is T.BOOL:
+            if cell in ("1", "true"):
+                return True
+            if cell in ("0", "false"):
+                return False
+            raise self.error(f"bad value '{cell}' for column '{column}' (bool: 0, 1, true or false)")
+        if t is T.FLOAT32:
+            return self._float(cell, column)
+        if not _INTEGER.fullmatch(cell):
+            what = ": whole milliseconds" if t is T.TIME else ": a decimal integer"
+            raise self.error(f"bad number '{cell}' for column '{column}' ({t.name}{what})")
+        lo, hi = _RANGES[t.name]
+        value = int(cell)
+        if not lo <= value <= hi:
+            raise self.error(f"value {cell} out of range for column '{column}' ({t.name}: {lo} .. {hi})")
+        return value
+
+    def _float(self, cell: str, column: str) -> float:
+        d = parse_strtod(cell)
+        if d is None:
+            raise self.error(f"bad number '{cell}' for column '{column}' (float32)")
+        overflow = math.isinf(d) and not _SPECIAL.fullmatch(cell)
+        # Above FLT_MAX but below FLT_MAX + half an ulp rounds to FLT_MAX.
+        if overflow or (math.isfinite(d) and abs(d) >= _FLOAT_MAX + 2.0 ** 103):
+            raise self.error(f"value '{cell}' out of range for column '{column}' "
+                             f"(float32: magnitude at most {_FLOAT_MAX:.9g})")
+        if math.isfinite(d) and abs(d) > _FLOAT_MAX:
+            d = math.copysign(_FLOAT_MAX, d)
+        return V.f32(d)

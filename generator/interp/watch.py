@@ -1,0 +1,114 @@
+"""``easylab run --watch``: poll the model and its imports, and replace the
+running program when they change (docs/local.md, "Live replacement").
+
+A watcher thread polls the files' modification times and sizes. On a
+change it runs the front end; errors are printed and the old program keeps
+running; a good model is handed to :meth:`Engine.replace_model`, which
+builds its plug-ins (a failure is printed, the old program keeps running)
+and swaps it in at the next instant.
+"""
+
+from __future__ import annotations
+
+import os
+import threading
+from pathlib import Path
+from typing import Callable
+
+from ..frontend import lower_file
+from ..ir import Program
+from ..loader import library_path, load
+from ..source import Diagnostics, SourceCache
+from .engine import Engine
+from .plugins import PluginError, plugin_source
+
+
+def model_files(path: Path, program: Program | None) -> list[Path]:
+    """The files a model depends on: itself, its imports, and the impl files
+    of its actors."""
+    files = [path]
+    loaded = load(path, SourceCache(), Diagnostics())
+    if loaded is not None:
+        for module in loaded.modules:
+            name = module.file
+            files.append(library_path(name[1:-1]) if name.startswith("<") and name.endswith(">") else Path(name))
+    if program is not None:
+        files += [Path(s.impl) for s in program.specs if s.impl]
+    return list(dict.fromkeys(files))
+
+
+def _stamp(files: list[Path]) -> tuple:
+    stamp = []
+    for f in files:
+        try:
+            st = os.stat(f)
+            stamp.append((str(f), st.st_mtime_ns, st.st_size))
+        except OSError:
+            stamp.append((str(f), None, None))
+    return tuple(stamp)
+
+
+class ModelWatcher(threading.Thread):
+    """Polls a model's files every ``interval`` seconds and replaces the
+    engine's program when they change; ``say`` prints a message."""
+
+    def __init__(self, path: str, engine: Engine, say: Callable[[str], None], schedule: str | None = None,
+                 interval: float = 0.2):
+        super().__init__(name="easylab-watch", daemon=True)
+        self.path = Path(path)
+        self.engine = engine
+        self.say = say
+        self.schedule = schedule
+        self.interval = interval
+        self._stop_event = threading.Event()
+        self.files = model_files(self.path, engine.program)
+        self._last = _stamp(self.files)
+
+    def stop(self) -> None:
+        self._stop_event.set()
+        self.join()
+
+    def run(self) -> None:
+        while not self._stop_event.wait(self.interval):
+            stamp = _stamp(self.files)
+            if stamp == self._last:
+                continue
+            # Let an editor finish writing: act when two polls agree.
+            if self._stop_event.wait(self.interval):
+                return
+            stamp = _stamp(self.files)
+            self._last = stamp
+            self.reload()
+            self._last = _stamp(self.files)
+
+    def reload(self) -> None:
+        """Run the front end on the model and hand a good result over."""
+        running = f"still running program 0x{self.engine.program.program_id:08x}"
+        try:
+            program, result = lower_file(self.path, self.schedule)
+        except (OSError, UnicodeDecodeError) as err:
+            self.say(f"easylab run: {self.path}: {getattr(err, 'strerror', None) or err}; {running}")
+            return
+        self.files = model_files(self.path, program)
+        if program is None:
+            count = len(result.diagnostics.sorted())
+            self.say(f"{result.report()}\neasylab run: {self.path}: {count} error{'s' if count != 1 else ''}; "
+                     f"{running}")
+            return
+        if self._unchanged(program):
+            return
+        try:
+            self.engine.replace_model(program)
+        except PluginError as err:
+            self.say(f"easylab run: error: {err}\neasylab run: {running}")
+
+    def _unchanged(self, program: Program) -> bool:
+        """The same IR and the same actor code: nothing to replace."""
+        running = self.engine.state
+        if program.program_id != running.program.program_id:
+            return False
+        try:
+            digests = [self.engine.cache.digest(plugin_source(s)) for s in program.specs]
+        except (OSError, ValueError):
+            return False
+        return digests == [p.digest for p in running.plugins]
