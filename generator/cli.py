@@ -164,6 +164,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--cflags", metavar="FLAGS", help="extra compiler flags, e.g. \"-fsanitize=address,undefined\"")
     p.set_defaults(func=cmd_build)
 
+    from .interp.cli import add_parser as add_run_parser
+    add_run_parser(sub)
     return parser
 
 
