@@ -107,6 +107,8 @@ class ExprWriter:
         if op == "or":
             return f"({a} || {b})"
         if op in ("==", "!=", "<", "<=", ">", ">="):
+            if t.is_integer:  # through el_cmp_*: no warning for comparisons the types decide
+                return f"(el_cmp_{_DIV_SUFFIX.get(t.name, 'u32')}({a}, {b}) {op} 0)"
             return f"({a} {op} {b})"
         if t is T.TIME:
             return f"el_time_{'add' if op == '+' else 'sub'}({a}, {b})"
@@ -693,3 +695,9 @@ def render(program: Program, board, template_dir: Path, release: bool = False) -
     for produce in PRODUCERS:
         files.update(produce(program, board, env, view, release))
     return files
+
+
+# The debug interface (docs/protocol.md): its tables, map and glue.
+from . import debuggen  # noqa: E402  (imports nothing of this module at import time)
+PRODUCERS.append(debuggen.produce)
+INTERFACE_HOOKS.append(debuggen.interface_hook)

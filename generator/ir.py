@@ -412,7 +412,7 @@ class _Lowering:
             else:
                 externals.append(External(node, direction, "item", self.item_of[id(ep.target)], count))
         task = self.task_index.get(df.task.name) if df.task else None
-        return Dataflow(did, df.name, instance_ids, buffers, externals, analysis.result.schedule,
+        return Dataflow(did, df.name, instance_ids, buffers, externals, _activation_schedule(analysis, externals),
                         analysis.result.kind, dict(analysis.result.repetitions), task,
                         location(df.decl.name_span))
 
@@ -515,6 +515,22 @@ class _Lowering:
         if isinstance(node, I.Binary):
             return I.Binary(node.type, node.op, self.expr(node.left), self.expr(node.right), node.operand_type)
         return node
+
+
+def _activation_schedule(analysis, externals: list[External]) -> sdf.Schedule:
+    """The analysis's schedule with the item endpoints moved out of the way:
+    every ``in:`` item node fires first and every ``out:`` item node last, so
+    a dataflow that writes a var and also reads it sees the value latched at
+    release whatever the schedule (docs/ir.md, "dataflows"). They fire once
+    per activation, so they sit at the top level of any schedule."""
+    items = {e.node: e for e in externals if e.kind == "item"}
+    body = analysis.result.schedule.body
+    moved = [n for n in body if isinstance(n, sdf.Fire) and n.actor in items]
+    assert len(moved) == len(items), "item endpoints fire once per activation, at the top level"
+    rest = tuple(n for n in body if not (isinstance(n, sdf.Fire) and n.actor in items))
+    first = tuple(sdf.Fire(e.node) for e in externals if e.kind == "item" and e.direction == "in")
+    last = tuple(sdf.Fire(e.node) for e in externals if e.kind == "item" and e.direction == "out")
+    return sdf.Schedule(first + rest + last)
 
 
 def lower(model: CheckedModel, timing: Timing) -> Program:

@@ -2,6 +2,7 @@
 #include "el_dispatch.h"
 #include "el_model.h"
 #include "el_port.h"
+#include "el_debug.h" /* the debugger's hooks: empty macros without a debug server */
 
 static uint64_t el_now;
 
@@ -47,6 +48,7 @@ void el_run(int argc, char **argv)
                 }
             }
             el_port_inputs(el_now);
+            EL_DEBUG_INSTANT(); /* queued debugger writes; halts at an instant */
             if (release != 0u) {
                 el_gen_read_devices(release);
                 for (task = 0u; task < el_task_count; task++) {
@@ -60,7 +62,9 @@ void el_run(int argc, char **argv)
                 uint32_t bit = (uint32_t)1u << task;
                 if ((release & bit) != 0u) {
                     uint32_t late;
+                    EL_DEBUG_TASK_BEGIN(task); /* task breakpoints, step by task */
                     el_gen_body(task);
+                    EL_DEBUG_TASK_END(task);
                     pending |= bit;
                     /* Lateness never changes the published values; it is
                      * counted so that it is never silent. */

@@ -47,6 +47,19 @@ EL_INLINE float el_clamp_f32(float v, float lo, float hi)
     return v < lo ? lo : (v > hi ? hi : v);
 }
 
+/* Three-way comparison of model integers (-1, 0, 1): generated guards
+ * compare through these, so that a comparison whose outcome the types
+ * already decide (an unsigned value >= 0) is no compiler warning. */
+#define EL_CMP_FN(name, T) \
+    EL_INLINE int8_t el_cmp_##name(T a, T b) { return (int8_t)(a < b ? -1 : (a > b ? 1 : 0)); }
+EL_CMP_FN(i8, int8_t)
+EL_CMP_FN(u8, uint8_t)
+EL_CMP_FN(i16, int16_t)
+EL_CMP_FN(u16, uint16_t)
+EL_CMP_FN(i32, int32_t)
+EL_CMP_FN(u32, uint32_t)
+#undef EL_CMP_FN
+
 /* Compare with an operator given as a compile-time string ("<", "<=", ...):
  * the compiler folds the string tests away. */
 #define EL_COMPARE(op, a, b) \

@@ -117,6 +117,11 @@ void el_host_trace_instant(uint64_t tick);
 /* Flush and close; false if writing failed (reported). No-op if closed. */
 bool el_host_trace_close(void);
 
+/* ---- debug interface (host_debug.c) ---- */
+
+/* The --debug option: open the pty or TCP port and serve it. */
+bool el_host_opt_debug(const char *arg);
+
 /* ---- non-volatile storage (host_nvram.c) ---- */
 
 /* Use the file at `path` (NULL: an in-memory store). */

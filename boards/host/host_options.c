@@ -136,6 +136,8 @@ const el_host_option_t el_host_options[] = {
     {"--trace", "FILE.csv|FILE.vcd", "record every item and chart at each instant (CSV or VCD by extension)", false,
      opt_trace},
     {"--nvram", "FILE", "non-volatile storage in FILE (4096 bytes; default: in memory)", false, opt_nvram},
+    {"--debug", "pty:LINK|tcp:PORT[,halt]", "serve the debug interface on a new pty (symlink LINK) or 127.0.0.1:PORT",
+     false, el_host_opt_debug},
     {"--help", NULL, "show this help and exit", false, opt_help},
 };
 const size_t el_host_option_count = sizeof el_host_options / sizeof el_host_options[0];

@@ -320,9 +320,12 @@ static bool sleep_until(uint64_t deadline_ns)
         if (now >= deadline_ns || watched_count == 0u)
             break;
         /* poll() counts whole milliseconds: leave the last one to
-         * clock_nanosleep so that instants stay exact. */
-        if (deadline_ns - now <= 1000000u)
+         * clock_nanosleep so that instants stay exact, but look at the
+         * descriptors at least once per instant (ticks of 1 ms or less). */
+        if (deadline_ns - now <= 1000000u) {
+            serve_fds(0);
             break;
+        }
         serve_fds((int)((deadline_ns - now - 1000000u) / 1000000u));
     }
     ts.tv_sec = (time_t)(deadline_ns / 1000000000u);

@@ -1,0 +1,155 @@
+"""The debug map (debug_map.json, written by ``easylab build`` beside a debug
+firmware): names, types and locations for the ids of the debug protocol.
+
+Without a map the tools still work by id (``#3``), asking the firmware for
+each item's type (ITEM_INFO).
+"""
+
+from __future__ import annotations
+
+import fnmatch
+import json
+import re
+from dataclasses import dataclass
+from pathlib import Path
+
+from .debug_protocol import K, PROBE_NAMES
+
+MAP_FORMAT = "easylab-debug-map"
+
+
+class MapError(Exception):
+    """A map that cannot be read, or a name it does not know (one line)."""
+
+
+@dataclass
+class Item:
+    id: int
+    name: str
+    kind: str
+    type: str
+    count: int
+    flags: list
+    unit: str | None = None
+    range: list | None = None
+    location: str = "?"
+
+    @property
+    def writable(self) -> bool:
+        return "write" in self.flags
+
+
+@dataclass
+class Point:
+    """A probe point: where a breakpoint can be set."""
+
+    kind: int
+    a: int
+    b: int
+    label: str
+
+
+class DebugMap:
+    def __init__(self, data: dict, path: str = "?"):
+        if data.get("format") != MAP_FORMAT:
+            raise MapError(f"{path}: not an EasyLab debug map")
+        self.path = path
+        self.data = data
+        self.model = data.get("model", "?")
+        self.program_id = int(str(data["program_id"]), 0)
+        self.tick_us = int(data.get("tick_us", 0))
+        self.items = [Item(i["id"], i["name"], i["kind"], i["type"], i["count"], i["flags"], i.get("unit"),
+                           i.get("range"), i.get("location", "?")) for i in data["items"]]
+        self.by_name = {i.name: i for i in self.items}
+        self.by_id = {i.id: i for i in self.items}
+        self.charts = data.get("charts", [])
+        self.actors = data.get("actors", [])
+        self.tasks = data.get("tasks", [])
+
+    @classmethod
+    def load(cls, path: str | Path) -> "DebugMap":
+        try:
+            data = json.loads(Path(path).read_text(encoding="utf-8"))
+        except FileNotFoundError:
+            raise MapError(f"{path}: no such file") from None
+        except (OSError, UnicodeDecodeError) as err:
+            raise MapError(f"{path}: {getattr(err, 'strerror', None) or err}") from None
+        except json.JSONDecodeError as err:
+            raise MapError(f"{path}: not JSON ({err.msg}, line {err.lineno})") from None
+        try:
+            return cls(data, str(path))
+        except (KeyError, TypeError, ValueError) as err:
+            raise MapError(f"{path}: broken debug map ({err})") from None
+
+    # -------------------------------------------------------------- items
+
+    def item(self, name: str) -> Item:
+        if name in self.by_name:
+            return self.by_name[name]
+        m = re.fullmatch(r"#(\d+)", name)
+        if m and int(m.group(1)) in self.by_id:
+            return self.by_id[int(m.group(1))]
+        close = [n for n in self.by_name if n.lower() == name.lower() or n.endswith("." + name)]
+        hint = f" (did you mean {', '.join(close[:3])}?)" if close else " (`vars` lists them)"
+        raise MapError(f"no item '{name}' in model {self.model}{hint}")
+
+    def glob(self, pattern: str | None) -> list[Item]:
+        if not pattern:
+            return list(self.items)
+        return [i for i in self.items if fnmatch.fnmatchcase(i.name, pattern)]
+
+    # -------------------------------------------------------------- probe points
+
+    def points(self) -> list[Point]:
+        """Every place a breakpoint can go, with its name in the console."""
+        pts = [Point(K.P_INSTANT, 0, 0, "instant")]
+        pts += [Point(K.P_TASK, t["id"], 0, f"task:{t['name']}") for t in self.tasks]
+        for c in self.charts:
+            pts.append(Point(K.P_CHART, c["id"], 0, f"chart:{c['name']}"))
+            pts += [Point(K.P_STEP, c["id"], s["id"], f"{c['name']}.{s['name']}") for s in c["steps"]]
+            pts += [Point(K.P_TRANSITION, c["id"], t["id"], f"{c['name']}:{t['name'].replace(' ', '')}")
+                    for t in c["transitions"]]
+        pts += [Point(K.P_ACTOR, a["id"], 0, f"actor:{a['name']}") for a in self.actors]
+        return pts
+
+    def point(self, text: str) -> Point:
+        """A probe point by name: ``Chart.Step``, ``Chart:A->B``,
+        ``actor:Dataflow.inst`` or ``Dataflow.inst``, ``task:NAME`` or NAME,
+        ``chart:NAME``, ``instant``."""
+        key = text.replace(" ", "")
+        pts = self.points()
+        exact = [p for p in pts if p.label == key]
+        if exact:
+            return exact[0]
+        loose = [p for p in pts if p.label.split(":", 1)[-1] == key] if ":" not in key or "->" in key else []
+        if len(loose) == 1:
+            return loose[0]
+        if len(loose) > 1:
+            raise MapError(f"'{text}' is ambiguous: {', '.join(p.label for p in loose)}")
+        raise MapError(f"no step, transition, actor, chart or task '{text}' in model {self.model} "
+                       f"(`breakpoints --all` lists them)")
+
+    def describe(self, kind: int, a: int, b: int) -> str:
+        """The name of a probe point (for halts and breakpoint lists)."""
+        for p in self.points():
+            if (p.kind, p.a, p.b) == (kind, a, b):
+                return p.label if p.kind != K.P_STEP else f"step {p.label}"
+        return f"{PROBE_NAMES.get(kind, kind)} {a}.{b}"
+
+    def task_name(self, task: int | None) -> str | None:
+        if task is None:
+            return None
+        return next((t["name"] for t in self.tasks if t["id"] == task), f"task {task}")
+
+    def actor_name(self, actor: int | None) -> str | None:
+        if actor is None:
+            return None
+        return next((a["name"] for a in self.actors if a["id"] == actor), f"actor {actor}")
+
+    def step_name(self, chart: int, step: int | None) -> str | None:
+        if step is None:
+            return None
+        c = next((c for c in self.charts if c["id"] == chart), None)
+        if c is None:
+            return str(step)
+        return next((s["name"] for s in c["steps"] if s["id"] == step), str(step))
