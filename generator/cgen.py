@@ -15,6 +15,7 @@ use circular buffers with run-time indices.
 from __future__ import annotations
 
 import re
+import types
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -662,6 +663,18 @@ def build_view(program: Program, board) -> CModel:
     deadlines = [t.deadline for t in program.tasks]
     return CModel(program, __version__, board.name, b.items, specs, states, b.buffers, dataflows, charts, tasks,
                   channels, boot, shutdown, reads, instants, deadlines)
+
+
+def spec_view(spec: ActorSpec) -> SpecView:
+    """The view of one actor specialisation on its own (for the
+    interpreter's plug-ins: templates/actor.c.j2 prints it), with its impl
+    file's file-scope code."""
+    return _Builder(types.SimpleNamespace(items=[], specs=[spec]), board=None).spec_view(spec)
+
+
+def environment(template_dir: Path) -> jinja2.Environment:
+    """The Jinja2 environment of the C templates."""
+    return _environment(template_dir)
 
 
 def _environment(template_dir: Path) -> jinja2.Environment:

@@ -37,12 +37,9 @@ import os
 import shutil
 import subprocess
 import threading
-import types
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 from pathlib import Path
-
-import jinja2.nodes
 
 from .. import cgen
 from ..boards import runtime_dir, templates_dir
@@ -84,39 +81,17 @@ def spec_view(spec: ActorSpec) -> cgen.SpecView:
     The specialisation is renamed to id 0 and its type's name, and its
     location keeps only the file: the plug-in source, hence its digest and
     its identity across live replacements, depends on what the code is, not
-    on where the specialisation sits in the program or its file. As the only
-    specialisation of the file it also gets its impl file's file-scope code.
-    (Candidate for cgen.py: a public ``spec_view(spec, prelude=True)``.)
+    on where the specialisation sits in the program or its file.
     """
     standalone = dataclasses.replace(spec, id=0, c_name=spec.type_name, location=spec.location.rsplit(":", 1)[0])
-    builder = cgen._Builder(types.SimpleNamespace(items=[], specs=[standalone]), board=None)
-    return builder.spec_view(standalone)
-
-
-@functools.lru_cache(maxsize=1)
-def _actor_block_template() -> jinja2.Template:
-    """The actor-code block of templates/model.c.j2 (its top-level loop over
-    ``m.specs``, with the template's top-level ``set`` statements before
-    it), as a template of its own: firmware and plug-ins print actor code
-    from one template. (Candidate for templates/: an ``actor.c.j2`` that
-    model.c.j2 includes.)"""
-    env = cgen._environment(templates_dir())
-    source = (templates_dir() / "model.c.j2").read_text(encoding="utf-8")
-    settings = []
-    for node in env.parse(source).body:
-        if isinstance(node, jinja2.nodes.Assign):
-            settings.append(node)
-        elif isinstance(node, jinja2.nodes.For) and isinstance(node.iter, jinja2.nodes.Getattr) \
-                and node.iter.attr == "specs":
-            return env.from_string(jinja2.nodes.Template([*settings, node], lineno=1))
-    raise RuntimeError("templates/model.c.j2 has no loop over m.specs: the plug-in generator needs one")
+    return cgen.spec_view(standalone)
 
 
 def _render_actor_block(view: cgen.SpecView) -> str:
-    """The firmware's actor code for one specialisation, as a release build
-    has it (no debug probes: a plug-in is not linked with the debug server)."""
-    m = types.SimpleNamespace(specs=[view], program=types.SimpleNamespace(interfaces=[]))
-    return _actor_block_template().render(m=m, release=True)
+    """The firmware's actor code for one specialisation (templates/actor.c.j2,
+    which model.c.j2 includes), without the debugger's probe: a plug-in is
+    not linked with the debug server."""
+    return cgen.environment(templates_dir()).get_template("actor.c.j2").render(s=view, debug=False)
 
 
 def _wrapper(spec: ActorSpec, view: cgen.SpecView) -> str:
