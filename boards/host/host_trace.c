@@ -8,7 +8,8 @@
  * el_items order (`name[0]` .. `name[n-1]` for count n > 1), then
  * `CHART.active` per chart; a row per instant at which any value differs
  * from the previous row (the first instant always gives a row). Values:
- * bool 0/1, integers in decimal, float32 as %.9g (exact round trip),
+ * bool 0/1, integers in decimal, float32 as %.9g (exact round trip; every
+ * NaN as "nan": its sign depends on the compiler, not on the model),
  * time as integer milliseconds, chart activity as the names of the active
  * steps in step order joined by `+` (empty when none is active).
  *
@@ -241,7 +242,10 @@ static void csv_row(uint64_t time_us)
         } else if (t->type == EL_T_F32) {
             float f;
             memcpy(&f, cell, sizeof f);
-            fprintf(out, "%.9g", (double)f);
+            if (isnan(f))
+                fputs("nan", out); /* the sign of a NaN depends on the compiler, not the model */
+            else
+                fprintf(out, "%.9g", (double)f);
         } else {
             bool is_signed;
             uint32_t v = cell_bits(t, cell, &is_signed);
@@ -310,7 +314,10 @@ static void vcd_value(const tcol_t *t, const unsigned char *cell)
     } else if (t->type == EL_T_F32) {
         float f;
         memcpy(&f, cell, sizeof f);
-        fprintf(out, "r%.9g", (double)f);
+        if (isnan(f))
+            fputs("rnan", out);
+        else
+            fprintf(out, "r%.9g", (double)f);
     } else if (t->type == EL_T_BOOL) {
         fprintf(out, "%c%s\n", cell[0] ? '1' : '0', t->id);
         return;

@@ -148,10 +148,11 @@ def _vcd_id(k: int) -> str:
 
 
 def _float_text(bits: int) -> str:
-    """``%.9g`` of a float32 as glibc prints it."""
+    """``%.9g`` of a float32 as glibc prints it; every NaN as ``nan`` (its
+    sign depends on the compiler, not on the model: boards/host/host_trace.c)."""
     value = V.f32_from_bits(bits)
     if value != value:
-        return "-nan" if bits >> 31 else "nan"
+        return "nan"
     return "%.9g" % value
 
 

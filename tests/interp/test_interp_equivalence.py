@@ -9,7 +9,6 @@ random typed expressions (the C arithmetic).
 
 from __future__ import annotations
 
-import re
 
 import pytest
 
@@ -63,14 +62,6 @@ def test_charts_move(firmware, tmp_path):
         assert steps in seen["charts"]
 
 
-def _nan_sign_free(text: bytes) -> bytes:
-    """A trace with every NaN printed as ``nan``: C leaves the sign of a NaN
-    open, and gcc's optimiser changes it (it rewrites ``a + (-b)`` as
-    ``a - b``); the interpreter follows the FPU's rules on the expression as
-    written, so only NaN signs may differ."""
-    return re.sub(rb"-nan\b", b"nan", text)
-
-
 @pytest.mark.parametrize("seed", [1, 2, 3])
 def test_random_expressions(seed, host_firmware, tmp_path):
     gen = ExprModel(seed)
@@ -83,7 +74,9 @@ def test_random_expressions(seed, host_firmware, tmp_path):
         host, interp = tmp_path / f"host.{ext}", tmp_path / f"interp.{ext}"
         run_host(exe, host, "1200ms", stimulus)
         assert run_interp(model, interp, "1200ms", stimulus) == 0
-        assert _nan_sign_free(interp.read_bytes()) == _nan_sign_free(host.read_bytes())
+        # Every NaN is printed "nan" by both: C leaves a NaN's sign to the
+        # compiler (gcc rewrites a + (-b) as a - b), so traces do not show it.
+        assert interp.read_bytes() == host.read_bytes()
 
 
 @pytest.mark.parametrize("name, schedule", [("cd_to_dat", "min-buffer"), ("multirate", "sas")])
