@@ -50,7 +50,9 @@ def compile_host_like(program: Program, board: Board, out_dir: Path, generated: 
     """Compile and link the generated code, the runtime and the board's port."""
     compiler = cc or board.cc
     if shutil.which(compiler) is None:
-        package = _DEBIAN_PACKAGES.get(Path(compiler).name, board.debian_package or compiler)
+        package = _DEBIAN_PACKAGES.get(Path(compiler).name, board.debian_package if compiler == board.cc else None)
+        if package is None:
+            raise BuildError(f"the C compiler '{compiler}' is not installed (or not on PATH)")
         raise BuildError(f"the C compiler '{compiler}' of board '{board.name}' is not installed "
                          f"(Debian package: {package})")
     # A release build has no debug code at all: the debug server's files

@@ -172,6 +172,13 @@ def build_parser() -> argparse.ArgumentParser:
 def main(argv: list[str] | None = None) -> int:
     """Entry point of the ``easylab`` console script."""
     parser = build_parser()
+    argv = list(sys.argv[1:] if argv is None else argv)
+    # `--cflags -O0`: argparse takes a value starting with '-' for an option;
+    # join it to its option so that both spellings work.
+    for i, arg in enumerate(argv[:-1]):
+        if arg == "--cflags":
+            argv[i:i + 2] = [f"--cflags={argv[i + 1]}"]
+            break
     args = parser.parse_args(argv)
     if not getattr(args, "func", None):
         parser.print_help()

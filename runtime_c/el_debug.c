@@ -26,7 +26,6 @@
 #include "el_model.h"
 #include "el_port.h"
 
-#include <string.h>
 
 #if EL_DBG_MAX_PAYLOAD != EL_DBG_MAX_FRAME - EL_DBG_HEADER - EL_DBG_TRAILER
 #error "el_debug_protocol.h: EL_DBG_MAX_PAYLOAD must be EL_DBG_MAX_FRAME - 4"
@@ -59,6 +58,7 @@ static el_cobs_decoder_t rx;
 static bool rx_ready;
 static uint8_t resp[EL_DBG_MAX_FRAME];
 static uint16_t resp_len; /* bytes of resp in use (seq, cmd, status, payload) */
+static bool resp_full;     /* a put did not fit: every later put of this response fails too */
 static uint8_t wire[EL_COBS_MAX_ENCODED(EL_DBG_MAX_FRAME) + 1u];
 static uint16_t wire_len; /* the last response as sent, for a repeated request */
 static bool have_last;
@@ -108,9 +108,29 @@ static uint16_t get_u16(const uint8_t *p)
     return (uint16_t)((uint16_t)p[0] | (uint16_t)((uint16_t)p[1] << 8));
 }
 
+/* Byte copies of our own: the runtime needs no C library (some targets'
+ * front ends have none). */
+static void copy_bytes(void *dst, const void *src, uint16_t n)
+{
+    uint8_t *d = (uint8_t *)dst;
+    const uint8_t *s = (const uint8_t *)src;
+    while (n-- > 0u) {
+        *d++ = *s++;
+    }
+}
+
+static void zero_bytes(void *dst, uint16_t n)
+{
+    uint8_t *d = (uint8_t *)dst;
+    while (n-- > 0u) {
+        *d++ = 0u;
+    }
+}
+
 static bool put_u8(uint8_t v)
 {
-    if (resp_len + 1u > EL_DBG_MAX_FRAME - EL_DBG_TRAILER) {
+    if (resp_full || resp_len + 1u > EL_DBG_MAX_FRAME - EL_DBG_TRAILER) {
+        resp_full = true;
         return false;
     }
     resp[resp_len++] = v;
@@ -171,7 +191,7 @@ static void get_elem(const el_dbg_item_t *it, uint16_t elem, uint8_t *out)
         break;
     case EL_DBG_T_F32:
         f = ((const float *)it->addr)[elem];
-        memcpy(&v32, &f, sizeof v32);
+        copy_bytes(&v32, &f, (uint16_t)(sizeof v32));
         out[0] = (uint8_t)(v32 & 0xFFu);
         out[1] = (uint8_t)((v32 >> 8) & 0xFFu);
         out[2] = (uint8_t)((v32 >> 16) & 0xFFu);
@@ -214,7 +234,7 @@ static void set_elem(const el_dbg_item_t *it, uint16_t elem, const uint8_t *in)
         ((uint16_t *)it->addr)[elem] = (uint16_t)v32;
         break;
     case EL_DBG_T_F32:
-        memcpy(&f, &v32, sizeof f);
+        copy_bytes(&f, &v32, (uint16_t)(sizeof f));
         ((float *)it->addr)[elem] = f;
         break;
     default:
@@ -249,7 +269,7 @@ static uint8_t check_value(const el_dbg_item_t *it, const uint8_t *in)
         s = u > 0x7FFFFFFFuL ? -(int32_t)(0xFFFFFFFFuL - u) - 1 : (int32_t)u;
         break;
     case EL_DBG_T_F32:
-        memcpy(&f, &u, sizeof f);
+        copy_bytes(&f, &u, (uint16_t)(sizeof f));
         return (f >= r->lo.f && f <= r->hi.f) ? EL_DBG_OK : EL_DBG_E_RANGE;
     default: /* unsigned, time, bool */
         return (u >= r->lo.u && u <= r->hi.u) ? EL_DBG_OK : EL_DBG_E_RANGE;
@@ -313,7 +333,7 @@ static void halt_here(uint8_t why, uint8_t kind, uint16_t a, uint16_t b, uint8_t
         halt_request = false;
         step_unit = 0u;
         bp_count = 0u;
-        memset(bps, 0, sizeof bps);
+        zero_bytes(bps, (uint16_t)(sizeof bps));
     }
     update_armed();
     el_port_resync();
@@ -545,8 +565,8 @@ static uint8_t do_write(const uint8_t *p, uint16_t n)
     e->item = id;
     e->elem = elem;
     e->op = EL_DBG_OP_WRITE;
-    memset(e->value, 0, sizeof e->value);
-    memcpy(e->value, p + 4, size);
+    zero_bytes(e->value, (uint16_t)(sizeof e->value));
+    copy_bytes(e->value, p + 4, (uint16_t)(size));
     if (tx_state == TX_OPEN) {
         (void)put_u8(EL_DBG_QUEUED);
         (void)put_u8(tx_len);
@@ -617,7 +637,7 @@ static uint8_t do_bp_clear(const uint8_t *p, uint16_t n)
         return EL_DBG_E_LENGTH;
     }
     if (p[0] == EL_DBG_NONE8) {
-        memset(bps, 0, sizeof bps);
+        zero_bytes(bps, (uint16_t)(sizeof bps));
         bp_count = 0u;
     } else if (p[0] >= EL_DBG_BP_MAX || bps[p[0]].used == 0u) {
         return EL_DBG_E_ID;
@@ -653,10 +673,18 @@ static uint8_t dispatch(uint8_t cmd, const uint8_t *p, uint16_t n)
         if (n != 0u) {
             return EL_DBG_E_LENGTH;
         }
-        (void)(put_u8(EL_DBG_PROTOCOL_VERSION) && put_u16(EL_DBG_MAX_FRAME) && put_u8(EL_DBG_WINDOW)
-               && put_u32(el_program_id) && put_u16(el_dbg_item_count) && put_u16(el_dbg_actor_count)
-               && put_u8(el_dbg_chart_count) && put_u8(el_task_count) && put_u8(EL_DBG_TX_MAX)
-               && put_u8(EL_DBG_WRITE_QUEUE) && put_u8(EL_DBG_BP_MAX) && put_u8(EL_DBG_VALUE_MAX));
+        (void)put_u8(EL_DBG_PROTOCOL_VERSION);
+        (void)put_u16(EL_DBG_MAX_FRAME);
+        (void)put_u8(EL_DBG_WINDOW);
+        (void)put_u32(el_program_id);
+        (void)put_u16(el_dbg_item_count);
+        (void)put_u16(el_dbg_actor_count);
+        (void)put_u8(el_dbg_chart_count);
+        (void)put_u8(el_task_count);
+        (void)put_u8(EL_DBG_TX_MAX);
+        (void)put_u8(EL_DBG_WRITE_QUEUE);
+        (void)put_u8(EL_DBG_BP_MAX);
+        (void)put_u8(EL_DBG_VALUE_MAX);
         return EL_DBG_OK;
     case EL_DBG_CMD_GET_PROGRAM_ID:
         if (n != 0u) {
@@ -668,8 +696,11 @@ static uint8_t dispatch(uint8_t cmd, const uint8_t *p, uint16_t n)
         if (n != 0u) {
             return EL_DBG_E_LENGTH;
         }
-        (void)(put_u8(status_flags()) && put_location() && put_u32((uint32_t)el_now_tick()) && put_u8(wq_len)
-               && put_u8(tx_len));
+        (void)put_u8(status_flags());
+        (void)put_location();
+        (void)put_u32((uint32_t)el_now_tick());
+        (void)put_u8(wq_len);
+        (void)put_u8(tx_len);
         return EL_DBG_OK;
     case EL_DBG_CMD_GET_COUNTERS:
         if (n != 0u) {
@@ -690,18 +721,21 @@ static uint8_t dispatch(uint8_t cmd, const uint8_t *p, uint16_t n)
             return EL_DBG_E_ID;
         }
         it = &el_dbg_items[get_u16(p)];
-        memset(lo, 0, sizeof lo);
-        memset(hi, 0, sizeof hi);
+        zero_bytes(lo, (uint16_t)(sizeof lo));
+        zero_bytes(hi, (uint16_t)(sizeof hi));
         if ((it->flags & EL_DBG_F_RANGE) != 0u && it->range != EL_DBG_NONE16) {
             uint32_t l, h;
-            memcpy(&l, &el_dbg_ranges[it->range].lo, sizeof l);
-            memcpy(&h, &el_dbg_ranges[it->range].hi, sizeof h);
+            copy_bytes(&l, &el_dbg_ranges[it->range].lo, (uint16_t)(sizeof l));
+            copy_bytes(&h, &el_dbg_ranges[it->range].hi, (uint16_t)(sizeof h));
             for (i = 0u; i < 4u; i++) {
                 lo[i] = (uint8_t)((l >> (8u * i)) & 0xFFu);
                 hi[i] = (uint8_t)((h >> (8u * i)) & 0xFFu);
             }
         }
-        (void)(put_u8(it->type) && put_u8(it->kind) && put_u8(it->flags) && put_u16(it->count));
+        (void)put_u8(it->type);
+        (void)put_u8(it->kind);
+        (void)put_u8(it->flags);
+        (void)put_u16(it->count);
         for (i = 0u; i < 4u; i++) {
             (void)put_u8(lo[i]);
         }
@@ -796,8 +830,11 @@ static uint8_t dispatch(uint8_t cmd, const uint8_t *p, uint16_t n)
         (void)put_u8(bp_count);
         for (i = 0u; i < EL_DBG_BP_MAX; i++) {
             if (bps[i].used != 0u) {
-                (void)(put_u8(i) && put_u8(bps[i].kind) && put_u16(bps[i].a) && put_u16(bps[i].b)
-                       && put_u16(bps[i].hits));
+                (void)put_u8(i);
+                (void)put_u8(bps[i].kind);
+                (void)put_u16(bps[i].a);
+                (void)put_u16(bps[i].b);
+                (void)put_u16(bps[i].hits);
             }
         }
         return EL_DBG_OK;
@@ -859,10 +896,12 @@ static void handle_frame(uint16_t len)
     resp[1] = (uint8_t)(cmd | EL_DBG_RESPONSE);
     resp[2] = EL_DBG_OK;
     resp_len = 3u;
+    resp_full = false;
     status = dispatch(cmd, rx_buf + EL_DBG_HEADER, (uint16_t)(len - EL_DBG_HEADER - EL_DBG_TRAILER));
     if (status != EL_DBG_OK) {
         resp[2] = status;
         resp_len = 3u;
+    resp_full = false;
         count(status == EL_DBG_E_UNKNOWN_CMD ? EL_DBG_C_UNKNOWN : EL_DBG_C_ERRORS);
     }
     send_response();
