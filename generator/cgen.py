@@ -714,3 +714,9 @@ def render(program: Program, board, template_dir: Path, release: bool = False) -
 from . import debuggen  # noqa: E402  (imports nothing of this module at import time)
 PRODUCERS.append(debuggen.produce)
 INTERFACE_HOOKS.append(debuggen.interface_hook)
+
+
+# The service interface (docs/service.md): register map files, C tables and Modbus glue.
+from . import servicegen as _servicegen  # noqa: E402  (imports this module: keep at the end)
+PRODUCERS.append(_servicegen.produce)
+INTERFACE_HOOKS.append(_servicegen.interface_hook)

@@ -122,6 +122,20 @@ bool el_host_trace_close(void);
 /* The --debug option: open the pty or TCP port and serve it. */
 bool el_host_opt_debug(const char *arg);
 
+/* ---- service interface (host_modbus.c, host_hmi.c; docs/service.md) ---- */
+
+/* --modbus-tcp PORT, --modbus-rtu pty:LINK: where the model's Modbus
+ * interfaces are served (opened when the option is read). */
+bool el_host_opt_modbus_tcp(const char *arg);
+bool el_host_opt_modbus_rtu(const char *arg);
+/* --hmi pty:LINK: the example HMI, a line protocol over el_service.h. */
+bool el_host_opt_hmi(const char *arg);
+/* A pseudo-terminal with a symlink `link` to it (removed at exit): returns
+ * its master and keeps our own slave descriptor in *slave_out (so the master
+ * never sees a hangup between clients), or -1 after reporting the error
+ * prefixed with `option`. */
+int el_host_make_pty(const char *option, const char *link, int *slave_out);
+
 /* ---- non-volatile storage (host_nvram.c) ---- */
 
 /* Use the file at `path` (NULL: an in-memory store). */

@@ -138,6 +138,12 @@ const el_host_option_t el_host_options[] = {
     {"--nvram", "FILE", "non-volatile storage in FILE (4096 bytes; default: in memory)", false, opt_nvram},
     {"--debug", "pty:LINK|tcp:PORT[,halt]", "serve the debug interface on a new pty (symlink LINK) or 127.0.0.1:PORT",
      false, el_host_opt_debug},
+    {"--modbus-tcp", "PORT", "serve the model's Modbus TCP interface on 127.0.0.1:PORT (default: its port)", false,
+     el_host_opt_modbus_tcp},
+    {"--modbus-rtu", "pty:LINK", "serve the model's Modbus RTU interface on a new pty (symlink LINK; 8N1)", false,
+     el_host_opt_modbus_rtu},
+    {"--hmi", "pty:LINK", "the example HMI (get NAME / set NAME VALUE lines) on a new pty (symlink LINK)", false,
+     el_host_opt_hmi},
     {"--help", NULL, "show this help and exit", false, opt_help},
 };
 const size_t el_host_option_count = sizeof el_host_options / sizeof el_host_options[0];

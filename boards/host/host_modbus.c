@@ -1,0 +1,453 @@
+/* EasyLab host board: the Modbus links of the service interface
+ * (runtime_c/el_modbus_port.h, docs/service.md).
+ *
+ *   --modbus-tcp PORT      serve the model's `modbus tcp` interface on
+ *                          127.0.0.1:PORT (default: the model's port),
+ *                          EL_HOST_MB_TCP_CONNS clients at once
+ *   --modbus-rtu pty:LINK  serve its `modbus rtu` interface on a new
+ *                          pseudo-terminal; LINK is a symlink to it
+ *                          (replaced if it is a stale symlink, removed at
+ *                          exit); any serial tool opens LINK (8N1: this
+ *                          kernel's ptys refuse even parity)
+ *
+ * Both may be given; each serves only if the model declares that
+ * interface. The descriptors are opened when the option is read (so a busy
+ * port or a bad link is a command-line error, exit status 2) and served
+ * between instants (el_host_watch_fd): the handlers here only move bytes
+ * into buffers; the runtime's slave takes them from el_idle, right after,
+ * through el_port_mb_* (pull: the board never calls into the runtime).
+ *
+ * RTU framing on a pty: there is no character timing, so frames end (a) at
+ * a silence of 3.5 characters at the model's baud rate, at least
+ * EL_HOST_MB_SILENCE_MIN_US, measured on CLOCK_MONOTONIC between bursts of
+ * bytes (and noticed when the next burst comes or at the next idle call),
+ * and (b) as soon as the bytes form a CRC-valid request of the length its
+ * function code implies (EL_MB_PORT_UNTIMED: the runtime's `early` mode).
+ * Garbage followed by a silence is dropped with it; garbage glued to a
+ * request without a silence spoils that request, as it would on a line.
+ */
+#ifndef _POSIX_C_SOURCE
+#define _POSIX_C_SOURCE 200809L
+#endif
+#ifndef _XOPEN_SOURCE
+#define _XOPEN_SOURCE 700 /* posix_openpt, grantpt, unlockpt, ptsname */
+#endif
+
+#include "host_internal.h"
+#include "el_modbus_port.h"
+
+#include <arpa/inet.h>
+#include <errno.h>
+#include <fcntl.h>
+#include <netinet/in.h>
+#include <poll.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/socket.h>
+#include <sys/stat.h>
+#include <termios.h>
+#include <time.h>
+#include <unistd.h>
+
+/* TCP clients served at once; one more is accepted and closed at once. */
+#define EL_HOST_MB_TCP_CONNS 10u
+/* Bytes buffered per TCP client (at least one whole ADU, 260 bytes). */
+#define EL_HOST_MB_TCP_BUF 1024u
+/* Receive events buffered on the RTU pty (bytes and silence marks). */
+#define EL_HOST_MB_RTU_RING 1024u
+/* The shortest silence that ends an RTU frame on a pty, in microseconds
+ * (scheduling jitter on a host is larger than t3.5). */
+#define EL_HOST_MB_SILENCE_MIN_US 5000u
+
+/* ---- helpers ---- */
+
+static bool set_flags(int fd)
+{
+    int fl = fcntl(fd, F_GETFL), fd_fl = fcntl(fd, F_GETFD);
+    /* Non-blocking; closed on exec (the debugger's reset executes the
+     * program again, which opens its own links). */
+    return fl >= 0 && fd_fl >= 0 && fcntl(fd, F_SETFL, fl | O_NONBLOCK) == 0 &&
+           fcntl(fd, F_SETFD, fd_fl | FD_CLOEXEC) == 0;
+}
+
+static uint64_t now_ns(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (uint64_t)ts.tv_sec * 1000000000u + (uint64_t)ts.tv_nsec;
+}
+
+/* Write all of `data` to a non-blocking descriptor, waiting at most about
+ * 100 ms for room. */
+static bool write_all(int fd, const uint8_t *data, size_t len)
+{
+    int waits = 0;
+    while (len > 0u) {
+        ssize_t n = write(fd, data, len);
+        if (n > 0) {
+            data += n;
+            len -= (size_t)n;
+            continue;
+        }
+        if (n < 0 && errno == EINTR)
+            continue;
+        if (n < 0 && (errno == EAGAIN || errno == EWOULDBLOCK) && waits < 10) {
+            struct pollfd p;
+            p.fd = fd;
+            p.events = POLLOUT;
+            p.revents = 0;
+            (void)poll(&p, 1, 10);
+            waits++;
+            continue;
+        }
+        return false;
+    }
+    return true;
+}
+
+/* Links made by this file, removed at exit. */
+static char link_paths[2][4096];
+static bool atexit_done;
+
+static void remove_links(void)
+{
+    size_t i;
+    for (i = 0; i < 2u; i++)
+        if (link_paths[i][0] != '\0') {
+            struct stat st;
+            if (lstat(link_paths[i], &st) == 0 && S_ISLNK(st.st_mode))
+                (void)unlink(link_paths[i]);
+            link_paths[i][0] = '\0';
+        }
+}
+
+/* A pty whose slave LINK points at: returns the master (and our own slave
+ * descriptor, kept open so that the master never sees a hangup between
+ * clients), or -1 after reporting. Shared with host_hmi.c. */
+int el_host_make_pty(const char *option, const char *link, int *slave_out)
+{
+    struct termios tio;
+    struct stat st;
+    const char *name;
+    int master, slave;
+    size_t slot;
+
+    if (link[0] == '\0') {
+        el_host_error("%s pty:LINK: give the path of the link", option);
+        return -1;
+    }
+    if (strlen(link) >= sizeof link_paths[0]) {
+        el_host_error("%s: link path too long", option);
+        return -1;
+    }
+    if (lstat(link, &st) == 0 && !S_ISLNK(st.st_mode)) {
+        el_host_error("%s pty:%s: the path exists and is not a symlink", option, link);
+        return -1;
+    }
+    master = posix_openpt(O_RDWR | O_NOCTTY);
+    if (master < 0 || grantpt(master) != 0 || unlockpt(master) != 0 || (name = ptsname(master)) == NULL) {
+        el_host_error("%s: cannot make a pseudo-terminal: %s", option, strerror(errno));
+        if (master >= 0)
+            close(master);
+        return -1;
+    }
+    slave = open(name, O_RDWR | O_NOCTTY);
+    if (slave < 0) {
+        el_host_error("%s: cannot open %s: %s", option, name, strerror(errno));
+        close(master);
+        return -1;
+    }
+    /* Raw 8N1, no echo: the bytes pass as they are. */
+    if (tcgetattr(slave, &tio) == 0) {
+        tio.c_iflag &= ~(tcflag_t)(IGNBRK | BRKINT | PARMRK | ISTRIP | INLCR | IGNCR | ICRNL | IXON | IXOFF);
+        tio.c_oflag &= ~(tcflag_t)OPOST;
+        tio.c_lflag &= ~(tcflag_t)(ECHO | ECHONL | ICANON | ISIG | IEXTEN);
+        tio.c_cflag &= ~(tcflag_t)(CSIZE | PARENB | CSTOPB);
+        tio.c_cflag |= CS8 | CREAD | CLOCAL;
+        tio.c_cc[VMIN] = 1;
+        tio.c_cc[VTIME] = 0;
+        (void)tcsetattr(slave, TCSANOW, &tio);
+    }
+    if (!set_flags(master) || !set_flags(slave)) {
+        el_host_error("%s: cannot set up the pseudo-terminal: %s", option, strerror(errno));
+        close(master);
+        close(slave);
+        return -1;
+    }
+    (void)unlink(link); /* a stale symlink of an earlier run */
+    if (symlink(name, link) != 0) {
+        el_host_error("%s pty:%s: cannot make the link: %s", option, link, strerror(errno));
+        close(master);
+        close(slave);
+        return -1;
+    }
+    slot = link_paths[0][0] == '\0' ? 0u : 1u;
+    if (link_paths[slot][0] == '\0')
+        strcpy(link_paths[slot], link);
+    if (!atexit_done) {
+        atexit_done = true;
+        (void)atexit(remove_links);
+    }
+    *slave_out = slave;
+    return master;
+}
+
+/* ---- RTU on a pty ---- */
+
+static int rtu_fd = -1, rtu_keep = -1;
+static uint16_t rtu_ring[EL_HOST_MB_RTU_RING]; /* bytes 0..255, or RING_SILENCE */
+static size_t rtu_head, rtu_count;
+static uint64_t rtu_last_ns;   /* when the last burst of bytes came */
+static bool rtu_since_silence; /* bytes came since the last silence mark */
+static uint64_t rtu_silence_ns = (uint64_t)EL_HOST_MB_SILENCE_MIN_US * 1000u;
+#define RING_SILENCE 0x100u
+
+static void ring_put(uint16_t v)
+{
+    if (rtu_count < EL_HOST_MB_RTU_RING) {
+        rtu_ring[(rtu_head + rtu_count) % EL_HOST_MB_RTU_RING] = v;
+        rtu_count++;
+    }
+}
+
+static void rtu_readable(int fd, short revents, void *ctx)
+{
+    uint8_t buf[512];
+    size_t room = EL_HOST_MB_RTU_RING - rtu_count;
+    ssize_t n, i;
+    uint64_t now;
+    (void)ctx;
+    (void)revents;
+    if (room < 2u)
+        return; /* the slave takes events right after this (el_idle) */
+    n = read(fd, buf, room - 1u < sizeof buf ? room - 1u : sizeof buf);
+    if (n <= 0)
+        return;
+    now = now_ns();
+    if (rtu_since_silence && now - rtu_last_ns >= rtu_silence_ns) {
+        ring_put(RING_SILENCE);
+        rtu_since_silence = false;
+    }
+    for (i = 0; i < n; i++)
+        ring_put(buf[i]);
+    rtu_last_ns = now;
+    rtu_since_silence = true;
+}
+
+bool el_host_opt_modbus_rtu(const char *arg)
+{
+    if (strncmp(arg, "pty:", 4) != 0) {
+        el_host_error("--modbus-rtu %s: give pty:LINK (a pseudo-terminal with a symlink LINK to it)", arg);
+        return false;
+    }
+    rtu_fd = el_host_make_pty("--modbus-rtu", arg + 4, &rtu_keep);
+    if (rtu_fd < 0)
+        return false;
+    if (!el_host_watch_fd(rtu_fd, rtu_readable, NULL))
+        return false;
+    return true;
+}
+
+uint8_t el_port_mb_rtu_open(uint8_t uart, uint32_t baud, uint8_t parity, uint8_t unit)
+{
+    uint64_t t35_ns;
+    (void)uart;
+    (void)parity; /* a pty has no parity: the client chooses 8N1 */
+    (void)unit;
+    if (rtu_fd < 0)
+        return EL_MB_PORT_OFF;
+    /* 3.5 characters of 11 bits; 1.75 ms above 19200 baud. */
+    t35_ns = baud > 19200u || baud == 0u ? 1750000u : (uint64_t)38500000000u / baud;
+    rtu_silence_ns = t35_ns > (uint64_t)EL_HOST_MB_SILENCE_MIN_US * 1000u ? t35_ns
+                                                                         : (uint64_t)EL_HOST_MB_SILENCE_MIN_US * 1000u;
+    return EL_MB_PORT_UNTIMED;
+}
+
+int16_t el_port_mb_rtu_getc(void)
+{
+    uint16_t v;
+    if (rtu_count == 0u) {
+        if (rtu_since_silence && now_ns() - rtu_last_ns >= rtu_silence_ns) {
+            rtu_since_silence = false;
+            return EL_MB_SILENCE;
+        }
+        return EL_MB_NONE;
+    }
+    v = rtu_ring[rtu_head];
+    rtu_head = (rtu_head + 1u) % EL_HOST_MB_RTU_RING;
+    rtu_count--;
+    return v == RING_SILENCE ? EL_MB_SILENCE : (int16_t)v;
+}
+
+void el_port_mb_rtu_send(const uint8_t *adu, uint16_t len)
+{
+    if (rtu_fd >= 0)
+        (void)write_all(rtu_fd, adu, len); /* nobody listening: the reply is lost, as on a line */
+}
+
+/* ---- TCP ---- */
+
+typedef struct {
+    int fd; /* -1: free */
+    size_t len;
+    uint8_t buf[EL_HOST_MB_TCP_BUF];
+} tcp_conn_t;
+
+static int tcp_listen = -1;
+static uint16_t tcp_port_option; /* --modbus-tcp, 0: none */
+static tcp_conn_t tcp_conns[EL_HOST_MB_TCP_CONNS];
+static bool tcp_init_done;
+static bool tcp_served; /* the model has a `modbus tcp` interface (el_port_mb_tcp_open came) */
+
+static void tcp_init(void)
+{
+    size_t i;
+    if (tcp_init_done)
+        return;
+    tcp_init_done = true;
+    for (i = 0; i < EL_HOST_MB_TCP_CONNS; i++)
+        tcp_conns[i].fd = -1;
+}
+
+void el_port_mb_tcp_close(uint8_t conn)
+{
+    if (conn >= EL_HOST_MB_TCP_CONNS || tcp_conns[conn].fd < 0)
+        return;
+    el_host_unwatch_fd(tcp_conns[conn].fd);
+    close(tcp_conns[conn].fd);
+    tcp_conns[conn].fd = -1;
+    tcp_conns[conn].len = 0;
+}
+
+static void conn_readable(int fd, short revents, void *ctx)
+{
+    tcp_conn_t *c = (tcp_conn_t *)ctx;
+    ssize_t n;
+    (void)revents;
+    if (c->fd != fd)
+        return;
+    if (c->len >= sizeof c->buf)
+        return; /* full of whole requests: the slave takes them right after this */
+    n = read(fd, c->buf + c->len, sizeof c->buf - c->len);
+    if (n > 0) {
+        c->len += (size_t)n;
+        return;
+    }
+    if (n < 0 && (errno == EAGAIN || errno == EWOULDBLOCK || errno == EINTR))
+        return;
+    el_port_mb_tcp_close((uint8_t)(c - tcp_conns)); /* closed by the client, or an error */
+}
+
+static void accept_ready(int fd, short revents, void *ctx)
+{
+    size_t i;
+    int c;
+    (void)revents;
+    (void)ctx;
+    c = accept(fd, NULL, NULL); /* refused at once when there is no room, or no Modbus TCP in the model */
+    if (c < 0)
+        return;
+    for (i = 0; i < EL_HOST_MB_TCP_CONNS; i++)
+        if (tcp_conns[i].fd < 0)
+            break;
+    if (!tcp_served || i == EL_HOST_MB_TCP_CONNS || !set_flags(c) || !el_host_watch_fd(c, conn_readable, &tcp_conns[i])) {
+        close(c); /* no room: refused */
+        return;
+    }
+    tcp_conns[i].fd = c;
+    tcp_conns[i].len = 0;
+}
+
+static bool tcp_listen_on(uint16_t port, const char *what)
+{
+    struct sockaddr_in addr;
+    int one = 1;
+    tcp_init();
+    tcp_listen = socket(AF_INET, SOCK_STREAM, 0);
+    if (tcp_listen < 0) {
+        el_host_error("%s: cannot make a socket: %s", what, strerror(errno));
+        return false;
+    }
+    (void)setsockopt(tcp_listen, SOL_SOCKET, SO_REUSEADDR, &one, sizeof one);
+    memset(&addr, 0, sizeof addr);
+    addr.sin_family = AF_INET;
+    addr.sin_port = htons(port);
+    addr.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+    if (bind(tcp_listen, (struct sockaddr *)&addr, sizeof addr) != 0 || listen(tcp_listen, 16) != 0 ||
+        !set_flags(tcp_listen)) {
+        el_host_error("%s: cannot listen on 127.0.0.1:%u: %s", what, (unsigned)port, strerror(errno));
+        close(tcp_listen);
+        tcp_listen = -1;
+        return false;
+    }
+    if (!el_host_watch_fd(tcp_listen, accept_ready, NULL)) {
+        close(tcp_listen);
+        tcp_listen = -1;
+        return false;
+    }
+    return true;
+}
+
+bool el_host_opt_modbus_tcp(const char *arg)
+{
+    char *end;
+    unsigned long port;
+    errno = 0;
+    port = strtoul(arg, &end, 10);
+    if (arg[0] < '0' || arg[0] > '9' || *end != '\0' || errno != 0 || port < 1u || port > 65535u) {
+        el_host_error("--modbus-tcp %s: give a TCP port, 1..65535", arg);
+        return false;
+    }
+    tcp_port_option = (uint16_t)port;
+    return tcp_listen_on(tcp_port_option, "--modbus-tcp");
+}
+
+uint8_t el_port_mb_tcp_open(uint16_t port)
+{
+    if (tcp_listen < 0 && !tcp_listen_on(port, "modbus tcp")) {
+        /* The model's own port is taken: nothing can be served. */
+        exit(EL_HOST_EXIT_USAGE);
+    }
+    tcp_served = true;
+    return (uint8_t)EL_HOST_MB_TCP_CONNS;
+}
+
+uint16_t el_port_mb_tcp_peek(uint8_t conn, uint8_t *buf, uint16_t n)
+{
+    const tcp_conn_t *c;
+    if (conn >= EL_HOST_MB_TCP_CONNS)
+        return 0u;
+    c = &tcp_conns[conn];
+    if (c->fd < 0)
+        return 0u;
+    if (n > c->len)
+        n = (uint16_t)c->len;
+    memcpy(buf, c->buf, n);
+    return n;
+}
+
+void el_port_mb_tcp_consume(uint8_t conn, uint16_t n)
+{
+    tcp_conn_t *c;
+    if (conn >= EL_HOST_MB_TCP_CONNS)
+        return;
+    c = &tcp_conns[conn];
+    if (n >= c->len) {
+        c->len = 0;
+        return;
+    }
+    memmove(c->buf, c->buf + n, c->len - n);
+    c->len -= n;
+}
+
+bool el_port_mb_tcp_send(uint8_t conn, const uint8_t *adu, uint16_t len)
+{
+    if (conn >= EL_HOST_MB_TCP_CONNS || tcp_conns[conn].fd < 0)
+        return false;
+    if (!write_all(tcp_conns[conn].fd, adu, len)) {
+        el_port_mb_tcp_close(conn); /* a client that does not read its replies */
+        return false;
+    }
+    return true;
+}

@@ -1,0 +1,207 @@
+"""Helpers of the service interface's tests (tests/service): firmware
+processes serving Modbus TCP and RTU on ptys, raw Modbus frames."""
+
+from __future__ import annotations
+
+import os
+import shutil
+import signal
+import socket
+import struct
+import subprocess
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[2]
+EXAMPLES = ROOT / "examples"
+DATA = Path(__file__).resolve().parent / "data"
+
+# ---------------------------------------------------------------- processes
+
+
+
+def free_port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+class Firmware:
+    """A host firmware process serving Modbus (and optionally the HMI)."""
+
+    def __init__(self, exe: Path, workdir: Path, tcp: bool = True, rtu: bool = True, hmi: bool = False,
+                 nvram: Path | None = None, extra: list[str] | None = None):
+        self.exe = exe
+        self.port = free_port() if tcp else None
+        self.rtu = workdir / f"rtu{id(self)}" if rtu else None
+        self.hmi = workdir / f"hmi{id(self)}" if hmi else None
+        self.nvram = nvram
+        args = [str(exe), "--duration", "600s"]
+        if tcp:
+            args += ["--modbus-tcp", str(self.port)]
+        if rtu:
+            args += ["--modbus-rtu", f"pty:{self.rtu}"]
+        if hmi:
+            args += ["--hmi", f"pty:{self.hmi}"]
+        if nvram is not None:
+            args += ["--nvram", str(nvram)]
+        self.args = args + (extra or [])
+        self.proc = None
+
+    def start(self, wait: bool = True) -> "Firmware":
+        env = dict(os.environ, ASAN_OPTIONS="detect_leaks=0", UBSAN_OPTIONS="print_stacktrace=1")
+        self.proc = subprocess.Popen(self.args, stdout=subprocess.PIPE, stderr=subprocess.PIPE, env=env)
+        if wait:
+            self.wait_ready()
+        return self
+
+    def wait_ready(self, timeout: float = 10.0) -> None:
+        deadline = time.monotonic() + timeout
+        while time.monotonic() < deadline:
+            if self.proc.poll() is not None:
+                raise AssertionError(f"firmware exited {self.proc.returncode}: {self.proc.stderr.read().decode()}")
+            ok = True
+            if self.port is not None:
+                try:
+                    socket.create_connection(("127.0.0.1", self.port), timeout=0.2).close()
+                except OSError:
+                    ok = False
+            for link in (self.rtu, self.hmi):
+                if link is not None and not link.exists():
+                    ok = False
+            if ok:
+                return
+            time.sleep(0.01)
+        raise AssertionError("firmware did not come up")
+
+    def stop(self) -> str:
+        """SIGTERM, wait; returns stderr (checked for sanitizer reports)."""
+        if self.proc is None:
+            return ""
+        if self.proc.poll() is None:
+            self.proc.send_signal(signal.SIGTERM)
+        try:
+            _, err = self.proc.communicate(timeout=20)
+        except subprocess.TimeoutExpired:
+            self.proc.kill()
+            _, err = self.proc.communicate()
+        text = err.decode(errors="replace")
+        for marker in ("runtime error", "AddressSanitizer", "LeakSanitizer"):
+            assert marker not in text, text
+        return text
+
+    def kill(self) -> None:
+        if self.proc is not None and self.proc.poll() is None:
+            self.proc.kill()
+            self.proc.wait()
+
+    def __enter__(self):
+        return self.start()
+
+    def __exit__(self, *exc):
+        self.stop()
+
+
+# ---------------------------------------------------------------- raw Modbus
+
+
+
+def crc16(data: bytes) -> int:
+    crc = 0xFFFF
+    for b in data:
+        crc ^= b
+        for _ in range(8):
+            crc = (crc >> 1) ^ 0xA001 if crc & 1 else crc >> 1
+    return crc
+
+
+def rtu_frame(unit: int, pdu: bytes) -> bytes:
+    body = bytes([unit]) + pdu
+    return body + struct.pack("<H", crc16(body))
+
+
+def mbap(tid: int, unit: int, pdu: bytes) -> bytes:
+    return struct.pack(">HHHB", tid, 0, len(pdu) + 1, unit) + pdu
+
+
+class RawPty:
+    """The client side of a firmware's RTU pty, raw, without pyserial."""
+
+    def __init__(self, link: Path):
+        import termios
+        import tty
+        self.fd = os.open(str(link), os.O_RDWR | os.O_NOCTTY)
+        tty.setraw(self.fd)
+        termios.tcflush(self.fd, termios.TCIOFLUSH)
+
+    def send(self, data: bytes) -> None:
+        os.write(self.fd, data)
+
+    def recv(self, timeout: float = 1.0, quiet: float = 0.05) -> bytes:
+        """Bytes until `quiet` seconds pass without any (or `timeout`)."""
+        import select
+        out = b""
+        deadline = time.monotonic() + timeout
+        while True:
+            left = deadline - time.monotonic()
+            if left <= 0:
+                return out
+            r, _, _ = select.select([self.fd], [], [], min(left, quiet) if out else left)
+            if not r:
+                if out:
+                    return out
+                continue
+            out += os.read(self.fd, 4096)
+
+    def ask(self, unit: int, pdu: bytes, timeout: float = 1.0) -> bytes | None:
+        """Send a request; the reply's PDU (CRC and unit checked), or None."""
+        self.send(rtu_frame(unit, pdu))
+        reply = self.recv(timeout)
+        if not reply:
+            return None
+        assert crc16(reply) == 0, reply.hex()
+        assert reply[0] == unit, reply.hex()
+        return reply[1:-2]
+
+    def close(self) -> None:
+        os.close(self.fd)
+
+
+class RawTcp:
+    def __init__(self, port: int):
+        self.sock = socket.create_connection(("127.0.0.1", port), timeout=2)
+        self.sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
+        self.tid = 0
+
+    def recv_adu(self) -> tuple[int, int, bytes]:
+        head = self._exact(7)
+        tid, proto, length, unit = struct.unpack(">HHHB", head)
+        assert proto == 0
+        return tid, unit, self._exact(length - 1)
+
+    def _exact(self, n: int) -> bytes:
+        out = b""
+        while len(out) < n:
+            chunk = self.sock.recv(n - len(out))
+            if not chunk:
+                raise ConnectionError("closed")
+            out += chunk
+        return out
+
+    def ask(self, pdu: bytes, unit: int = 1) -> bytes:
+        self.tid = (self.tid + 1) & 0xFFFF
+        self.sock.sendall(mbap(self.tid, unit, pdu))
+        tid, u, reply = self.recv_adu()
+        assert tid == self.tid and u == unit
+        return reply
+
+    def close(self) -> None:
+        self.sock.close()
+
+
+def read_regs_pdu(fc: int, address: int, count: int) -> bytes:
+    return struct.pack(">BHH", fc, address, count)
+
+
+def tool_available(name: str) -> bool:
+    return shutil.which(name) is not None
