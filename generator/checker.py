@@ -70,7 +70,7 @@ class Checker:
         self.claims: list[Claim] = []
         self._const_in_progress: list[str] = []
         self._const_failed: set[str] = set()
-        self._addresses: dict[tuple[str, int], ast.Data] = {}
+        self._addresses: dict[tuple[str, int, int], ast.Data] = {}  # (table, first, last) -> item
 
     # ================================================================ driver
 
@@ -280,13 +280,22 @@ class Checker:
         if decl.service is not None and decl.service.address is not None and not 0 <= decl.service.address <= 65535:
             self.error(decl.service.span, f"register address {decl.service.address} is outside 0..65535")
         elif decl.service is not None and decl.service.address is not None:
-            key = (decl.service.access, decl.service.address)
-            other = self._addresses.setdefault(key, decl)
-            if other is not decl:
-                self.error(decl.service.span, f"register address {decl.service.address} ({decl.service.access}) "
-                                              f"is given to '{other.name}' and to '{decl.name}'",
-                           "give each item its own address, or leave the address out to have one assigned",
-                           [note(other.service.span, f"'{other.name}' has it here")])
+            # Items clash when their registers overlap in the same table.
+            table = T.register_table(t, decl.service.access)
+            first = decl.service.address
+            last = first + T.register_count(t) - 1
+            for (other_table, other_first, other_last), other in self._addresses.items():
+                if other_table == table and first <= other_last and other_first <= last:
+                    where = f"{first}" if first == last else f"{first}..{last}"
+                    self.error(decl.service.span, f"{table} register {where} of '{decl.name}' overlaps "
+                                                  f"'{other.name}' ({other_first}..{other_last})"
+                                                  if other_last != other_first or first != last else
+                               f"{table} register {first} is given to '{other.name}' and to '{decl.name}'",
+                               "give each item its own address, or leave the address out to have one assigned",
+                               [note(other.service.span, f"'{other.name}' has it here")])
+                    break
+            else:
+                self._addresses[(table, first, last)] = decl
         self.data[decl.name] = DataInfo(decl, t, initial, rng)
 
     def check_channel(self, decl: ast.Channel) -> None:

@@ -59,9 +59,7 @@ def crc16(data: bytes) -> int:
     return crc
 
 
-def registers_of(t: T.ValueType) -> int:
-    """Addresses an item takes in its table: 1 (a bit or a 16-bit register) or 2."""
-    return 2 if t.bits == 32 else 1
+registers_of = T.register_count  # the rule lives in types.py, shared with the checker
 
 
 @dataclass
@@ -118,9 +116,7 @@ class ServiceMap:
 
 
 def table_of(item: Item) -> str:
-    if item.type is T.BOOL:
-        return "coil" if item.service == "rw" else "discrete"
-    return "holding" if item.service == "rw" else "input"
+    return T.register_table(item.type, item.service)
 
 
 def _describe(e: Entry, located: bool = True) -> str:

@@ -143,3 +143,17 @@ def smallest_int_type(value: int) -> ValueType:
         if fits(value, t):
             return t
     return UINT32
+
+
+def register_table(t: ValueType, access: str) -> str:
+    """The Modbus table of a service item: bools are coils (rw) or discrete
+    inputs (ro), other items holding (rw) or input (ro) registers."""
+    if t is BOOL:
+        return "coil" if access == "rw" else "discrete"
+    return "holding" if access == "rw" else "input"
+
+
+def register_count(t: ValueType) -> int:
+    """Addresses an item takes in its table: 1 (a bit or a 16-bit register),
+    or 2 for 32-bit values (int32, uint32, float32, time)."""
+    return 2 if t.bits == 32 else 1

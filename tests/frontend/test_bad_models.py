@@ -758,10 +758,19 @@ CASES = [
         var a: int16 service ro @ 5
         var b: int16 service ro @ 5
         var c: int16 service rw @ 5
+        var d: bool service rw @ 5
         """),
-         E(2, 14, "register address 5 (ro) is given to 'a' and to 'b'",
+         E(2, 14, "input register 5 is given to 'a' and to 'b'",
            hint='give each item its own address, or leave the address out to have one assigned',
            note=(1, 14, "'a' has it here"))),
+    case('data-overlapping-registers', dedent("""\
+        param a: int32 service rw @ 10
+        var b: int16 service rw @ 11
+        var c: bool service rw @ 10
+        """),
+         E(2, 14, "holding register 11 of 'b' overlaps 'a' (10..11)",
+           hint='give each item its own address, or leave the address out to have one assigned',
+           note=(1, 16, "'a' has it here"))),
     case('data-time-too-long', 'param t: time = 5000000000 s\n',
          E(1, 17, "the initial value of param 't': a 'time' is from 0 to 4294967295 ms")),
     case('data-time-not-whole-ms', 'var t: time = 1500 us\n',
