@@ -13,14 +13,14 @@ MODEL   ?= examples/pt100_sensor.elab
 DEB_PACKAGES := gcc make pkg-config graphviz tmux socat \
 	gcc-avr avr-libc binutils-avr simavr libsimavr-dev libelf-dev avrdude \
 	sdcc sdcc-libraries sdcc-ucsim gputils gpsim \
-	mbpoll libmodbus-dev clang libclang-rt-14-dev clang-tidy
+	mbpoll libmodbus-dev clang libclang-rt-14-dev clang-tidy valgrind
 
 .PHONY: setup deps venv test demo bench clean help
 
 help:
 	@echo "make setup   install Debian packages (when missing) and the virtual environment"
 	@echo "make test    run the test suite (does set-up first)"
-	@echo "make demo    check, analyse and draw the shipped example models"
+	@echo "make demo    build and run the PT100 sensor on the host board, check, analyse and draw the examples"
 	@echo "make bench   run the benchmarks, results in bench/results/"
 	@echo "make clean   remove build outputs and the virtual environment"
 
