@@ -3,9 +3,10 @@ toolchain into build/<model>/<board>/."""
 
 from __future__ import annotations
 
+import importlib
 import shutil
 import subprocess
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 from . import cgen
@@ -25,8 +26,10 @@ class BuildError(Exception):
 @dataclass
 class BuildResult:
     out_dir: Path
-    executable: Path
+    executable: Path  # the host program, or a cross board's ELF
     sources: list[Path]
+    notes: list[str] = field(default_factory=list)  # printed before the path (a cross board's sizes)
+    simulator: Path | None = None  # a cross board's simulator build (--sim)
 
 
 def generate(program: Program, board: Board, out_dir: Path, release: bool = False) -> list[Path]:
@@ -71,11 +74,40 @@ def compile_host_like(program: Program, board: Board, out_dir: Path, generated: 
     return exe
 
 
+def backend_of(board: Board):
+    """The generator module of a cross board (board.toml `backend`, a module
+    of this package such as avrgen), or None for host-like boards."""
+    name = board.raw.get("backend")
+    if not name:
+        return None
+    try:
+        return importlib.import_module(f".{name}", __package__)
+    except ImportError as err:
+        raise BuildError(f"board '{board.name}': its backend module '{name}' cannot be loaded: {err}") from None
+
+
 def build(program: Program, board_name: str, out_dir: Path, extra_cflags: list[str] | None = None,
-          cc: str | None = None, release: bool = False) -> BuildResult:
+          cc: str | None = None, release: bool = False, mcu: str | None = None, sim: bool = False,
+          schedule: str | None = None) -> BuildResult:
     """Generate and compile ``program`` for a board. A release build has no
-    debug interface (the debug server is linked into debug builds only)."""
+    debug interface (the debug server is linked into debug builds only).
+    Cross boards (a `backend` in board.toml) also take an MCU, check the
+    model's resource claims, report sizes and build a simulator (``sim``)."""
     board = load_board(board_name)
+    backend = backend_of(board)
+    if backend is None:
+        if mcu is not None or sim:
+            raise BuildError(f"board '{board.name}' has no {'MCU choice (--mcu)' if mcu else 'simulator (--sim)'}")
+        generated = generate(program, board, out_dir, release)
+        exe = compile_host_like(program, board, out_dir, generated, extra_cflags, cc, release)
+        return BuildResult(out_dir, exe, generated)
+    board = backend.configure(board, mcu, sim)
+    checked = backend.check(program, board)
     generated = generate(program, board, out_dir, release)
-    exe = compile_host_like(program, board, out_dir, generated, extra_cflags, cc, release)
-    return BuildResult(out_dir, exe, generated)
+    generated += backend.produce(program, board, out_dir, release, checked)
+    exe, report = backend.compile(program, board, out_dir, generated, extra_cflags, cc, release, schedule)
+    result = BuildResult(out_dir, exe, generated, list(report.lines))
+    if sim:
+        result.simulator, warnings = backend.build_simulator(program, board, out_dir, exe)
+        result.notes += warnings + [f"simulator: {result.simulator}"]
+    return result

@@ -28,6 +28,11 @@ from . import types as T
 from .ir import ActorSpec, Buffer, Chart, Dataflow, Item, Program, Task
 
 NONE_STEP = 0xFF
+# A schedule with circular buffers (not single-appearance) longer than this
+# many runs of firings is emitted as a table walked by a loop (data instead
+# of straight-line code: min-buffer schedules of multirate graphs have
+# hundreds of appearances).
+TABLE_SCHEDULE_RUNS = 24
 _C_TYPE_ENUM = {"bool": "EL_T_BOOL", "int8": "EL_T_I8", "uint8": "EL_T_U8", "int16": "EL_T_I16",
                 "uint16": "EL_T_U16", "int32": "EL_T_I32", "uint32": "EL_T_U32", "float32": "EL_T_F32",
                 "time": "EL_T_TIME"}
@@ -362,6 +367,10 @@ class _Builder:
             bufs[b.id] = info
         lines: list[str] = []
         counters: list[str] = []
+        if not linear:
+            runs = df.schedule.run_length()
+            if len(runs) > TABLE_SCHEDULE_RUNS:
+                return self._table_schedule(runs, df, bufs, inst_by_name, ext_by_node, item_ref, paths, fire_nodes)
         self._emit(df.schedule.body, [], lines, 1, df, bufs, linear, inst_by_name, ext_by_node, item_ref,
                    counters, paths, fire_nodes)
         # Delay tokens of edges linear at the top level move to the front once per activation.
@@ -371,6 +380,40 @@ class _Builder:
                     self._shift(info, lines, 1)
         decls = [f"    {'uint16_t' if count <= 0xFFFF else 'uint32_t'} {name};" for name, count in counters]
         return decls + lines
+
+    def _table_schedule(self, runs, df, bufs, insts, exts, item_ref, paths, fire_nodes) -> list[str]:
+        """A long schedule with circular buffers (min-buffer) as data: its
+        run-length firing sequence in a ROM table of (node, count) pairs
+        walked by a loop around one switch over the nodes. The firing
+        order is the schedule's, so the values are the same; the code is
+        the size of one firing per node instead of one per appearance."""
+        nodes = list(dict.fromkeys(actor for actor, _ in runs))
+        pairs: list[tuple[int, int]] = []
+        for actor, count in runs:
+            while count > 0:
+                pairs.append((nodes.index(actor), min(count, 255)))
+                count -= 255
+        index_t = "uint16_t" if len(pairs) <= 0xFFFF else "uint32_t"
+        small = len(nodes) <= 256
+        elem_t, read = ("uint8_t", "EL_ROM_READ_U8") if small else ("uint16_t", "EL_ROM_READ_U16")
+        lines = [f"    static const {elem_t} el_seq[{2 * len(pairs)}] EL_ROM = {{ /* (node, firings) */"]
+        flat = [v for pair in pairs for v in pair]
+        for k in range(0, len(flat), 16):
+            lines.append("        " + ", ".join(f"{v}u" for v in flat[k:k + 16]) + ",")
+        lines.append("    };")
+        lines += [f"    {index_t} el_k;", "    uint8_t el_n;",
+                  f"    for (el_k = 0u; el_k < {len(pairs)}u; el_k++) {{",
+                  f"        {elem_t} el_node = {read}(&el_seq[2u * el_k]);",
+                  f"        uint8_t el_times = (uint8_t){read}(&el_seq[2u * el_k + 1u]);",
+                  "        for (el_n = 0u; el_n < el_times; el_n++) {",
+                  "            switch (el_node) {"]
+        for i, node in enumerate(nodes):
+            lines.append(f"            case {i}u:")
+            self._fire(node, [], None, "                ", lines, df, bufs, False, insts, exts, item_ref, paths,
+                       fire_nodes)
+            lines.append("                break;")
+        lines += ["            default: break;", "            }", "        }", "    }"]
+        return lines
 
     @staticmethod
     def _firings_below(path, level, fire) -> int:

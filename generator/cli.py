@@ -109,9 +109,11 @@ def cmd_build(args) -> int:
     out = Path(args.output) if args.output else Path("build") / program.name / args.board
     try:
         built = build(program, args.board, out, extra_cflags=shlex.split(args.cflags or ""), cc=args.cc,
-                      release=args.release)
+                      release=args.release, mcu=args.mcu, sim=args.sim, schedule=args.schedule)
     except (BuildError, BoardError) as err:
         raise CliError(str(err)) from None
+    for note in built.notes:
+        print(note)
     print(built.executable)
     return EXIT_OK
 
@@ -162,6 +164,10 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("-o", "--output", metavar="DIR", help="output folder")
     p.add_argument("--cc", metavar="CC", help="use this C compiler instead of the board's")
     p.add_argument("--cflags", metavar="FLAGS", help="extra compiler flags, e.g. \"-fsanitize=address,undefined\"")
+    p.add_argument("--mcu", metavar="MCU", help="the MCU of a cross board (avr: atmega328p, the default, or "
+                                                "atmega2560)")
+    p.add_argument("--sim", action="store_true", help="a simulation build (avr: instants reported to the simavr "
+                                                      "harness, which is built beside the ELF)")
     p.set_defaults(func=cmd_build)
 
     from .interp.cli import add_parser as add_run_parser

@@ -1,0 +1,333 @@
+"""The AVR board: generated code against hand-written C in CPU cycles, and
+the runtime's own footprint.
+
+1. Cycles per activation, exact, in simavr: pt100_sensor's Acquire and
+   cd_to_dat's Convert, the generated dataflow function (model.c of an AVR
+   build, avr-gcc -Os) against the hand-written C of bench/handwritten/ on
+   the same inputs (the same cases as bench_codegen.py, whose checks must
+   agree), on the ATmega2560 (cd_to_dat's buffers, generated or hand-
+   written, need more than the ATmega328P's 2 KB). A small libsimavr runner
+   stamps avr->cycle at markers the program writes to GPIOR0. Flash: the
+   program's flash with one side minus the same program with neither.
+   Goals: at most 1.10x the cycles and 1.15x the flash of hand-written C.
+2. Footprint on the ATmega328P (release builds unless noted): a one-actor
+   model (the dispatcher, the port, the model), then what a debug interface
+   and a Modbus RTU slave add; flash by part (symbol sizes by object file).
+3. The examples' sizes (those of docs/boards.md).
+
+Writes out_dir/avr.json and prints a table. Run: python bench/bench_avr.py [out_dir]
+"""
+
+from __future__ import annotations
+
+import importlib.util
+import json
+import re
+import subprocess
+import sys
+import tempfile
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+HERE = ROOT / "bench"
+MCU = "atmega2560"
+CFLAGS_EXTRA = ["-DEL_RELEASE=1", "-DEL_AVR_NO_MAIN", "-Wno-unused-function"]
+
+PROGRAM = """
+#include "model.c"
+#include <avr/io.h>
+#include <avr/interrupt.h>
+#include <avr/sleep.h>
+{decls}
+#define MARK(v) do {{ __asm__ __volatile__("" ::: "memory"); GPIOR0 = (v); }} while (0)
+
+__attribute__((noinline)) static uint32_t run(uint16_t n)
+{{
+    uint16_t i;
+    uint32_t check = 0u;
+    MARK(1u);
+    for (i = 0u; i < n; i++) {{ {body}
+    }}
+    MARK(2u);
+    return check;
+}}
+
+int main(void)
+{{
+    uint32_t check = run({n}u);
+    uint8_t k;
+    for (k = 0u; k < 4u; k++) {{ GPIOR1 = (uint8_t)(check >> (8u * k)); MARK((uint8_t)(0x10u + k)); }}
+    cli();
+    sleep_cpu(); /* simavr ends a run that sleeps with interrupts off */
+    return 0;
+}}
+"""
+
+RUNNER = r"""
+/* Stamp avr->cycle at each GPIOR0 write of an AVR program; print them. */
+#include "sim_avr.h"
+#include "sim_elf.h"
+#include "sim_core.h"
+#include <stdio.h>
+#include <string.h>
+#include <fcntl.h>
+#include <unistd.h>
+
+static avr_cycle_count_t start, stop;
+static uint32_t check;
+
+static void mark(struct avr_t *avr, avr_io_addr_t addr, uint8_t v, void *param)
+{
+    (void)param;
+    avr->data[addr] = v;
+    if (v == 1u) start = avr->cycle;
+    else if (v == 2u) stop = avr->cycle;
+    else if (v >= 0x10u && v < 0x14u) check |= (uint32_t)avr->data[0x4A] << (8u * (v - 0x10u));
+}
+
+int main(int argc, char **argv)
+{
+    elf_firmware_t fw;
+    avr_t *avr;
+    int null = open("/dev/null", O_WRONLY), out = dup(1), state;
+    memset(&fw, 0, sizeof fw);
+    dup2(null, 1);
+    if (argc < 3 || elf_read_firmware(argv[2], &fw) != 0) return 2;
+    avr = avr_make_mcu_by_name(argv[1]);
+    if (!avr) return 2;
+    avr_init(avr);
+    avr_load_firmware(avr, &fw);
+    dup2(out, 1);
+    avr->frequency = 16000000;
+    avr->log = 0;
+    avr_register_io_write(avr, 0x3E, mark, NULL);
+    do {
+        state = avr_run(avr);
+    } while (state != cpu_Done && state != cpu_Crashed && avr->cycle < 4000000000ull);
+    fflush(stdout);
+    printf("%llu %lu\n", (unsigned long long)(stop - start), (unsigned long)check);
+    return state == cpu_Done ? 0 : 1;
+}
+"""
+
+
+def _load(name: str):
+    spec = importlib.util.spec_from_file_location(name, HERE / f"{name}.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def _generate(model: Path, out: Path, mcu: str, schedule: str | None = None):
+    """model.c and the AVR board's generated headers of a release build."""
+    from easylab import avrgen
+    from easylab.boards import load_board
+    from easylab.build import generate
+    from easylab.frontend import lower_file
+
+    program, result = lower_file(model, schedule=schedule)
+    if program is None:
+        raise SystemExit(result.report())
+    board = avrgen.configure(load_board("avr"), mcu)
+    out.mkdir(parents=True, exist_ok=True)
+    generate(program, board, out, release=True)
+    avrgen.produce(program, board, out, True, avrgen.check(program, board))
+    return program, board
+
+
+def _compile(board, work: Path, name: str, source: str, extra: list[Path]) -> Path:
+    from easylab.boards import runtime_dir
+
+    (work / f"{name}.c").write_text(source)
+    elf = work / f"{name}.elf"
+    board_sources = [board.path / s for s in board.sources]
+    runtime = [p for p in sorted(runtime_dir().glob("*.c")) if not p.name.startswith("el_debug")]
+    cmd = ["avr-gcc", *board.cflags, *CFLAGS_EXTRA, f"-I{work}", f"-I{runtime_dir()}",
+           *[f"-I{board.path / d}" for d in board.include_dirs], "-o", str(elf), str(work / f"{name}.c"),
+           *map(str, extra), *map(str, board_sources), *map(str, runtime), *board.ldflags]
+    proc = subprocess.run(cmd, capture_output=True, text=True)
+    if proc.returncode != 0:
+        raise SystemExit(f"avr-gcc failed for {name}:\n{proc.stderr}")
+    return elf
+
+
+def _flash(elf: Path) -> int:
+    from easylab import avrgen
+    from easylab.boards import load_board
+
+    s = avrgen.sections(load_board("avr"), elf)
+    return s.get(".text", 0) + s.get(".data", 0)
+
+
+def _cycles(runner: Path, elf: Path) -> tuple[int, int]:
+    out = subprocess.run([str(runner), MCU, str(elf)], capture_output=True, text=True, timeout=600)
+    if out.returncode != 0:
+        raise SystemExit(f"{elf.name} did not end cleanly in simavr: {out.stdout}{out.stderr}")
+    cycles, check = out.stdout.strip().splitlines()[-1].split()
+    return int(cycles), int(check)
+
+
+def measure(name: str, case: dict, tmp: Path, runner: Path) -> dict:
+    from easylab import cgen
+
+    work = tmp / re.sub(r"\W+", "_", name)
+    program, board = _generate(ROOT / case["model"], work, MCU)
+    view = cgen.build_view(program, board)
+    df = next(d for d in program.dataflows if d.name == case["dataflow"])
+    fields = {k: view.items[program.item(v).id].local for k, v in case["names"].items()}
+    fmt = dict(fields, task=f"el_t{df.task}", fn=f"el_df{df.id}_{cgen.ident(df.name)}")
+    n = max(1, case["activations"] // 10)
+    hand = HERE / "handwritten" / case["handwritten"]
+    progs = {
+        "generated": PROGRAM.format(decls=case["decls"], body=case["generated"].format(**fmt), n=n),
+        "handwritten": PROGRAM.format(decls=case["decls"], body=case["hand"], n=n),
+        "baseline": PROGRAM.format(decls=case["decls"], body="", n=n),
+    }
+    elfs = {k: _compile(board, work, k, src, [hand]) for k, src in progs.items()}
+    gen_cycles, gen_check = _cycles(runner, elfs["generated"])
+    hw_cycles, hw_check = _cycles(runner, elfs["handwritten"])
+    base_cycles, _ = _cycles(runner, elfs["baseline"])
+    if gen_check != hw_check:
+        raise SystemExit(f"{name}: generated and hand-written code disagree on the AVR: {gen_check} != {hw_check}")
+    base_flash = _flash(elfs["baseline"])
+    gen_flash = _flash(elfs["generated"]) - base_flash
+    hw_flash = _flash(elfs["handwritten"]) - base_flash
+    gen = (gen_cycles - base_cycles) / n
+    hw = (hw_cycles - base_cycles) / n
+    return {"case": name, "mcu": MCU, "activations": n, "generated_cycles": round(gen, 1),
+            "handwritten_cycles": round(hw, 1), "cycle_ratio": round(gen / hw, 3),
+            "generated_flash": gen_flash, "handwritten_flash": hw_flash,
+            "flash_ratio": round(gen_flash / hw_flash, 3)}
+
+
+FOOTPRINT_MODELS = {
+    "one-actor model": ("", "", True),
+    "+ debug interface (debug build)": ("", "debug on uart0 baud 115200\n", False),
+    "+ Modbus RTU slave": (" service ro", "modbus rtu on uart0 baud 19200 parity none unit 1\n", True),
+}
+
+FOOTPRINT_BASE = """model footprint
+import std
+var x: uint8{service}
+dataflow D {{
+    c = Const<uint8>(value = 1)
+    c.y -> x
+}}
+task t period 1 ms {{ run D }}
+"""
+
+# Where a firmware's flash goes, by the object file that defines a symbol.
+PARTS = [("dispatcher", ("el_dispatch",)), ("port (boards/avr)", ("avr_",)),
+         ("debug server", ("el_debug", "debug_tables")),
+         ("service map, persist, Modbus", ("el_service", "el_persist", "el_modbus", "service_tables", "el_crc16")),
+         ("model", ("model_gen", "el_avr_devices", "el_arith"))]
+
+
+def breakdown(elf: Path) -> dict[str, int]:
+    """Flash bytes per part of the runtime (symbol sizes; the rest is avr-libc,
+    libgcc and the vector table)."""
+    objs = sorted((elf.parent / "obj").glob("*.o"))
+    owner = {}
+    for obj in objs:
+        out = subprocess.run(["avr-nm", "--defined-only", str(obj)], capture_output=True, text=True).stdout
+        for line in out.splitlines():
+            parts = line.split()
+            if len(parts) == 3 and parts[1] in "tTdDrR":
+                owner.setdefault(parts[2], obj.stem)
+    sizes = {name: 0 for name, _ in PARTS}
+    sizes["avr-libc, libgcc, vectors"] = 0
+    out = subprocess.run(["avr-nm", "-S", "--defined-only", str(elf)], capture_output=True, text=True).stdout
+    for line in out.splitlines():
+        parts = line.split()
+        if len(parts) != 4 or parts[2] not in "tTdDrR" or int(parts[0], 16) >= 0x800000 and parts[2] in "tT":
+            continue
+        size = int(parts[1], 16)
+        obj = owner.get(parts[3], "")
+        part = next((name for name, prefixes in PARTS if obj.startswith(prefixes)), "avr-libc, libgcc, vectors")
+        sizes[part] += size
+    return sizes
+
+
+def footprint(tmp: Path) -> list[dict]:
+    rows = []
+    for label, (service, extra, release) in FOOTPRINT_MODELS.items():
+        model = tmp / "footprint" / re.sub(r"\W+", "_", label) / "footprint.elab"
+        model.parent.mkdir(parents=True)
+        model.write_text(FOOTPRINT_BASE.format(service=service) + extra)
+        cmd = [sys.executable, "-m", "easylab", "build", str(model), "--board", "avr", "--mcu", "atmega328p",
+               "-o", str(model.parent / "out")] + (["--release"] if release else [])
+        proc = subprocess.run(cmd, capture_output=True, text=True, cwd=ROOT)
+        if proc.returncode != 0:
+            rows.append({"what": label, "error": proc.stderr.strip()})
+            continue
+        m = re.search(r"flash (\d+) of .* RAM (\d+) of", proc.stdout)
+        elf = Path(proc.stdout.strip().splitlines()[-1])
+        rows.append({"what": label, "mcu": "atmega328p", "flash": int(m.group(1)), "ram": int(m.group(2)),
+                     "flash_by_part": breakdown(elf)})
+    base = rows[0]
+    for r in rows[1:]:
+        if "flash" in r and "flash" in base:
+            r["flash_added"] = r["flash"] - base["flash"]
+            r["ram_added"] = r["ram"] - base["ram"]
+    return rows
+
+
+def examples_sizes(tmp: Path) -> list[dict]:
+    """Every example on the ATmega2560 (debug builds), blink and cd_to_dat
+    on the ATmega328P."""
+    rows = []
+    builds = [(p.stem, "atmega2560", []) for p in sorted((ROOT / "examples").glob("*.elab"))]
+    builds += [("blink", "atmega328p", []), ("blink", "atmega328p", ["--release"]),
+               ("cd_to_dat", "atmega328p", ["--release", "--schedule", "min-buffer"])]
+    for name, mcu, flags in builds:
+        out = tmp / "examples" / f"{name}-{mcu}-{'-'.join(flags) or 'debug'}"
+        cmd = [sys.executable, "-m", "easylab", "build", str(ROOT / "examples" / f"{name}.elab"), "--board", "avr",
+               "--mcu", mcu, *flags, "-o", str(out)]
+        proc = subprocess.run(cmd, capture_output=True, text=True, cwd=ROOT)
+        m = re.search(r"flash (\d+) of (\d+) .* RAM (\d+) of (\d+)", proc.stdout + proc.stderr)
+        rows.append({"example": name, "mcu": mcu, "flags": " ".join(flags) or "(debug build)",
+                     "flash": int(m.group(1)) if m else None, "ram": int(m.group(3)) if m else None,
+                     "fits": proc.returncode == 0})
+    return rows
+
+
+def main(out_dir: Path) -> dict:
+    sys.path.insert(0, str(ROOT))
+    codegen = _load("bench_codegen")
+    results = {}
+    with tempfile.TemporaryDirectory() as tmpdir:
+        tmp = Path(tmpdir)
+        pc = subprocess.run(["pkg-config", "--cflags", "--libs", "simavr"], capture_output=True, text=True,
+                            check=True)
+        runner = tmp / "runner"
+        (tmp / "runner.c").write_text(RUNNER)
+        subprocess.run(["gcc", "-O2", "-o", str(runner), str(tmp / "runner.c"), *pc.stdout.split(), "-lelf"],
+                       check=True)
+        results["cycles"] = [measure(name, case, tmp, runner) for name, case in codegen.CASES.items()]
+        results["footprint"] = footprint(tmp)
+        results["examples"] = examples_sizes(tmp)
+    out_dir = Path(out_dir)
+    out_dir.mkdir(parents=True, exist_ok=True)
+    (out_dir / "avr.json").write_text(json.dumps(results, indent=2) + "\n")
+    print(f"generated against hand-written C on the {MCU} (avr-gcc -Os, simavr cycles per activation)")
+    print(f"  {'dataflow':24} {'generated':>10} {'hand':>10} {'ratio':>6} {'flash gen':>10} {'hand':>6} {'ratio':>6}")
+    for r in results["cycles"]:
+        print(f"  {r['case']:24} {r['generated_cycles']:>10} {r['handwritten_cycles']:>10} {r['cycle_ratio']:>6} "
+              f"{r['generated_flash']:>10} {r['handwritten_flash']:>6} {r['flash_ratio']:>6}")
+    print("runtime footprint on the atmega328p (bytes)")
+    for r in results["footprint"]:
+        if "error" in r:
+            print(f"  {r['what']:34} does not build: {r['error'].splitlines()[0]}")
+        else:
+            added = f"  (+{r['flash_added']} flash, +{r['ram_added']} RAM)" if "flash_added" in r else ""
+            print(f"  {r['what']:34} flash {r['flash']:>6}  RAM {r['ram']:>5}{added}")
+            print("      " + ", ".join(f"{k} {v}" for k, v in r["flash_by_part"].items() if v))
+    print("examples")
+    for r in results["examples"]:
+        print(f"  {r['example']:20} {r['mcu']:11} {r['flags']:34} flash {r['flash']!s:>6}  RAM {r['ram']!s:>5}"
+              f"{'' if r['fits'] else '  (does not fit)'}")
+    return results
+
+
+if __name__ == "__main__":
+    main(Path(sys.argv[1] if len(sys.argv) > 1 else "bench/results"))

@@ -1,0 +1,71 @@
+/* EasyLab AVR board: declarations shared by the board's own files
+ * (avr_port.c, avr_uart.c, avr_nv.c, avr_interfaces.c, the drivers).
+ * Generated code includes el_board.h, never this.
+ *
+ * el_avr_config.h is generated for each build (generator/avrgen.py): the
+ * MCU, the tick timer's settings, the UARTs the model uses and their ring
+ * sizes, the debug and Modbus UARTs, the watchdog, EL_AVR_SIM.
+ */
+#ifndef AVR_INTERNAL_H
+#define AVR_INTERNAL_H
+
+#include "el_types.h"
+#include "el_avr_config.h"
+
+#include <avr/io.h>
+#include <avr/interrupt.h>
+
+#if EL_AVR_CONFIG_VERSION != 1
+#error "el_avr_config.h was generated for another version of the AVR board: rebuild"
+#endif
+
+/* ---- time (avr_port.c) ---- */
+
+/* The fine clock: Timer2 clock periods (F_CPU / EL_AVR_TICK_PRESCALE) since
+ * boot, wrapping at 2^32 (about 37 minutes with a prescaler of 32, 4.9 h with
+ * 128). Callable with interrupts on or off. */
+uint32_t el_avr_clock(void);
+
+/* Fine-clock periods in `us` microseconds (rounded up). */
+uint32_t el_avr_clock_from_us(uint32_t us);
+
+/* ---- UARTs (avr_uart.c): interrupt-driven rings, 8 data bits, 1 stop bit ---- */
+
+#define EL_AVR_PARITY_NONE 0u
+#define EL_AVR_PARITY_EVEN 1u
+#define EL_AVR_PARITY_ODD 2u
+
+/* Configure USART n (a UART the model uses: el_avr_config.h has its rings)
+ * and enable its receiver, transmitter and receive interrupt. */
+void el_avr_uart_open(uint8_t n, uint32_t baud, uint8_t parity);
+/* The next received byte, or -1. */
+int16_t el_avr_uart_getc(uint8_t n);
+/* Bytes waiting in the receive ring. */
+uint8_t el_avr_uart_available(uint8_t n);
+/* Take up to `max` received bytes; returns how many. */
+uint16_t el_avr_uart_read(uint8_t n, uint8_t *buf, uint16_t max);
+/* Queue `len` bytes for sending: all of them (waiting at most `wait_ms`
+ * for room in the ring while the ring drains), or none (false). */
+bool el_avr_uart_write(uint8_t n, const uint8_t *data, uint16_t len, uint16_t wait_ms);
+/* The fine clock (el_avr_clock) when the last byte was received. */
+uint32_t el_avr_uart_last_rx(uint8_t n);
+/* Bytes received with a framing, parity or overrun error, or lost to a
+ * full ring (saturating). */
+uint16_t el_avr_uart_errors(uint8_t n);
+
+/* ---- the ADC (avr_port.c) ---- */
+
+/* Enable the ADC (AVCC reference, clock F_CPU / 128) and disconnect the
+ * digital input of channel `ch`'s pin. */
+void el_avr_adc_open(uint8_t ch);
+/* One 10-bit conversion of channel `ch` (busy-waits about 104 us). */
+uint16_t el_avr_adc_read(uint8_t ch);
+
+/* ---- simulation hooks (EL_AVR_SIM builds, avr_port.c; docs/boards.md) ---- */
+
+/* Written to GPIOR0 (the harness hooks writes to it). */
+#define EL_AVR_SIM_INPUTS 1u   /* el_port_inputs: apply the stimulus due now */
+#define EL_AVR_SIM_INSTANT 2u  /* el_port_instant: record the instant */
+#define EL_AVR_SIM_REPORT 3u   /* a test program's result byte follows in GPIOR1 */
+
+#endif /* AVR_INTERNAL_H */

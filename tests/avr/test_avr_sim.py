@@ -1,0 +1,261 @@
+"""Cross-board equivalence: the AVR firmware in simavr gives the host
+board's trace, byte for byte, for every example and its stimulus; and the
+harness itself (pins, hardware limits, UARTs on ptys, options)."""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import time
+from pathlib import Path
+
+import pytest
+
+from avr_testlib import DATA, EXAMPLE_NAMES, ROOT, run, stimulus_of
+
+NATIVE = ROOT / "tests" / "native" / "data"
+
+
+def both(sim_builds, host_builds, name, tmp_path, stimulus: Path | None, duration: str, ext: str = "csv"):
+    """(host trace, AVR trace) of one example and stimulus."""
+    host_trace, avr_trace = tmp_path / f"host.{ext}", tmp_path / f"avr.{ext}"
+    args = ["--fast", "--duration", duration] + (["--stimulus", stimulus] if stimulus else [])
+    run(host_builds[name], *args, "--trace", host_trace)
+    proc = run(sim_builds[name].simulator, *args, "--trace", avr_trace)
+    assert proc.stderr == "", proc.stderr
+    return host_trace.read_bytes(), avr_trace.read_bytes()
+
+
+@pytest.mark.parametrize("name", EXAMPLE_NAMES)
+def test_the_avr_trace_equals_the_host_trace(sim_builds, host_builds, name, tmp_path):
+    host, avr = both(sim_builds, host_builds, name, tmp_path, stimulus_of(name), "2s")
+    assert host.count(b"\n") > 3
+    assert avr == host
+
+
+@pytest.mark.parametrize("name", ["line_follower", "pt100_sensor"])
+def test_vcd_traces_are_equal_too(sim_builds, host_builds, name, tmp_path):
+    host, avr = both(sim_builds, host_builds, name, tmp_path, stimulus_of(name), "1500ms", "vcd")
+    assert host.startswith(b"$comment") and avr == host
+
+
+# The native tests' stimuli: other inputs, longer runs (pt100_sensor's own
+# stops before its out-of-range ADC values, tested below).
+@pytest.mark.parametrize("name, stimulus, duration", [
+    ("blink", "blink.stimulus.csv", "3s"),
+    ("cd_to_dat", "cd_to_dat.stimulus.csv", "400ms"),
+    ("line_follower", "line_follower.stimulus.csv", "3s"),
+    ("pneumatic_cylinder", "pneumatic_cylinder.stimulus.csv", "3600ms"),
+    ("pt100_sensor", "pt100_sensor.stimulus.csv", "2s"),
+    ("pt100_sensor", "pt100_stats.stimulus.csv", "5s"),
+])
+def test_the_native_suites_stimuli_give_equal_traces(sim_builds, host_builds, name, stimulus, duration, tmp_path):
+    path = NATIVE / stimulus
+    if not path.is_file():  # another suite's data: its absence is not this board's failure
+        pytest.fail(f"{path} is missing")
+    host, avr = both(sim_builds, host_builds, name, tmp_path, path, duration)
+    assert avr == host
+
+
+def test_a_value_the_adc_cannot_give_is_an_error(sim_builds, tmp_path):
+    stim = tmp_path / "s.csv"
+    stim.write_text("time_us,sensor.raw\n0,300\n30000,1024\n")
+    proc = run(sim_builds["pt100_sensor"].simulator, "--fast", "--duration", "1s", "--stimulus", stim, "--trace",
+               tmp_path / "t.csv", ok=False)
+    assert proc.returncode == 1
+    assert "sensor.raw = 1024 at 30000 us: the atmega2560's ADC gives 0..1023 (10 bits)" in proc.stderr
+
+
+def test_stimulus_errors_are_reported_as_on_the_host_board(sim_builds, host_builds, tmp_path):
+    stim = tmp_path / "bad.csv"
+    stim.write_text("time_us,nonsense\n0,1\n")
+    avr = run(sim_builds["blink"].simulator, "--fast", "--duration", "1s", "--stimulus", stim, ok=False)
+    host = run(host_builds["blink"], "--fast", "--duration", "1s", "--stimulus", stim, ok=False)
+    assert avr.returncode == host.returncode == 2
+    assert avr.stderr.splitlines()[0] == host.stderr.splitlines()[0] == f"{stim}:1: unknown column 'nonsense'"
+
+
+def test_bad_command_lines_exit_2(sim_builds):
+    exe = sim_builds["blink"].simulator
+    for args, message in [(["--duration", "10"], "--duration 10: give a number and a unit"),
+                          (["--uart7", "x"], "unknown option '--uart7'"),
+                          (["--bogus"], "unknown option '--bogus'"),
+                          (["--uart0", "serial"], "give pty:LINK, tcp:PORT, file:PATH or null")]:
+        proc = run(exe, *args, ok=False)
+        assert proc.returncode == 2 and message in proc.stderr, (args, proc.stderr)
+    assert "--stimulus FILE" in run(exe, "--help").stdout
+
+
+def test_the_pins_trace_shows_levels_and_pwm_duties(sim_builds, tmp_path):
+    pins = tmp_path / "pins.csv"
+    run(sim_builds["pneumatic_cylinder"].simulator, "--fast", "--duration", "200ms", "--stimulus",
+        DATA / "pneumatic_cylinder.stimulus.csv", "--pins", pins)
+    rows = [line.split(",") for line in pins.read_text().splitlines()[1:]]
+    assert pins.read_text().startswith("cycle,time_us,pin,value\n")
+    duty = [int(r[3]) for r in rows if r[2] == "PB5.pwm"]
+    assert duty[0] == 0 and 255 in duty and any(0 < d < 255 for d in duty)  # the valve's PID output
+    assert ["PA1", "1"] == [r[2:] for r in rows if r[2] == "PA1"][0]  # end_in, driven by the stimulus
+    cycles = [int(r[0]) for r in rows]
+    assert cycles == sorted(cycles)
+
+
+def test_the_tick_is_exact_in_cpu_cycles(sim_builds, tmp_path):
+    """blink toggles its LED at its deadlines: 100 ms apart to the cycle."""
+    pins = tmp_path / "pins.csv"
+    stim = tmp_path / "s.csv"
+    stim.write_text("time_us,half_period\n0,100\n")
+    run(sim_builds["blink"].simulator, "--fast", "--duration", "1s", "--stimulus", stim, "--pins", pins)
+    edges = [int(line.split(",")[0]) for line in pins.read_text().splitlines()[1:] if ",PB5," in line][1:]
+    assert len(edges) >= 9
+    gaps = [b - a for a, b in zip(edges, edges[1:])]
+    # No drift: n half periods are n x 1.6 M cycles; the only jitter is a
+    # cycle of simavr's timer rounding around each tick.
+    assert abs((edges[-1] - edges[0]) - 1_600_000 * len(gaps)) <= 1, gaps
+    assert all(abs(g - 1_600_000) <= 1 for g in gaps), gaps
+
+
+def test_the_simulation_runs_in_real_time_unless_fast(sim_builds, tmp_path):
+    start = time.monotonic()
+    run(sim_builds["blink"].simulator, "--duration", "300ms")
+    assert 0.28 <= time.monotonic() - start < 3.0
+
+
+class Harness:
+    """A harness run with UART1 on a pty, for a Modbus client."""
+
+    def __init__(self, exe: Path, link: Path, *args):
+        self.link = link
+        self.proc = subprocess.Popen([str(exe), "--uart1", f"pty:{link}", "--wait", *map(str, args)],
+                                     stderr=subprocess.PIPE, text=True)
+        deadline = time.monotonic() + 20
+        while not link.exists() and time.monotonic() < deadline:
+            time.sleep(0.05)
+        assert link.exists()
+
+    def client(self):
+        from pymodbus.client import ModbusSerialClient
+
+        client = ModbusSerialClient(port=str(self.link), baudrate=19200, parity="N", timeout=2)
+        assert client.connect()
+        return client
+
+    def stop(self) -> str:
+        self.proc.terminate()
+        self.proc.wait(timeout=10)
+        return self.proc.stderr.read()
+
+
+def read_holding(client, count: int, timeout: float = 20.0) -> list[int]:
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:  # the first request may meet a firmware still booting
+        reply = client.read_holding_registers(0, count=count, device_id=17)
+        if not reply.isError():
+            return reply.registers
+    raise AssertionError("no Modbus reply")
+
+
+def test_a_uart_on_a_pty_serves_modbus_rtu_and_the_eeprom_persists(sim_builds, tmp_path):
+    """The harness's pty plumbing end to end (pymodbus over Modbus RTU on
+    USART1), and the EEPROM: a persist param written over Modbus is there
+    again in the next run with the same --nvram file."""
+    exe = sim_builds["pt100_sensor"].simulator
+    nv = tmp_path / "eeprom.bin"
+    h = Harness(exe, tmp_path / "uart1", "--nvram", nv)
+    try:
+        client = h.client()
+        assert read_holding(client, 3) == [1000, 0, 800]  # cal_gain, cal_offset, alarm_high
+        assert not client.write_register(1, 25, device_id=17).isError()
+        assert read_holding(client, 3) == [1000, 25, 800]
+        time.sleep(0.5)  # the EEPROM write happens between instants
+        client.close()
+    finally:
+        err = h.stop()
+    assert f"uart1 on {tmp_path / 'uart1'} -> /dev/pts/" in err
+    assert not (tmp_path / "uart1").exists()  # the harness removes its link
+    assert nv.stat().st_size == 4096
+    h = Harness(exe, tmp_path / "uart1", "--nvram", nv)
+    try:
+        client = h.client()
+        assert read_holding(client, 3) == [1000, 25, 800]
+        client.close()
+    finally:
+        h.stop()
+
+
+def test_the_uart_link_and_harness_files_of_a_build(sim_builds):
+    built = sim_builds["pt100_sensor"]
+    out = built.elf.parent
+    assert built.simulator == out / "pt100_sensor-sim" and os.access(built.simulator, os.X_OK)
+    hw = (out / "hw_map.json").read_text()
+    assert '"adc": 0' in hw and '"pin": "PF0"' in hw and '"use": "modbus-rtu"' in hw
+
+
+def test_the_debug_interface_answers_on_a_tcp_uart(sim_builds):
+    """The debug transport of the AVR port (USART0), through the harness's
+    TCP socket: hello and a read with the project's own client."""
+    import re
+
+    from avr_testlib import debug_client_class
+
+    DebugClient = debug_client_class()
+
+    proc = subprocess.Popen([str(sim_builds["pt100_sensor"].simulator), "--uart0", "tcp:0", "--wait"],
+                            stderr=subprocess.PIPE, text=True)
+    try:
+        line = proc.stderr.readline()
+        port = int(re.search(r"uart0 on tcp 127\.0\.0\.1:(\d+)", line).group(1))
+        client = DebugClient.open(f"socket://127.0.0.1:{port}", timeout=2.0)
+        try:
+            hello = client.hello()
+            program_id = int((sim_builds["pt100_sensor"].elf.parent / "model.c").read_text()
+                             .split("Program id 0x")[1][:8], 16)
+            assert hello.program_id == program_id and hello.max_frame == 160
+            assert client.read([(0, "int16", 1)]) == [1000]  # cal_gain
+        finally:
+            client.close()
+    finally:
+        proc.terminate()
+        proc.wait(timeout=10)
+
+
+ENCODERS = {
+    # pins with pin-change interrupts of every group simavr simulates, and
+    # external interrupts (INTn)
+    "atmega328p": {"wheel": ("PB0", "PB1"), "knob": ("PC0", "PC1"), "axle": ("PD4", "PD5"), "ext": ("PD2", "PD3")},
+    "atmega2560": {"wheel": ("PB0", "PB1"), "axle": ("PD0", "PE4"), "ext": ("PE6", "PE7")},
+}
+
+
+@pytest.mark.parametrize("mcu", ["atmega328p", "atmega2560"])
+def test_encoders_count_the_stimulus_quadrature_edges(tmp_path, mcu):
+    from avr_testlib import avr_build, host_build
+
+    encoders = ENCODERS[mcu]
+    lines = ["model enc", "import std"]
+    lines += [f'device {n}: Encoder(pin_a = "{a}", pin_b = "{b}")' for n, (a, b) in encoders.items()]
+    lines += [f"var v_{n}: int32" for n in encoders]
+    lines.append("dataflow D { " + "  ".join(f"{n}.count -> v_{n}" for n in encoders) + " }")
+    lines.append("task t period 10 ms { run D }")
+    model = tmp_path / "enc.elab"
+    model.write_text("\n".join(lines) + "\n")
+    stim = tmp_path / "enc.csv"
+    names = list(encoders)
+    rows = [[0] * len(names), [5, -3, 7, 1][:len(names)], [-10, 100, -2, 0][:len(names)], [250, -40, 0, -9][:len(names)]]
+    stim.write_text("time_us," + ",".join(f"{n}.count" for n in names) + "\n" +
+                    "".join(f"{t},{','.join(map(str, r))}\n" for t, r in zip([0, 20000, 50000, 120000], rows)))
+    sim = avr_build(model, tmp_path / "avr", "--mcu", mcu, "--sim", "--release").simulator
+    host = host_build(model, tmp_path / "host")
+    run(host, "--fast", "--duration", "300ms", "--stimulus", stim, "--trace", tmp_path / "h.csv")
+    run(sim, "--fast", "--duration", "300ms", "--stimulus", stim, "--trace", tmp_path / "a.csv")
+    assert (tmp_path / "a.csv").read_text() == (tmp_path / "h.csv").read_text()
+    assert "250" in (tmp_path / "h.csv").read_text()
+
+
+def test_a_sim_build_warns_of_what_simavr_does_not_simulate(tmp_path):
+    from avr_testlib import avr_build
+
+    model = tmp_path / "k.elab"
+    model.write_text('model k\nimport std\ndevice knob: Encoder(pin_a = "PK0", pin_b = "PK1")\nvar x: int32\n'
+                     'dataflow D { knob.count -> x }\ntask t period 10 ms { run D }\n')
+    out = avr_build(model, tmp_path / "o", "--mcu", "atmega2560", "--sim", "--release").proc.stdout
+    assert "warning: simavr 1.6 simulates the atmega2560's pin-change interrupts on port B only: encoder 'knob'" in out
