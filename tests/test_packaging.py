@@ -58,10 +58,17 @@ def test_wheel_checks_and_draws_an_example_outside_the_tree(installed):
                  cwd=work, env=clean_env).stdout.split()
     assert str(env_dir) in where[0], "easylab must be imported from the installed wheel"
     assert where[1] == "True"
+    # The installed package builds firmware from its own runtime and boards.
+    out = _run([str(exe), "build", model.name, "--board", "host", "-o", "fw"], cwd=work, env=clean_env)
+    program = work / out.stdout.strip().splitlines()[-1]
+    assert program.is_file() and program.parent == work / "fw"
 
 
 def test_wheel_carries_the_package_data(installed):
     env_dir, _ = installed
     site = next((env_dir / "lib").glob("python3*/site-packages/easylab"))
-    for rel in ("elab.lark", "stdlib/std.elab", "stdlib/actors/pt100_linearize.c"):
+    for rel in ("elab.lark", "stdlib/std.elab", "stdlib/actors/pt100_linearize.c", "templates/model.c.j2",
+                "templates/actor.c.j2", "runtime_c/el_dispatch.c", "runtime_c/el_debug_protocol.h",
+                "boards/host/board.toml", "boards/host/host_port.c", "boards/avr/board.toml",
+                "boards/avr/sim/avr_sim.c", "host_tools/debug_console.py", "interp/engine.py"):
         assert (site / rel).is_file(), rel
