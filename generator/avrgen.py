@@ -644,13 +644,9 @@ def produce(program: Program, board: Board, out_dir: Path, release: bool, res: R
         "el_avr_devices.c": devices_source(program, board, views),
         "hw_map.json": json.dumps(hw_map(program, board, res, views), indent=2) + "\n",
     }
-    written = []
-    for name, text in files.items():
-        path = out_dir / name
-        if not path.exists() or path.read_text(encoding="utf-8") != text:
-            path.write_text(text, encoding="utf-8")
-        written.append(path)
-    return written
+    from .build import write_files  # build imports this module lazily
+
+    return write_files(out_dir, files)
 
 
 # ====================================================================== the cross build

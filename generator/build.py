@@ -32,18 +32,23 @@ class BuildResult:
     simulator: Path | None = None  # a cross board's simulator build (--sim)
 
 
+def write_files(out_dir: Path, files: dict[str, str]) -> list[Path]:
+    """Write generated files into ``out_dir``, leaving unchanged ones alone
+    (their modification time then tells make-like tools nothing changed)."""
+    written = []
+    for name, text in files.items():
+        path = out_dir / name
+        if not path.exists() or path.read_text(encoding="utf-8") != text:
+            path.write_text(text, encoding="utf-8")
+        written.append(path)
+    return written
+
+
 def generate(program: Program, board: Board, out_dir: Path, release: bool = False) -> list[Path]:
     """Write the generated files (C sources, maps); returns their paths."""
     try:
         out_dir.mkdir(parents=True, exist_ok=True)
-        files = cgen.render(program, board, templates_dir(), release)
-        written = []
-        for name, text in files.items():
-            path = out_dir / name
-            if not path.exists() or path.read_text(encoding="utf-8") != text:
-                path.write_text(text, encoding="utf-8")
-            written.append(path)
-        return written
+        return write_files(out_dir, cgen.render(program, board, templates_dir(), release))
     except OSError as err:
         raise BuildError(f"cannot write to {out_dir}: {err.strerror or err}") from None
 
