@@ -22,7 +22,7 @@ from easylab.frontend import check_file
 ROOT = Path(__file__).resolve().parents[2]
 # The examples, and a model with every construct of the language once.
 SEEDS = [*sorted((ROOT / "examples").glob("*.elab")), Path(__file__).parent / "models" / "all_features.elab"]
-TOTAL_CASES = 1500
+TOTAL_CASES = 3000
 
 # Whitespace, comments, strings, inline-C delimiters, operators, words, numbers.
 TOKEN = re.compile(r'\s+|//[^\n]*|/\*.*?\*/|"(?:[^"\\\n]|\\.)*"|\{\{|\}\}|->|\.\.|[<>=!]=|[A-Za-z_]\w*'
