@@ -31,6 +31,9 @@
 #define EL_AVR_DEBUG_TX_WAIT_MS 50u
 #endif
 
+/* In .noinit RAM (avr_port.c): 0x5A asks el_port_init to halt at the first instant. */
+extern uint8_t el_avr_reset_halt;
+
 uint16_t el_debug_port_read(uint8_t *buf, uint16_t max)
 {
     return el_avr_uart_read(EL_AVR_DEBUG_UART, buf, max);
@@ -43,7 +46,8 @@ bool el_debug_port_write(const uint8_t *frame, uint16_t len)
 
 bool el_debug_port_reset(uint8_t flags)
 {
-    (void)flags;
+    /* RESET_HALT survives the reset in .noinit RAM (el_port_init reads it). */
+    el_avr_reset_halt = (flags & EL_DBG_RESET_HALT) != 0u ? 0x5Au : 0u;
     /* Let the reply go out, then let the watchdog restart everything. */
     wdt_enable(WDTO_30MS);
     for (;;) {

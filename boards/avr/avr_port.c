@@ -57,6 +57,12 @@ const struct el_avr_mmcu_long el_avr_mmcu_freq __attribute__((section(".mmcu"), 
 
 /* MCUSR at reset (EXTRF, PORF, BORF, WDRF): why the MCU started. */
 uint8_t el_avr_reset_cause __attribute__((section(".noinit")));
+/* A debugger RESET with RESET_HALT (avr_interfaces.c) leaves 0x5A here,
+ * kept across the watchdog reset; el_port_init reads and clears it. */
+uint8_t el_avr_reset_halt __attribute__((section(".noinit")));
+/* GPIOR2 at boot of a simulation build: the harness's --halt (halt at the
+ * first instant, as the host board's `--debug ...,halt`). */
+#define EL_AVR_SIM_HALT 0xA5u
 
 void el_avr_early_init(void) __attribute__((naked, used, section(".init3")));
 void el_avr_early_init(void)
@@ -149,7 +155,19 @@ bool el_port_init(int argc, char **argv)
 #endif
 #if defined(EL_AVR_DEBUG_UART) && defined(EL_DEBUG_SERVER) && EL_DEBUG_SERVER
     el_avr_uart_open(EL_AVR_DEBUG_UART, EL_AVR_DEBUG_BAUD, EL_AVR_PARITY_NONE);
+    /* Halt at the first instant after a RESET with RESET_HALT only (a
+     * power-on leaves .noinit undefined: the reset cause must be the watchdog). */
+    if (el_avr_reset_halt == 0x5Au && (el_avr_reset_cause & _BV(WDRF)) != 0u) {
+        el_debug_halt_at_start();
+    }
+#if defined(EL_AVR_SIM) && EL_AVR_SIM
+    if (GPIOR2 == EL_AVR_SIM_HALT) { /* the harness's --halt */
+        el_debug_halt_at_start();
+    }
+    GPIOR2 = 0u;
 #endif
+#endif
+    el_avr_reset_halt = 0u;
     ticks = 0u;
     isr_count = 0u;
     start_tick_timer();

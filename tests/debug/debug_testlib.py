@@ -4,6 +4,7 @@ processes serving the debug interface on a pty, clients."""
 from __future__ import annotations
 
 import csv
+import json
 import os
 import signal
 import subprocess
@@ -46,7 +47,7 @@ class Firmware:
         self.trace = tmp / f"{self.exe.name}.trace.csv"
         self.map_path = self.exe.parent / "debug_map.json"
         spec = transport or f"pty:{self.link}"
-        cmd = [str(self.exe), "--debug", spec + (",halt" if halt else ""), "--trace", str(self.trace), *args]
+        cmd = self.command(spec, halt, list(args))
         if fast:
             cmd.append("--fast")
         if duration:
@@ -59,6 +60,9 @@ class Firmware:
                     raise AssertionError(f"{cmd} did not start: {self.proc.communicate()}")
                 time.sleep(0.01)
         self.clients: list[DebugClient] = []
+
+    def command(self, spec: str, halt: bool, args: list[str]) -> list[str]:
+        return [str(self.exe), "--debug", spec + (",halt" if halt else ""), "--trace", str(self.trace), *args]
 
     @property
     def map(self) -> DebugMap:
@@ -98,6 +102,18 @@ class Firmware:
     def rows(self) -> list[dict]:
         with open(self.trace, newline="") as f:
             return list(csv.DictReader(f))
+
+
+class AvrFirmware(Firmware):
+    """The AVR firmware (ATmega2560) in its simavr harness, NAME-sim, with
+    the model's debug UART on a new pty (or TCP port): the same options and
+    the same client side as Firmware. `halt` is the harness's --halt, the
+    host's `--debug ...,halt`."""
+
+    def command(self, spec: str, halt: bool, args: list[str]) -> list[str]:
+        hw = json.loads((self.exe.parent / "hw_map.json").read_text())
+        uart = next(n for n, u in hw["uarts"].items() if u["use"] == "debug")
+        return [str(self.exe), f"--uart{uart}", spec, "--trace", str(self.trace), *args] + (["--halt"] if halt else [])
 
 
 def env_with_tools() -> dict:
@@ -148,25 +164,72 @@ def built(name: str) -> Path:
     return build(model, _BUILD_ROOT / name)
 
 
+@_functools.lru_cache(maxsize=None)
+def built_avr(name: str) -> Path:
+    """An ATmega2560 simulation build (debug) of examples/NAME.elab (or
+    models/NAME.elab), once per test run: its simavr harness, NAME-sim."""
+    import subprocess as sp
+    import sys
+    model = EXAMPLES / f"{name}.elab"
+    if not model.exists():
+        model = MODELS / f"{name}.elab"
+    out = _BUILD_ROOT / "avr" / name
+    proc = sp.run([sys.executable, "-m", "easylab", "build", str(model), "--board", "avr", "--mcu", "atmega2560",
+                   "--sim", "-o", str(out)], capture_output=True, text=True, timeout=300, stdin=sp.DEVNULL)
+    assert proc.returncode == 0, f"avr build of {name} failed:\n{proc.stdout}{proc.stderr}"
+    return next(Path(line.split(": ", 1)[1]) for line in proc.stdout.splitlines() if line.startswith("simulator: "))
+
+
+# The boards the debug suite runs on: the host board's process, and the AVR
+# firmware (ATmega2560) in simavr with its debug UART on a pty. A test runs
+# on both with @on_boards, on the host only with @host_only(reason).
+BOARDS = ("host", "avr")
+on_boards = pytest.mark.parametrize("board", BOARDS, indirect=True)
+
+
+def host_only(reason: str):
+    return pytest.mark.parametrize("board", ["host", pytest.param(
+        "avr", marks=pytest.mark.skip(reason=f"host-only: {reason}"))], indirect=True)
+
+
+@pytest.fixture
+def board(request) -> str:
+    """The board the firmware runs on (host unless the test is parametrised;
+    a module whose tests are parametrised by board imports this fixture)."""
+    return getattr(request, "param", "host")
+
+
+def _board_of(request) -> str:
+    """The test's board: its `board` parameter, else host (modules that do
+    not import the `board` fixture are host-only)."""
+    cs = getattr(request.node, "callspec", None)
+    return cs.params.get("board", "host") if cs is not None else "host"
+
+
 class _Builds:
+    def __init__(self, board: str = "host"):
+        self.board = board
+
     def __getitem__(self, name: str) -> Path:
-        return built(name)
+        return built_avr(name) if self.board == "avr" else built(name)
 
 
 @pytest.fixture
-def builds():
-    """builds[name] -> executable (built on first use, shared by the run)."""
-    return _Builds()
+def builds(request):
+    """builds[name] -> executable (built on first use, shared by the run):
+    the host program, or for the AVR board the simavr harness."""
+    return _Builds(_board_of(request))
 
 
 @pytest.fixture
-def firmware(tmp_path):
+def firmware(tmp_path, request):
     """firmware(exe, *args, halt=True, fast=True, duration=None): started
     processes are stopped after the test."""
     started: list[Firmware] = []
+    board = _board_of(request)
 
     def start(exe, *args, **kw):
-        fw = Firmware(exe, tmp_path, *args, **kw)
+        fw = (AvrFirmware if board == "avr" else Firmware)(exe, tmp_path, *args, **kw)
         started.append(fw)
         return fw
 

@@ -8,11 +8,15 @@ import time
 
 import pytest
 
-from debug_testlib import EXAMPLES, builds, firmware  # noqa: F401 (fixtures)
+from debug_testlib import EXAMPLES, board, builds, firmware, host_only, on_boards  # noqa: F401 (fixtures)
 from easylab.host_tools.debug_protocol import K, DebugError, crc16, cobs_encode, encode_frame
 from easylab.host_tools.transport import TransportTimeout
 
 EXAMPLE_NAMES = sorted(p.stem for p in EXAMPLES.glob("*.elab"))
+
+# The firmware of each test runs on the board of its `board` parameter
+# (@on_boards: host and the AVR in simavr; @host_only: the AVR skipped, why).
+pytestmark = pytest.mark.usefixtures("board")
 
 
 def ids(fw, *names):
@@ -20,6 +24,7 @@ def ids(fw, *names):
     return [(m.item(n).id, m.item(n).type, m.item(n).count) for n in names]
 
 
+@on_boards
 @pytest.mark.parametrize("name", EXAMPLE_NAMES)
 def test_every_example_identifies_itself_and_reads_every_item(builds, firmware, name):
     fw = firmware(builds[name])
@@ -42,6 +47,8 @@ def test_every_example_identifies_itself_and_reads_every_item(builds, firmware, 
     assert len(s.charts) == len(m.charts) and s.task is None
 
 
+@host_only("a debugger write to a device `out` datum (end_out.level) holds on the host board until the next "
+           "stimulus read; on a target the driver's next read() of the pin replaces it (docs/protocol.md)")
 def test_writes_change_the_behaviour_in_the_trace(builds, firmware):
     # Without a write the cylinder stays retracted ...
     fw = firmware(builds["pneumatic_cylinder"], duration="100ms")
@@ -71,6 +78,7 @@ def test_writes_change_the_behaviour_in_the_trace(builds, firmware):
     assert rows[0]["time_us"] == "0" and rows[0]["start_cmd"] == "1"
 
 
+@on_boards
 def test_read_only_range_and_type_checks(builds, firmware):
     fw = firmware(builds["pneumatic_cylinder"])
     c = fw.client()
@@ -99,6 +107,7 @@ def test_read_only_range_and_type_checks(builds, firmware):
     assert c.read(ids(fw, "timeout", "PositionControl.pid.integral")) == [5000, -123456]
 
 
+@on_boards
 def test_a_transaction_of_16_writes_is_never_seen_half_applied(builds, firmware):
     fw = firmware(builds["tx16"], halt=False, fast=False)  # real time: commits land between instants
     c = fw.client()
@@ -139,6 +148,7 @@ def test_a_transaction_of_16_writes_is_never_seen_half_applied(builds, firmware)
     assert rows[-1]["p0"] == "20"
 
 
+@on_boards
 def test_breakpoints_halt_at_the_right_item(builds, firmware):
     fw = firmware(builds["pneumatic_cylinder"])
     c = fw.client()
@@ -181,6 +191,7 @@ def test_breakpoints_halt_at_the_right_item(builds, firmware):
     assert c.bp_list() == []
 
 
+@on_boards
 def test_step_advances_exactly_one_unit(builds, firmware):
     fw = firmware(builds["pneumatic_cylinder"])
     c = fw.client()
@@ -208,6 +219,7 @@ def test_step_advances_exactly_one_unit(builds, firmware):
     assert e.value.status == K.E_NOT_HALTED
 
 
+@on_boards
 def test_break_run_and_resync_in_real_time(builds, firmware):
     fw = firmware(builds["pneumatic_cylinder"], halt=False, fast=False)  # tick 5 ms, real time
     c = fw.client()
@@ -232,6 +244,9 @@ def test_break_run_and_resync_in_real_time(builds, firmware):
     assert times == sorted(times) and len(set(times)) == len(times)
 
 
+@host_only("the host board's RESET re-executes the process, which starts a new trace file and removes its link "
+           "at exit; the AVR's watchdog reset restarts the MCU inside the same harness, whose one trace file holds "
+           "the rows of both runs")
 def test_reset_restarts_the_program(builds, firmware):
     fw = firmware(builds["pneumatic_cylinder"])
     c = fw.client()
@@ -265,6 +280,7 @@ def test_reset_restarts_the_program(builds, firmware):
     assert fw.rows()[0]["time_us"] == "0" and fw.rows()[0]["kp"] == "400"
 
 
+@on_boards
 def test_damaged_frames_are_counted_and_the_next_good_frame_works(builds, firmware):
     fw = firmware(builds["blink"])
     c = fw.client()
@@ -310,6 +326,7 @@ def test_damaged_frames_are_counted_and_the_next_good_frame_works(builds, firmwa
     assert c.counters()["duplicates"] == after["duplicates"] + 1
 
 
+@on_boards
 def test_tcp_transport(builds, firmware, tmp_path):
     import socket
     with socket.socket() as s:
@@ -334,6 +351,7 @@ def test_tcp_transport(builds, firmware, tmp_path):
     assert c2.hello().program_id == fw.map.program_id
 
 
+@on_boards
 def test_dispatcher_keeps_time_while_a_client_floods_it(builds, firmware):
     """Serving the debugger never makes the dispatcher late (bounded work)."""
     fw = firmware(builds["cd_to_dat"], halt=False, fast=False)

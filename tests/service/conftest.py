@@ -18,7 +18,7 @@ from pathlib import Path
 
 import pytest
 
-from svc_testlib import DATA, EXAMPLES, ROOT, Firmware
+from svc_testlib import AVR_NO_TCP, DATA, EXAMPLES, ROOT, AvrFirmware, Firmware
 SANITIZE = "-g -fsanitize=address,undefined -fno-sanitize-recover=all -fno-omit-frame-pointer"
 
 # ---------------------------------------------------------------- packaging shim
@@ -90,12 +90,56 @@ def build_model(model: Path, out: Path, cflags: str = "", release: bool = False)
     return _BUILDS[key]
 
 
+def build_avr(model: Path, out: Path, env: dict) -> Built:
+    """An ATmega2560 simulation build (``easylab build MODEL --board avr
+    --mcu atmega2560 --sim``, once per session); `exe` is its simavr harness.
+    A model's `modbus tcp` line is left out: the board has no network (the
+    tests of TCP are host-only)."""
+    import subprocess
+
+    key = ("avr", str(model))
+    if key not in _BUILDS:
+        text = model.read_text()
+        if any(line.lstrip().startswith("modbus tcp") for line in text.splitlines()):
+            out.mkdir(parents=True, exist_ok=True)
+            model = out / model.name
+            model.write_text("".join(line for line in text.splitlines(keepends=True)
+                                     if not line.lstrip().startswith("modbus tcp")))
+        proc = subprocess.run([sys.executable, "-m", "easylab", "build", str(model), "--board", "avr", "--mcu",
+                               "atmega2560", "--sim", "-o", str(out / "avr")], capture_output=True, text=True,
+                              env=env, timeout=300, stdin=subprocess.DEVNULL)
+        assert proc.returncode == 0, f"avr build of {model} failed:\n{proc.stdout}{proc.stderr}"
+        sim = next(Path(line.split(": ", 1)[1]) for line in proc.stdout.splitlines() if line.startswith("simulator: "))
+        _BUILDS[key] = Built(out / "avr", sim)
+    return _BUILDS[key]
+
+
+# The boards the Modbus RTU conformance tests run on: the host board's
+# process (RTU on a pty), and the AVR firmware (ATmega2560) in simavr with
+# the model's Modbus UART on a pty. A test runs on both with @on_boards
+# (svc_testlib), on the host only with @host_only(reason).
 @pytest.fixture(scope="session")
-def builds(shim, tmp_path_factory):
+def board(request) -> str:
+    """The board of builds, svc_all and firmware (host unless parametrised)."""
+    return getattr(request, "param", "host")
+
+
+def pytest_collection_modifyitems(items):
+    """Modbus TCP (a `tcp` parameter of a client or link fixture) is host-only."""
+    for item in items:
+        cs = getattr(item, "callspec", None)
+        if cs is not None and cs.params.get("board") == "avr" and "tcp" in cs.params.values():
+            item.add_marker(pytest.mark.skip(reason=AVR_NO_TCP))
+
+
+@pytest.fixture(scope="session")
+def builds(shim, tool_env, board, tmp_path_factory):
     d = tmp_path_factory.mktemp("service_builds")
 
     def get(name: str, cflags: str = "", release: bool = False) -> Built:
         model = DATA / f"{name}.elab" if (DATA / f"{name}.elab").exists() else EXAMPLES / f"{name}.elab"
+        if board == "avr":  # sanitizers are the host's; a debug build (release: no debug server, same Modbus)
+            return build_avr(model, d / name, tool_env)
         tag = name + ("_asan" if cflags else "") + ("_rel" if release else "")
         return build_model(model, d / tag, cflags, release)
     return get
@@ -103,19 +147,21 @@ def builds(shim, tmp_path_factory):
 
 @pytest.fixture(scope="session")
 def svc_all(builds) -> Built:
-    """tests/service/data/service_all.elab with ASan and UBSan."""
+    """tests/service/data/service_all.elab with ASan and UBSan (host), or its
+    AVR simulation build without Modbus TCP."""
     return builds("service_all", SANITIZE)
 
 
 # ---------------------------------------------------------------- processes
 
 @pytest.fixture
-def firmware(tmp_path):
-    """Start firmwares; every one is stopped (and checked) at the end."""
+def firmware(tmp_path, board):
+    """Start firmwares (host processes, or AVR harnesses); every one is
+    stopped (and checked) at the end."""
     started: list[Firmware] = []
 
     def start(exe, **kw) -> Firmware:
-        fw = Firmware(exe, tmp_path, **kw).start()
+        fw = (AvrFirmware if board == "avr" else Firmware)(exe, tmp_path, **kw).start()
         started.append(fw)
         return fw
     yield start

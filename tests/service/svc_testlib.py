@@ -3,6 +3,7 @@ processes serving Modbus TCP and RTU on ptys, raw Modbus frames."""
 
 from __future__ import annotations
 
+import json
 import os
 import shutil
 import signal
@@ -100,6 +101,38 @@ class Firmware:
 
     def __exit__(self, *exc):
         self.stop()
+
+
+AVR_NO_TCP = ("host-only: Modbus TCP needs a network; the AVR board has none (it refuses `modbus tcp` at "
+              "build time)")
+
+
+class AvrFirmware(Firmware):
+    """The AVR firmware (ATmega2560) in its simavr harness (NAME-sim, real
+    time) serving Modbus RTU on the model's Modbus UART on a pty: the same
+    `rtu` link and the same life cycle as Firmware. No Modbus TCP (`port`
+    stays None), no HMI."""
+
+    def __init__(self, exe: Path, workdir: Path, tcp: bool = True, rtu: bool = True, hmi: bool = False,
+                 nvram: Path | None = None, extra: list[str] | None = None):
+        assert not hmi, "the AVR board has no HMI"
+        assert rtu, AVR_NO_TCP
+        self.exe = exe
+        self.port = None
+        self.rtu = workdir / f"rtu{id(self)}"
+        self.hmi = None
+        self.nvram = nvram
+        hw = json.loads((Path(exe).parent / "hw_map.json").read_text())
+        uart = next(n for n, u in hw["uarts"].items() if u["use"] == "modbus-rtu")
+        args = [str(exe), "--duration", "600s", f"--uart{uart}", f"pty:{self.rtu}"]
+        if nvram is not None:
+            args += ["--nvram", str(nvram)]
+        self.args = args + (extra or [])
+        self.proc = None
+
+    def wait_ready(self, timeout: float = 10.0) -> None:
+        super().wait_ready(timeout)
+        time.sleep(0.02)  # the link is there before the firmware has opened its UART (about 1 ms of its time)
 
 
 # ---------------------------------------------------------------- raw Modbus
@@ -201,6 +234,21 @@ class RawTcp:
 
 def read_regs_pdu(fc: int, address: int, count: int) -> bytes:
     return struct.pack(">BHH", fc, address, count)
+
+
+def _boards_mark(avr_reason: str | None):
+    import pytest
+    avr = "avr" if avr_reason is None else pytest.param("avr", marks=pytest.mark.skip(reason=f"host-only: {avr_reason}"))
+    return pytest.mark.parametrize("board", ["host", avr], indirect=True)
+
+
+def host_only(reason: str):
+    """Parametrise a test by board, the AVR board skipped for `reason`."""
+    return _boards_mark(reason)
+
+
+# Run a test on both boards (the fixtures board, builds, svc_all, firmware).
+on_boards = _boards_mark(None)
 
 
 def tool_available(name: str) -> bool:

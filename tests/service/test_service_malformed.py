@@ -14,7 +14,7 @@ import time
 
 import pytest
 
-from svc_testlib import RawPty, RawTcp, mbap, read_regs_pdu, rtu_frame
+from svc_testlib import RawPty, RawTcp, host_only, mbap, on_boards, read_regs_pdu, rtu_frame
 
 UNIT = 3
 GAP = 0.03  # longer than the host's RTU silence (5 ms)
@@ -42,6 +42,7 @@ def still_fine(p: RawPty) -> None:
 # ---------------------------------------------------------------- RTU
 
 
+@on_boards
 def test_bad_crc_is_dropped(pty):
     frame = bytearray(rtu_frame(UNIT, P_FAR))
     frame[-1] ^= 0x55
@@ -51,6 +52,7 @@ def test_bad_crc_is_dropped(pty):
     still_fine(pty)
 
 
+@on_boards
 def test_truncated_frame_is_dropped_at_the_silence(pty):
     pty.send(rtu_frame(UNIT, P_FAR)[:5])
     time.sleep(GAP)
@@ -60,6 +62,7 @@ def test_truncated_frame_is_dropped_at_the_silence(pty):
     still_fine(pty)
 
 
+@on_boards
 def test_frames_for_another_unit_are_ignored(pty):
     for unit in (1, 4, 247, 248, 255):
         pty.send(rtu_frame(unit, P_FAR))
@@ -67,6 +70,7 @@ def test_frames_for_another_unit_are_ignored(pty):
     still_fine(pty)
 
 
+@on_boards
 def test_oversize_frames_are_dropped(pty):
     # A write of 125 registers: 259 bytes, more than an RTU frame holds.
     data = b"\x00\x01" * 125
@@ -78,6 +82,7 @@ def test_oversize_frames_are_dropped(pty):
     still_fine(pty)
 
 
+@on_boards
 def test_garbage_between_frames(pty):
     rng = random.Random(6)
     for _ in range(25):
@@ -88,6 +93,9 @@ def test_garbage_between_frames(pty):
         still_fine(pty)
 
 
+@host_only("frames back to back, without a t3.5 silence between them, are one (bad) frame on a timed RTU line, "
+           "which the AVR's UART is (EL_MB_PORT_TIMED, as the specification frames); the host's pty has no character "
+           "timing, so its receiver ends a frame at the length its function code implies (EL_MB_PORT_UNTIMED)")
 def test_requests_back_to_back_in_one_write(pty):
     pty.send(rtu_frame(UNIT, P_FAR) + rtu_frame(UNIT, read_regs_pdu(0x03, 0, 1)) + rtu_frame(4, P_FAR))
     reply = pty.recv(timeout=1.0)
@@ -120,6 +128,7 @@ def test_requests_back_to_back_in_one_write(pty):
     (bytes([0x41, 1, 2, 3]), bytes([0xC1, 1])),
     (bytes([0x08, 0, 0, 0x12, 0x34]), bytes([0x88, 1])),                    # diagnostics
 ])
+@on_boards
 def test_malformed_requests_get_the_specified_exception(pty, pdu, answer):
     got = pty.ask(UNIT, pdu, timeout=0.5)
     assert got == answer
@@ -127,6 +136,7 @@ def test_malformed_requests_get_the_specified_exception(pty, pdu, answer):
     still_fine(pty)
 
 
+@on_boards
 def test_read_limits_are_served(svc_all, firmware):
     """125 registers and 2000 bits are allowed; the map ends earlier (02)."""
     fw = firmware(svc_all.exe, tcp=False)
@@ -142,6 +152,7 @@ def test_read_limits_are_served(svc_all, firmware):
 # ---------------------------------------------------------------- TCP
 
 
+@host_only("Modbus TCP needs a network; the AVR board has none")
 def test_tcp_pipelined_requests_and_sync_after_exceptions(fw_tcp):
     c = RawTcp(fw_tcp.port)
     try:
@@ -176,6 +187,7 @@ def test_tcp_pipelined_requests_and_sync_after_exceptions(fw_tcp):
     struct.pack(">HHHB", 1, 0, 1, 1),       # no PDU
     struct.pack(">HHHB", 1, 0, 256, 1),     # longer than any ADU
 ])
+@host_only("Modbus TCP needs a network; the AVR board has none")
 def test_tcp_broken_headers_close_the_connection(fw_tcp, head):
     c = RawTcp(fw_tcp.port)
     c.sock.sendall(head + P_FAR)
@@ -190,6 +202,7 @@ def test_tcp_broken_headers_close_the_connection(fw_tcp, head):
     c.close()
 
 
+@host_only("Modbus TCP needs a network; the AVR board has none")
 def test_tcp_several_clients_at_once(fw_tcp):
     clients = [RawTcp(fw_tcp.port) for _ in range(8)]
     try:
@@ -204,6 +217,7 @@ def test_tcp_several_clients_at_once(fw_tcp):
             c.close()
 
 
+@host_only("Modbus TCP needs a network; the AVR board has none")
 def test_tcp_connections_beyond_the_limit_are_refused(fw_tcp):
     clients = [RawTcp(fw_tcp.port) for _ in range(10)]
     try:
@@ -226,6 +240,7 @@ def test_tcp_connections_beyond_the_limit_are_refused(fw_tcp):
             c.close()
 
 
+@host_only("Modbus TCP needs a network; the AVR board has none")
 def test_tcp_garbage_then_a_new_connection(fw_tcp):
     rng = random.Random(7)
     for _ in range(20):

@@ -13,7 +13,7 @@ import time
 
 import pytest
 
-from svc_testlib import tool_available
+from svc_testlib import on_boards, tool_available
 
 pytestmark = pytest.mark.skipif(not tool_available("mbpoll"), reason="mbpoll is not installed (Debian: mbpoll)")
 
@@ -57,6 +57,7 @@ def link(request, svc_all, firmware):
     return rtu_args(fw, 3, 115200)
 
 
+@on_boards
 def test_service_all_every_kind(link):
     out, text = run(link, "-t", "4", "-r", "0", "-c", "4")
     assert signed(out[0]) == -5 and out[1] == "7" and signed(out[2]) == -300 and out[3].startswith("40000")
@@ -101,6 +102,7 @@ def _addr(smap: dict, name: str) -> int:
     return next(i["address"] for i in smap["items"] if i["name"] == name)
 
 
+@on_boards
 def test_pt100_sensor_over_rtu(builds, firmware):
     b = builds("pt100_sensor")
     smap = json.loads(b.map.read_text())
@@ -121,6 +123,7 @@ def test_pt100_sensor_over_rtu(builds, firmware):
     assert "Illegal data address" in run(link, "-t", "1", "-r", "1")[1]
 
 
+@on_boards
 def test_pneumatic_cylinder_over_rtu(builds, firmware):
     b = builds("pneumatic_cylinder")
     smap = json.loads(b.map.read_text())

@@ -13,7 +13,7 @@ import time
 
 import pytest
 
-from svc_testlib import RawPty, rtu_frame
+from svc_testlib import RawPty, host_only, on_boards, rtu_frame
 
 pymodbus = pytest.importorskip("pymodbus")
 from pymodbus.client import ModbusSerialClient, ModbusTcpClient  # noqa: E402
@@ -70,6 +70,7 @@ def exc(r) -> int:
     return r.exception_code
 
 
+@on_boards
 def test_the_map_is_what_the_tests_assume(svc_all):
     m = json.loads(svc_all.map.read_text())
     where = {i["name"]: (i["table"], i["address"], i["registers"]) for i in m["items"]}
@@ -80,6 +81,7 @@ def test_the_map_is_what_the_tests_assume(svc_all):
     assert m["word_order"] == "big"
 
 
+@on_boards
 def test_reads_every_table(client):
     h = ok(client.read_holding_registers(0, count=12, device_id=UNIT)).registers
     assert [s16(h[0]), h[1], s16(h[2]), h[3]] == [-5, 7, -300, 40000]
@@ -96,6 +98,7 @@ def test_reads_every_table(client):
     assert ok(client.read_discrete_inputs(0, count=2, device_id=UNIT)).bits[:2] == [False, False]
 
 
+@on_boards
 def test_writes_every_kind_and_tasks_see_them_at_their_next_release(client):
     ok(client.write_coil(0, True, device_id=UNIT))                        # 05: bool param
     ok(client.write_coil(1, True, device_id=UNIT))                        # 05: bool var
@@ -122,6 +125,7 @@ def test_writes_every_kind_and_tasks_see_them_at_their_next_release(client):
     assert ok(client.read_discrete_inputs(0, count=2, device_id=UNIT)).bits[:2] == [True, True]
 
 
+@on_boards
 def test_write_multiple_coils_and_registers(client):
     ok(client.write_coils(0, [True, False], device_id=UNIT))              # 15
     assert ok(client.read_coils(0, count=2, device_id=UNIT)).bits[:2] == [True, False]
@@ -130,6 +134,7 @@ def test_write_multiple_coils_and_registers(client):
     assert ok(client.read_holding_registers(0, count=12, device_id=UNIT)).registers == regs
 
 
+@on_boards
 def test_exceptions(client):
     u = UNIT
     # 01: a function code the slave does not implement.
@@ -160,6 +165,7 @@ def test_exceptions(client):
     assert ok(client.read_holding_registers(0, count=12, device_id=u)).registers == before
 
 
+@on_boards
 def test_device_identification(client, svc_all):
     m = json.loads(svc_all.map.read_text())
     r = ok(client.read_device_information(read_code=1, device_id=UNIT))
@@ -171,6 +177,7 @@ def test_device_identification(client, svc_all):
     assert r.information == {0x80: m["program_id"].encode()}
 
 
+@host_only("Modbus TCP needs a network; the AVR board has none")
 def test_tcp_answers_any_unit_id(svc_all, firmware):
     fw = firmware(svc_all.exe, rtu=False)
     c = ModbusTcpClient("127.0.0.1", port=fw.port, timeout=2, retries=0)
@@ -182,6 +189,7 @@ def test_tcp_answers_any_unit_id(svc_all, firmware):
         c.close()
 
 
+@on_boards
 def test_rtu_broadcast_is_executed_without_a_reply(svc_all, firmware):
     fw = firmware(svc_all.exe, tcp=False)
     # pymodbus itself: a broadcast write expects no reply.

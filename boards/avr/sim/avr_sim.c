@@ -76,6 +76,7 @@ extern uint64_t el_sim_now_us;
 /* The simulation build's markers (boards/avr/avr_internal.h). */
 #define GPIOR0_ADDR 0x3Eu
 #define GPIOR1_ADDR 0x4Au
+#define GPIOR2_ADDR 0x4Bu
 #define MARK_INPUTS 1u
 #define MARK_INSTANT 2u
 
@@ -124,6 +125,7 @@ static struct {
     const char *nvram;
     const char *elf;
     bool wait;
+    bool halt;
     bool report;
 } opt;
 
@@ -133,7 +135,7 @@ static void usage(FILE *f)
 {
     fprintf(f,
             "usage: %s [--fast] [--duration T] [--cycles N] [--stimulus FILE.csv] [--trace FILE.csv|FILE.vcd]\n"
-            "          [--pins FILE.csv|FILE.vcd] [--nvram FILE] [--uartN pty:LINK|tcp:PORT|file:PATH|null] [--wait]\n"
+            "          [--pins FILE.csv|FILE.vcd] [--nvram FILE] [--uartN pty:LINK|tcp:PORT|file:PATH|null] [--wait] [--halt]\n"
             "          [--elf FILE] [--report] [--help]\n"
             "Runs the %s firmware of model %s in simavr.\n"
             "  --fast            flat out (default: in step with the wall clock)\n"
@@ -146,6 +148,7 @@ static void usage(FILE *f)
             "  --nvram FILE      the EEPROM (%lu bytes), read at start and written at the end\n"
             "  --uartN SPEC      UART N on a pseudo-terminal (symlink LINK), TCP port, file or nothing\n"
             "  --wait            hold the CPU until every pty and TCP UART has a client\n"
+            "  --halt            halt at the first instant for the debugger (the host's --debug ...,halt)\n"
             "  --elf FILE        run this ELF (default: %s)\n"
             "  --report          print cycles, instants and UART errors on stderr at the end\n",
             el_host_prog, sim_mcu, el_model_name, (unsigned long)sim_nv_size, sim_elf_default);
@@ -219,6 +222,8 @@ static int parse_args(int argc, char **argv)
             opt.fast = true;
         } else if (strcmp(a, "--wait") == 0) {
             opt.wait = true;
+        } else if (strcmp(a, "--halt") == 0) {
+            opt.halt = true;
         } else if (strcmp(a, "--report") == 0) {
             opt.report = true;
         } else if (!takes_value(a)) {
@@ -1028,6 +1033,8 @@ int main(int argc, char **argv)
     sa.sa_handler = SIG_IGN;
     sigaction(SIGPIPE, &sa, NULL);
 
+    if (opt.halt) /* read by el_port_init of a debug build (EL_AVR_SIM_HALT) */
+        avr->data[GPIOR2_ADDR] = 0xA5u;
     if (opt.wait)
         wait_for_clients();
     start_ns = wall_ns();
@@ -1041,10 +1048,13 @@ int main(int argc, char **argv)
             check_deliveries();
         if (avr->cycle >= next_service) {
             next_service = avr->cycle + SERVICE_CYCLES;
-            /* A firmware without the simulation hooks (or far behind real
-             * time) never reaches T logically: end a second of CPU time
-             * after T. */
-            if (opt.has_duration && avr->cycle / (sim_clock_hz / 1000000u) > opt.duration_us + 1000000u) {
+            /* A firmware without the simulation hooks never reaches T
+             * logically: end a second of CPU time after T if no instant
+             * came at all. (One that has instants gets there; a debugger
+             * may halt logical time for as long as it likes, --halt from
+             * the start, as on the host board.) */
+            if (opt.has_duration && instants == 0u && !opt.halt &&
+                avr->cycle / (sim_clock_hz / 1000000u) > opt.duration_us + 1000000u) {
                 el_host_error("warning: no instant at or after %llu us came by %llu us of CPU time (a build "
                               "without --sim?): stopped", (unsigned long long)opt.duration_us,
                               (unsigned long long)(avr->cycle / (sim_clock_hz / 1000000u)));
