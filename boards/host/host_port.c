@@ -19,7 +19,6 @@
 #include <errno.h>
 #include <poll.h>
 #include <signal.h>
-#include <stdarg.h>
 #include <stdio.h>
 #include <string.h>
 #include <time.h>
@@ -43,16 +42,6 @@ static uint64_t start_ns;
 
 /* Critical-section nesting (no interrupts on the host: bookkeeping only). */
 static el_irq_state_t irq_disabled;
-
-void el_host_error(const char *fmt, ...)
-{
-    va_list ap;
-    fprintf(stderr, "%s: ", el_host_prog);
-    va_start(ap, fmt);
-    vfprintf(stderr, fmt, ap);
-    va_end(ap);
-    fputc('\n', stderr);
-}
 
 int el_host_exit_status(void)
 {

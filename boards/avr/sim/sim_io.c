@@ -3,23 +3,12 @@
  * files are the same byte for byte) need from their board. */
 #include "host_internal.h"
 
-#include <stdarg.h>
 #include <stdio.h>
 
 const char *el_host_prog = "easylab-avr-sim";
 
 /* The logical time of the instant the firmware is at (avr_sim.c sets it). */
 uint64_t el_sim_now_us;
-
-void el_host_error(const char *fmt, ...)
-{
-    va_list ap;
-    fprintf(stderr, "%s: ", el_host_prog);
-    va_start(ap, fmt);
-    vfprintf(stderr, fmt, ap);
-    va_end(ap);
-    fputc('\n', stderr);
-}
 
 uint64_t el_host_now_us(void)
 {

@@ -1,7 +1,22 @@
-/* EasyLab host board: sizes and names of the model's value types, shared
- * by the host board and the AVR board's simulator harness (which writes
- * traces with the host board's own host_trace.c and host_stimulus.c). */
+/* EasyLab host board: what the host board shares with the AVR board's
+ * simulator harness (which writes traces and reads stimuli with the host
+ * board's own host_trace.c and host_stimulus.c): messages, and the sizes
+ * and names of the model's value types. */
 #include "host_internal.h"
+
+#include <stdarg.h>
+#include <stdio.h>
+
+void el_host_error(const char *fmt, ...)
+{
+    va_list ap;
+    fprintf(stderr, "%s: ", el_host_prog);
+    va_start(ap, fmt);
+    vfprintf(stderr, fmt, ap);
+    va_end(ap);
+    fputc('\n', stderr);
+}
+
 
 size_t el_host_type_size(uint8_t type)
 {
