@@ -13,7 +13,7 @@ MODEL   ?= examples/pt100_sensor.elab
 DEB_PACKAGES := gcc make pkg-config graphviz tmux socat \
 	gcc-avr avr-libc binutils-avr simavr libsimavr-dev libelf-dev avrdude \
 	sdcc sdcc-libraries sdcc-ucsim gputils gpsim \
-	mbpoll libmodbus-dev clang libclang-rt-14-dev clang-tidy valgrind
+	mbpoll libmodbus-dev clang libclang-rt-14-dev clang-tidy valgrind gtkwave
 
 .PHONY: setup deps venv test demo bench clean help flash sim
 
