@@ -54,7 +54,9 @@ __attribute__((noinline)) static uint32_t run(uint16_t n)
 
 int main(void)
 {{
-    uint32_t check = run({n}u);
+    uint32_t check;
+    {setup}
+    check = run({n}u);
     uint8_t k;
     for (k = 0u; k < 4u; k++) {{ GPIOR1 = (uint8_t)(check >> (8u * k)); MARK((uint8_t)(0x10u + k)); }}
     cli();
@@ -179,9 +181,9 @@ def measure(name: str, case: dict, tmp: Path, runner: Path) -> dict:
     n = max(1, case["activations"] // 10)
     hand = HERE / "handwritten" / case["handwritten"]
     progs = {
-        "generated": PROGRAM.format(decls=case["decls"], body=case["generated"].format(**fmt), n=n),
-        "handwritten": PROGRAM.format(decls=case["decls"], body=case["hand"], n=n),
-        "baseline": PROGRAM.format(decls=case["decls"], body="", n=n),
+        "generated": PROGRAM.format(decls=case["decls"], body=case["generated"].format(**fmt), n=n, setup=""),
+        "handwritten": PROGRAM.format(decls=case["decls"], body=case["hand"], n=n, setup=""),
+        "baseline": PROGRAM.format(decls=case["decls"], body="", n=n, setup=""),
     }
     elfs = {k: _compile(board, work, k, src, [hand]) for k, src in progs.items()}
     gen_cycles, gen_check = _cycles(runner, elfs["generated"])
@@ -291,6 +293,47 @@ def examples_sizes(tmp: Path) -> list[dict]:
     return rows
 
 
+MODBUS_MODEL = "model mbbench\nimport std\n" + "".join(f"var r{k}: int16 = {k} service ro\n" for k in range(125)) + (
+    "var tick: int16\ndataflow D {\n    c = Const<int16>(value = 1)\n    c.y -> tick\n}\n"
+    "task t period 10 ms { run D }\nmodbus rtu on uart0 baud 19200 parity none unit 1\n")
+
+MODBUS_DECLS = """#include "el_modbus.h"
+#include "el_crc16.h"
+const uint8_t mb_request[5] = {0x04u, 0x00u, 0x00u, 0x00u, 125u}; /* read input registers 0..124 */
+uint8_t mb_response[256];
+void el_svc_gen_boot(void);"""
+
+
+def modbus_response(tmp: Path, runner: Path) -> dict:
+    """Cycles the slave needs to answer a 125-register read (function 04)
+    on the ATmega2560: the request's PDU handled into its response, then
+    the RTU frame's CRC over the 251-byte response, as the UART sends it."""
+    work = tmp / "modbus"
+    work.mkdir()
+    model = work / "mbbench.elab"
+    model.write_text(MODBUS_MODEL)
+    program, board = _generate(model, work, MCU)
+    extra = [p for p in work.glob("*.c") if p.name not in ("model.c",)]
+    n = 10
+    bodies = {
+        "pdu": "check += el_mb_pdu(mb_request, 5u, mb_response, false);",
+        "pdu_crc": "{ uint16_t len = el_mb_pdu(mb_request, 5u, mb_response, false); "
+                   "check += len + el_crc16(mb_response, len); }",
+        "baseline": "",
+    }
+    cycles = {}
+    for name, body in bodies.items():
+        elf = _compile(board, work, f"mb_{name}", PROGRAM.format(decls=MODBUS_DECLS, body=body, n=n,
+                                                             setup="el_svc_gen_boot(); /* the map */"), extra)
+        cycles[name], check = _cycles(runner, elf)
+        if name == "pdu" and check != n * 252:  # function, byte count, 250 data bytes, less the unit and CRC
+            raise SystemExit(f"the 125-register read answered {check // n} bytes, not 252")
+    pdu = (cycles["pdu"] - cycles["baseline"]) / n
+    frame = (cycles["pdu_crc"] - cycles["baseline"]) / n
+    return {"mcu": MCU, "registers": 125, "pdu_cycles": round(pdu), "pdu_and_crc_cycles": round(frame),
+            "pdu_and_crc_us_at_16mhz": round(frame / 16, 1)}
+
+
 def main(out_dir: Path) -> dict:
     sys.path.insert(0, str(ROOT))
     codegen = _load("bench_codegen")
@@ -306,6 +349,7 @@ def main(out_dir: Path) -> dict:
         results["cycles"] = [measure(name, case, tmp, runner) for name, case in codegen.CASES.items()]
         results["footprint"] = footprint(tmp)
         results["examples"] = examples_sizes(tmp)
+        results["modbus"] = modbus_response(tmp, runner)
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
     (out_dir / "avr.json").write_text(json.dumps(results, indent=2) + "\n")
@@ -326,6 +370,10 @@ def main(out_dir: Path) -> dict:
     for r in results["examples"]:
         print(f"  {r['example']:20} {r['mcu']:11} {r['flags']:34} flash {r['flash']!s:>6}  RAM {r['ram']!s:>5}"
               f"{'' if r['fits'] else '  (does not fit)'}")
+    m = results["modbus"]
+    print(f"Modbus response on the {MCU}: a {m['registers']}-register read takes {m['pdu_cycles']} cycles in the "
+          f"PDU handler, {m['pdu_and_crc_cycles']} with the RTU frame's CRC ({m['pdu_and_crc_us_at_16mhz']} us "
+          f"at 16 MHz)")
     return results
 
 
