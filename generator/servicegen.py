@@ -30,6 +30,7 @@ from dataclasses import dataclass
 
 from . import __version__
 from . import types as T
+from .crc import crc16  # persist keys are CRCs of the item's name and type
 from .ir import Item, Program
 
 MAP_FORMAT = 1
@@ -49,14 +50,6 @@ class ServiceMapError(ValueError):
     the message is one line naming the items involved."""
 
 
-def crc16(data: bytes) -> int:
-    """CRC-16/MODBUS, as runtime_c/el_crc16.c computes it."""
-    crc = 0xFFFF
-    for b in data:
-        crc ^= b
-        for _ in range(8):
-            crc = (crc >> 1) ^ 0xA001 if crc & 1 else crc >> 1
-    return crc
 
 
 registers_of = T.register_count  # the rule lives in types.py, shared with the checker

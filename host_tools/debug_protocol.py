@@ -17,6 +17,7 @@ from pathlib import Path
 from types import SimpleNamespace
 
 from .transport import FrameTransport, TransportError, TransportTimeout
+from ..crc import crc16  # the frames' CRC (re-exported for the tests)
 
 # ====================================================================== constants
 
@@ -95,13 +96,6 @@ def decode_value(type_name: str, data: bytes):
 # ====================================================================== framing
 
 
-def crc16(data: bytes, crc: int = 0xFFFF) -> int:
-    """CRC-16/MODBUS (runtime_c/el_crc16.c)."""
-    for b in data:
-        crc ^= b
-        for _ in range(8):
-            crc = (crc >> 1) ^ 0xA001 if crc & 1 else crc >> 1
-    return crc
 
 
 def cobs_encode(data: bytes) -> bytes:

@@ -79,19 +79,31 @@ static bool covered(const el_svc_map_t *m, uint8_t t, uint16_t start, uint16_t q
     return k != NOT_FOUND;
 }
 
+/* The checks every read request (01 to 04) passes, in the specification's
+ * order: length and quantity (03), then the address range (02). Returns 0
+ * with *start and *qty set, or the length of the exception response. */
+static uint16_t check_read(const el_svc_map_t *m, uint8_t t, uint8_t fc, const uint8_t *req, uint16_t len,
+                           uint16_t max_qty, uint8_t *resp, uint16_t *start, uint16_t *qty)
+{
+    if (len != 5u)
+        return exception(fc, EL_MB_EX_ILLEGAL_VALUE, resp);
+    *start = get16(req + 1);
+    *qty = get16(req + 3);
+    if (*qty < 1u || *qty > max_qty)
+        return exception(fc, EL_MB_EX_ILLEGAL_VALUE, resp);
+    if ((uint32_t)*start + *qty > 0x10000UL || !covered(m, t, *start, *qty))
+        return exception(fc, EL_MB_EX_ILLEGAL_ADDRESS, resp);
+    return 0u;
+}
+
 /* ---- 01 / 02: read coils / discrete inputs ---- */
 static uint16_t read_bits(const el_svc_map_t *m, uint8_t fc, const uint8_t *req, uint16_t len, uint8_t *resp)
 {
     uint8_t t = (uint8_t)(fc == 0x01u ? EL_SVC_COIL : EL_SVC_DISCRETE);
     uint16_t start, qty, i, k, bytes;
-    if (len != 5u)
-        return exception(fc, EL_MB_EX_ILLEGAL_VALUE, resp);
-    start = get16(req + 1);
-    qty = get16(req + 3);
-    if (qty < 1u || qty > EL_MB_MAX_READ_BITS)
-        return exception(fc, EL_MB_EX_ILLEGAL_VALUE, resp);
-    if ((uint32_t)start + qty > 0x10000UL || !covered(m, t, start, qty))
-        return exception(fc, EL_MB_EX_ILLEGAL_ADDRESS, resp);
+    uint16_t refused = check_read(m, t, fc, req, len, EL_MB_MAX_READ_BITS, resp, &start, &qty);
+    if (refused != 0u)
+        return refused;
     bytes = (uint16_t)((qty + 7u) / 8u);
     resp[0] = fc;
     resp[1] = (uint8_t)bytes;
@@ -113,14 +125,9 @@ static uint16_t read_regs(const el_svc_map_t *m, uint8_t fc, const uint8_t *req,
 {
     uint8_t t = (uint8_t)(fc == 0x03u ? EL_SVC_HOLDING : EL_SVC_INPUT);
     uint16_t start, qty, i, k;
-    if (len != 5u)
-        return exception(fc, EL_MB_EX_ILLEGAL_VALUE, resp);
-    start = get16(req + 1);
-    qty = get16(req + 3);
-    if (qty < 1u || qty > EL_MB_MAX_READ_REGS)
-        return exception(fc, EL_MB_EX_ILLEGAL_VALUE, resp);
-    if ((uint32_t)start + qty > 0x10000UL || !covered(m, t, start, qty))
-        return exception(fc, EL_MB_EX_ILLEGAL_ADDRESS, resp);
+    uint16_t refused = check_read(m, t, fc, req, len, EL_MB_MAX_READ_REGS, resp, &start, &qty);
+    if (refused != 0u)
+        return refused;
     resp[0] = fc;
     resp[1] = (uint8_t)(2u * qty);
     k = locate(m, t, start);

@@ -140,12 +140,10 @@ class AvrFirmware(Firmware):
 
 
 def crc16(data: bytes) -> int:
-    crc = 0xFFFF
-    for b in data:
-        crc ^= b
-        for _ in range(8):
-            crc = (crc >> 1) ^ 0xA001 if crc & 1 else crc >> 1
-    return crc
+    """CRC-16/MODBUS (easylab.crc, the project's one Python copy)."""
+    from easylab.crc import crc16 as crc
+
+    return crc(data)
 
 
 def rtu_frame(unit: int, pdu: bytes) -> bytes:
