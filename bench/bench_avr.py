@@ -173,7 +173,7 @@ def measure(name: str, case: dict, tmp: Path, runner: Path) -> dict:
     from easylab import cgen
 
     work = tmp / re.sub(r"\W+", "_", name)
-    program, board = _generate(ROOT / case["model"], work, MCU)
+    program, board = _generate(ROOT / case["model"], work, MCU, case.get("schedule"))
     view = cgen.build_view(program, board)
     df = next(d for d in program.dataflows if d.name == case["dataflow"])
     fields = {k: view.items[program.item(v).id].local for k, v in case["names"].items()}
@@ -354,9 +354,9 @@ def main(out_dir: Path) -> dict:
     out_dir.mkdir(parents=True, exist_ok=True)
     (out_dir / "avr.json").write_text(json.dumps(results, indent=2) + "\n")
     print(f"generated against hand-written C on the {MCU} (avr-gcc -Os, simavr cycles per activation)")
-    print(f"  {'dataflow':24} {'generated':>10} {'hand':>10} {'ratio':>6} {'flash gen':>10} {'hand':>6} {'ratio':>6}")
+    print(f"  {'dataflow':28} {'generated':>10} {'hand':>10} {'ratio':>6} {'flash gen':>10} {'hand':>6} {'ratio':>6}")
     for r in results["cycles"]:
-        print(f"  {r['case']:24} {r['generated_cycles']:>10} {r['handwritten_cycles']:>10} {r['cycle_ratio']:>6} "
+        print(f"  {r['case']:28} {r['generated_cycles']:>10} {r['handwritten_cycles']:>10} {r['cycle_ratio']:>6} "
               f"{r['generated_flash']:>10} {r['handwritten_flash']:>6} {r['flash_ratio']:>6}")
     print("runtime footprint on the atmega328p (bytes)")
     for r in results["footprint"]:

@@ -6,8 +6,11 @@ LET dispatcher with a channel), both run the same number of activations in
 virtual time without a trace: the interpreter in this process
 (``Engine.run``, as ``easylab run --fast`` does), the firmware as a process
 (``--fast --duration``, its start-up measured with a zero duration and
-subtracted). Best of several runs each. Also: the time to build a model's
-plug-ins into an empty cache, and to load them from a warm one.
+subtracted). Best of several runs each. Also: the interpreter with its
+interfaces library loaded (the firmware's debug and Modbus servers, as
+`easylab run --debug/--modbus-*` has them, without a client: the cost of
+the hooks and of copying the items in and out), and the time to build a
+model's plug-ins into an empty cache, and to load them from a warm one.
 
 Run: python bench/bench_interp.py [out_dir]  (writes out_dir/interp.json)
 """
@@ -58,6 +61,7 @@ def measure(name: str, activations: int, work: Path) -> dict:
     from easylab.build import build
     from easylab.frontend import lower_file
     from easylab.interp import Engine, PluginCache
+    from easylab.interp.engine import InterfaceOptions
 
     program, result = lower_file(ROOT / "examples" / f"{name}.elab")
     assert program is not None, result.report()
@@ -83,6 +87,13 @@ def measure(name: str, activations: int, work: Path) -> dict:
         assert engine.activations[task.name] == activations
     interp_s = _best(interpret, INTERP_REPEATS)
 
+    def interpret_served():
+        engine = Engine(program, cache, interfaces=InterfaceOptions())
+        engine.run(duration_us)
+        engine.shutdown()
+        assert engine.activations[task.name] == activations
+    served_s = _best(interpret_served, INTERP_REPEATS)
+
     exe = build(program, "host", work / f"fw_{name}", release=True).executable
 
     def native(duration: str):
@@ -97,6 +108,8 @@ def measure(name: str, activations: int, work: Path) -> dict:
         "interp_us_per_activation": interp_s / activations * 1e6,
         "native_us_per_activation": native_s / activations * 1e6,
         "ratio": interp_s / native_s,
+        "interp_served_s": served_s, "served_us_per_activation": served_s / activations * 1e6,
+        "served_ratio": served_s / interp_s,
         "plugins": len(program.specs), "plugins_cold_build_s": cold, "plugins_warm_load_s": warm,
     }
 
@@ -115,6 +128,9 @@ def main(out_dir) -> dict:
               f"{r['interp_firings_per_s']:>17,.0f} {r['native_firings_per_s']:>17,.0f} "
               f"{r['interp_us_per_activation']:>13.1f} {r['native_us_per_activation']:>13.2f} {r['ratio']:>7.0f}")
     print()
+    for r in results:
+        print(f"{r['model']}: with its interfaces served {r['served_us_per_activation']:.1f} us per activation, "
+              f"{r['served_ratio']:.2f} times the interpreter alone")
     for r in results:
         print(f"{r['model']}: {r['plugins']} plug-ins built in {r['plugins_cold_build_s']:.2f} s (empty cache), "
               f"loaded in {r['plugins_warm_load_s'] * 1e3:.0f} ms (warm cache)")

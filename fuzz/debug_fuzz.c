@@ -3,7 +3,8 @@
  *
  *   clang -g -O1 -fsanitize=fuzzer,address,undefined -DEL_DEBUG=1 \
  *       -Ifuzz/debug_include -Iruntime_c fuzz/debug_fuzz.c fuzz/debug_fuzz_model.c \
- *       runtime_c/el_debug.c runtime_c/el_debug_cobs.c runtime_c/el_crc16.c -o debug_fuzz
+ *       runtime_c/el_debug.c runtime_c/el_debug_cobs.c runtime_c/el_crc16.c \
+ *       -DEL_DEBUG_BOARD_COMMANDS=1 boards/host/host_load.c -o debug_fuzz
  *   ./debug_fuzz fuzz/debug_corpus -runs=150000
  *
  * The input is a sequence of records: a control byte, then (control & 0x7F)
@@ -15,6 +16,10 @@
  * probes of every kind. A halted program is fed the following records
  * through el_port_idle, as a board would; when the input ends, the halt is
  * released (el_debug_abort_halt).
+ *
+ * With EL_DEBUG_BOARD_COMMANDS the board commands of local execution
+ * (boards/host/host_load.c: a model text sent in pieces) are served too;
+ * a committed text is taken and refused, as the interpreter would.
  *
  * Invariants checked (abort on violation): every response is one frame
  * that decodes, carries a valid CRC, is at most EL_DBG_MAX_FRAME bytes and
@@ -28,6 +33,10 @@
 #include <string.h>
 
 void fuzz_model_reset(void);
+#if defined(EL_DEBUG_BOARD_COMMANDS) && EL_DEBUG_BOARD_COMMANDS
+uint32_t el_interp_take_load(const uint8_t **text);
+void el_interp_load_result(uint8_t state, uint32_t program_id, const char *message);
+#endif
 
 static const uint8_t *input;
 static size_t input_len, input_at;
@@ -132,6 +141,18 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
         EL_DEBUG_PROBE_ACTOR(el_dbg_actors[k % 3u]);
         el_debug_task_end();
         el_debug_poll();
+#if defined(EL_DEBUG_BOARD_COMMANDS) && EL_DEBUG_BOARD_COMMANDS
+        {
+            const uint8_t *text = NULL;
+            uint32_t n = el_interp_take_load(&text);
+            if (n != 0u && text == NULL) {
+                abort();
+            }
+            if (n != 0u && (k & 1u) != 0u) {
+                el_interp_load_result(EL_DBG_LOAD_REFUSED, 0u, (const char *)"refused by the fuzz target");
+            }
+        }
+#endif
         k++;
     }
     /* Leave no breakpoint, halt request or queue for the next input. */

@@ -20,6 +20,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from . import sdf
+from .sdf.analysis import SCHEDULE_NAMES
 from .model import CheckedModel, DataflowInfo, EdgeInfo, Endpoint
 from .source import Diagnostics, note
 
@@ -72,8 +73,7 @@ class DataflowAnalysis:
 
     def render_text(self) -> str:
         s = self.summary()
-        lines = [f"dataflow {s['name']} ({'single-appearance' if s['schedule_kind'] == 'sas' else 'minimum-buffer'}"
-                 f" schedule)"]
+        lines = [f"dataflow {s['name']} ({SCHEDULE_NAMES[s['schedule_kind']]} schedule)"]
         lines.append("  repetitions: " + (", ".join(f"{a}={n}" for a, n in s["repetitions"].items()) or "-"))
         lines.append(f"  schedule:    {s['schedule'] or '(no actors)'}")
         rows = [("edge", "rates", "delay", "buffer")]
@@ -144,6 +144,9 @@ def analyze_dataflow(df: DataflowInfo, diags: Diagnostics, schedule: str | None 
         result = sdf.analyze(graph, kind)
     except (sdf.InconsistentGraphError, sdf.DeadlockError) as err:
         _report(err, df, diags)
+        return None
+    except sdf.ScheduleError as err:  # the schedule kind asked for does not exist or is too long
+        diags.error(df.decl.name_span, f"dataflow '{df.name}': {err.message}")
         return None
     ok = True
     for node, ep in externals.items():

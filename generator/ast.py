@@ -259,7 +259,7 @@ class Edge(Node):
 
 @dataclass(frozen=True)
 class Dataflow(Named):
-    schedule: str | None  # "sas" | "min-buffer" | None
+    schedule: str | None  # "sas" | "flat" | "min-buffer" | None
     instances: tuple[Instance, ...]
     edges: tuple[Edge, ...]
 

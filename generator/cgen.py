@@ -741,16 +741,34 @@ INTERFACE_HOOKS: list = []
 def render(program: Program, board, template_dir: Path, release: bool = False) -> dict[str, str]:
     """The generated files: {file name: text}. Deterministic: the same
     program gives byte-identical files."""
-    view = build_view(program, board)
-    for hook in INTERFACE_HOOKS:
-        boot, poll = hook(program, board, release)
-        view.interface_boot.extend(boot)
-        view.interface_poll.extend(poll)
+    view = _view_with_interfaces(program, board, release)
     env = _environment(template_dir)
     files = {"model.c": env.get_template("model.c.j2").render(m=view, release=release)}
     for produce in PRODUCERS:
         files.update(produce(program, board, env, view, release))
     return files
+
+
+def render_interfaces(program: Program, board, template_dir: Path) -> dict[str, str]:
+    """The generated files of local execution's interfaces library (a debug
+    build): interp_interfaces.c, the model's storage and interface glue,
+    in place of model.c, and what the producers write beside it (debug and
+    service tables and maps)."""
+    view = _view_with_interfaces(program, board, False)
+    env = _environment(template_dir)
+    files = {"interp_interfaces.c": env.get_template("interp_interfaces.c.j2").render(m=view)}
+    for produce in PRODUCERS:
+        files.update(produce(program, board, env, view, False))
+    return files
+
+
+def _view_with_interfaces(program: Program, board, release: bool) -> CModel:
+    view = build_view(program, board)
+    for hook in INTERFACE_HOOKS:
+        boot, poll = hook(program, board, release)
+        view.interface_boot.extend(boot)
+        view.interface_poll.extend(poll)
+    return view
 
 
 # The debug interface (docs/protocol.md): its tables, map and glue.

@@ -12,6 +12,7 @@ import sys
 from pathlib import Path
 
 from . import __version__
+from .sdf.analysis import SCHEDULE_KINDS
 
 EXIT_OK, EXIT_MODEL_ERROR, EXIT_USAGE = 0, 1, 2
 
@@ -147,7 +148,7 @@ def build_parser() -> argparse.ArgumentParser:
                                    "repetition vector, schedule in looped notation, buffer sizes and bounds.")
     p.add_argument("file", metavar="FILE", help="model file (.elab) or SDF3 graph (.xml)")
     p.add_argument("--dataflow", metavar="NAME", help="only this dataflow")
-    p.add_argument("--schedule", choices=("sas", "min-buffer"),
+    p.add_argument("--schedule", choices=SCHEDULE_KINDS,
                    help="schedule kind (default: the dataflow's own choice, else sas)")
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.set_defaults(func=cmd_analyze)
@@ -159,7 +160,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("file", metavar="FILE", help="model file (.elab)")
     p.add_argument("--board", default="host", help="target board (default: host)")
     p.add_argument("--release", action="store_true", help="a release build: no debug interface")
-    p.add_argument("--schedule", choices=("sas", "min-buffer"),
+    p.add_argument("--schedule", choices=SCHEDULE_KINDS,
                    help="schedule kind of every dataflow (default: each dataflow's own, else sas)")
     p.add_argument("-o", "--output", metavar="DIR", help="output folder")
     p.add_argument("--cc", metavar="CC", help="use this C compiler instead of the board's")

@@ -21,8 +21,12 @@ the state variables of actor instances follow, instance by instance.
 
 from __future__ import annotations
 
+import functools
 import json
+import re
 from dataclasses import dataclass
+from pathlib import Path
+from types import SimpleNamespace
 
 from . import types as T
 from .ir import Program
@@ -193,12 +197,38 @@ def produce(program: Program, board, env, view, release: bool) -> dict[str, str]
     return files
 
 
-def _protocol_version(header) -> int:
-    import re
-    m = re.search(r"^#define EL_DBG_PROTOCOL_VERSION (\d+)u?\s*$", header.read_text(encoding="utf-8"), re.M)
-    if not m:
+_DEFINE = re.compile(r"^\s*#\s*define\s+EL_DBG_(\w+)\s+\(?(0[xX][0-9A-Fa-f]+|\d+)[uUlL]*\)?\s*(?:/\*.*)?$")
+
+
+def protocol_header_path() -> Path:
+    """runtime_c/el_debug_protocol.h of this installation: the one source of
+    the debug protocol's numbers."""
+    from .boards import runtime_dir  # the same folder the C build compiles from
+
+    return runtime_dir() / "el_debug_protocol.h"
+
+
+def parse_protocol_header(text: str) -> dict[str, int]:
+    """``{NAME: value}`` of every ``#define EL_DBG_NAME <integer>`` line."""
+    values: dict[str, int] = {}
+    for line in text.splitlines():
+        m = _DEFINE.match(line)
+        if m:
+            values[m.group(1)] = int(m.group(2), 0)
+    return values
+
+
+@functools.lru_cache(maxsize=None)
+def protocol_constants() -> SimpleNamespace:
+    """The protocol's constants by their C names without ``EL_DBG_``."""
+    return SimpleNamespace(**parse_protocol_header(protocol_header_path().read_text(encoding="utf-8")))
+
+
+def _protocol_version(header: Path) -> int:
+    version = parse_protocol_header(header.read_text(encoding="utf-8")).get("PROTOCOL_VERSION")
+    if version is None:
         raise ValueError(f"{header}: no EL_DBG_PROTOCOL_VERSION")
-    return int(m.group(1))
+    return version
 
 
 def interface_hook(program: Program, board, release: bool) -> tuple[list[str], list[str]]:

@@ -27,16 +27,17 @@ class FrontEndResult:
         return "\n".join(d.render(self.sources) for d in self.diagnostics.sorted())
 
 
-def check_file(path: str | Path, schedule: str | None = None) -> FrontEndResult:
+def check_file(path: str | Path, schedule: str | None = None, text: str | None = None) -> FrontEndResult:
     """Parse, check and analyse a model file and its imports.
 
     ``schedule`` overrides every dataflow's schedule kind (``sas`` or
-    ``min-buffer``).
+    ``min-buffer``). ``text``, if given, is read instead of the root file
+    (its imports are still files, relative to ``path``).
 
     Raises OSError (FileNotFoundError, UnicodeDecodeError as ValueError) only
     for the root file itself; every problem inside a model is a diagnostic.
     """
-    sources = SourceCache()
+    sources = SourceCache({Path(path): text} if text is not None else None)
     diags = Diagnostics()
     loaded = load(Path(path), sources, diags)
     model = None
@@ -53,11 +54,11 @@ def check_file(path: str | Path, schedule: str | None = None) -> FrontEndResult:
     return FrontEndResult(model if ok else None, diags, sources, timing if ok else None)
 
 
-def lower_file(path: str | Path, schedule: str | None = None):
+def lower_file(path: str | Path, schedule: str | None = None, text: str | None = None):
     """Front end, analyses and lowering: (IR program or None, FrontEndResult)."""
     from .ir import lower
 
-    result = check_file(path, schedule)
+    result = check_file(path, schedule, text)
     if result.model is None:
         return None, result
     return lower(result.model, result.timing), result

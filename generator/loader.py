@@ -60,8 +60,10 @@ def _load_file(path: Path, sources: SourceCache, diags: Diagnostics,
         return loaded[key]
     name = _display_name(path) if importer is None or not _is_library(key) else f"<{key.stem}>"
     try:
-        _check_readable(path)
-        text = path.read_text(encoding="utf-8-sig")  # an editor's byte order mark is no error
+        text = sources.given(path)
+        if text is None:
+            _check_readable(path)
+            text = path.read_text(encoding="utf-8-sig")  # an editor's byte order mark is no error
         if "\0" in text:  # valid UTF-8, but no text file has NUL bytes
             raise UnicodeDecodeError("utf-8", text.encode("utf-8"), text.index("\0"), text.index("\0") + 1,
                                      "a NUL byte: a binary file, not a model")

@@ -53,8 +53,15 @@ class Diagnostic:
 class SourceCache:
     """Keeps the text of every file read, to quote lines in diagnostics."""
 
-    def __init__(self) -> None:
+    def __init__(self, given: dict[Path, str] | None = None) -> None:
         self._texts: dict[str, list[str]] = {}
+        # Texts that stand for files, by resolved path (a model sent to a
+        # running interpreter, read instead of the file on disk).
+        self._given = {Path(k).resolve(): v for k, v in (given or {}).items()}
+
+    def given(self, path: Path) -> str | None:
+        """The text given for the file at ``path``, if any."""
+        return self._given.get(path.resolve())
 
     def add(self, name: str, text: str) -> None:
         # Lines end at '\n' only, as for the lexer (splitlines() would also

@@ -23,6 +23,7 @@ import struct
 import sys
 import threading
 import time
+from pathlib import Path
 
 from .debug_map import DebugMap, Item, MapError
 from .debug_protocol import (K, STEP_UNITS, TYPES, DebugClient, DebugError, ProtocolError, decode_value,
@@ -44,6 +45,7 @@ COMMANDS = {
     "break": "break | break at ITEM      halt at the next instant | set a breakpoint (step, transition, actor, task)",
     "step": "step [task|chart|actor|instant]   one task activation (default), chart evolution or actor firing",
     "reset": "reset [--halt]            restart the firmware from boot (--halt: halted at its first instant)",
+    "load": "load FILE                 replace the running model with FILE (local execution: `easylab run`)",
     "delete": "delete N|all              remove breakpoint N",
     "breakpoints": "breakpoints [--all]       the breakpoints (--all: every place one can go)",
     "wait": "wait [TIMEOUT]            wait until the program halts (default 10s)",
@@ -394,6 +396,38 @@ class Session:
         self.in_tx = False
         self.emit("reset: the program restarted" + (" (halted at its first instant)" if f.halted else ""),
                   {"reset": True, "halted": f.halted, "tick": f.tick})
+
+    def cmd_load(self, args):
+        if len(args) != 1:
+            raise CommandError("usage: load FILE")
+        try:
+            text = Path(args[0]).read_bytes()
+        except OSError as err:
+            raise CommandError(f"{args[0]}: {err.strerror or err}") from None
+        with self.lock:
+            try:
+                status = self.c.replace_model(text)
+            except DebugError as err:
+                if err.status == K.E_UNKNOWN_CMD:
+                    raise CommandError("this target cannot replace its model (firmware: build and flash it; "
+                                       "local execution with `easylab run` can)") from None
+                raise CommandError(str(err)) from None
+        if status.state == "refused":
+            raise CommandError(f"refused, the program runs on: {status.message}")
+        with self.lock:
+            self.c.hello()  # the new program's sizes and id
+        note = ""
+        if self.map is not None:  # `easylab run --maps` rewrote the map in place
+            try:
+                fresh = DebugMap.load(self.map.path)
+            except MapError:
+                fresh = None
+            if fresh is not None and fresh.program_id == status.program_id:
+                self.map = fresh
+            else:
+                note = f"; the map {self.map.path} is not the new program's: give its map with --map"
+        self.emit(f"replaced: program 0x{status.program_id:08x} runs" + note,
+                  {"replaced": True, "program_id": f"0x{status.program_id:08x}"})
 
     def cmd_delete(self, args):
         if len(args) != 1 or not (args[0] == "all" or args[0].isdigit()):

@@ -10,10 +10,8 @@ C header that the firmware compiles, runtime_c/el_debug_protocol.h
 from __future__ import annotations
 
 import random
-import re
 import struct
 from dataclasses import dataclass, field
-from pathlib import Path
 from types import SimpleNamespace
 
 from .transport import FrameTransport, TransportError, TransportTimeout
@@ -21,25 +19,9 @@ from ..crc import crc16  # the frames' CRC (re-exported for the tests)
 
 # ====================================================================== constants
 
-_DEFINE = re.compile(r"^\s*#\s*define\s+EL_DBG_(\w+)\s+\(?(0[xX][0-9A-Fa-f]+|\d+)[uUlL]*\)?\s*(?:/\*.*)?$")
-
-
-def header_path() -> Path:
-    """runtime_c/el_debug_protocol.h of this installation."""
-    from easylab.boards import runtime_dir  # the same folder the C build compiles from
-
-    return runtime_dir() / "el_debug_protocol.h"
-
-
-def parse_header(text: str) -> dict[str, int]:
-    """``{NAME: value}`` of every ``#define EL_DBG_NAME <integer>`` line."""
-    values: dict[str, int] = {}
-    for line in text.splitlines():
-        m = _DEFINE.match(line)
-        if m:
-            values[m.group(1)] = int(m.group(2), 0)
-    return values
-
+# The one parser of runtime_c/el_debug_protocol.h, shared with the generator.
+from ..debuggen import parse_protocol_header as parse_header  # noqa: E402
+from ..debuggen import protocol_header_path as header_path  # noqa: E402
 
 CONSTANTS: dict[str, int] = parse_header(header_path().read_text(encoding="utf-8"))
 K = SimpleNamespace(**CONSTANTS)
@@ -236,6 +218,20 @@ class Breakpoint:
     hits: int
 
 
+LOAD_STATES = {K.LOAD_IDLE: "idle", K.LOAD_RECEIVING: "receiving", K.LOAD_CHECKING: "checking",
+               K.LOAD_REPLACED: "replaced", K.LOAD_REFUSED: "refused"}
+
+
+@dataclass
+class LoadStatus:
+    """LOAD_STATUS: ``state`` (idle, receiving, checking, replaced,
+    refused), the program id once replaced, and the message (why refused)."""
+
+    state: str
+    program_id: int
+    message: str
+
+
 class DebugClient:
     """Requests and responses over a FrameTransport, one at a time.
 
@@ -424,6 +420,42 @@ class DebugClient:
 
     def reset(self, halt: bool = False) -> None:
         self.request(K.CMD_RESET, bytes([K.RESET_HALT if halt else 0]), what="reset")
+
+    # -------------------------------------------------------------- model replacement (local execution)
+
+    def load_status(self) -> "LoadStatus":
+        """LOAD_STATUS: where a model sent with :meth:`send_model` is."""
+        body = self.request(K.CMD_LOAD_STATUS, what="load status")
+        state, program_id = struct.unpack_from("<BI", body)
+        return LoadStatus(LOAD_STATES.get(state, str(state)), program_id, body[5:].decode("utf-8", "replace"))
+
+    def send_model(self, text: bytes) -> None:
+        """Send a model's text (LOAD_BEGIN, LOAD_DATA in chunks that fill a
+        frame, LOAD_COMMIT with its length and CRC-16): the interpreter
+        checks it and replaces the running program at an instant. Targets
+        that cannot (every firmware) answer E_UNKNOWN_CMD."""
+        self.request(K.CMD_LOAD_BEGIN, struct.pack("<I", len(text)), what="load")
+        chunk = self.max_frame - K.HEADER - K.TRAILER - 4
+        for at in range(0, len(text), chunk):
+            self.request(K.CMD_LOAD_DATA, struct.pack("<I", at) + text[at:at + chunk], what="load data")
+        self.request(K.CMD_LOAD_COMMIT, struct.pack("<IH", len(text), crc16(text)), what="load commit")
+
+    def replace_model(self, text: bytes, timeout: float = 120.0) -> "LoadStatus":
+        """Send a model and wait until it runs (``replaced``) or is refused
+        (``refused``, with the first error); the status."""
+        import time
+        self.send_model(text)
+        deadline = time.monotonic() + timeout
+        while True:
+            try:
+                status = self.load_status()
+            except TransportTimeout:  # the links moving to the new program's server: ask again
+                status = None
+            if status is not None and status.state in ("replaced", "refused"):
+                return status
+            if time.monotonic() > deadline:
+                raise TransportTimeout(f"the model was not checked within {timeout:g} s")
+            time.sleep(0.05)
 
     def bp_set(self, kind: int, a: int, b: int = 0) -> int:
         return self.request(K.CMD_BP_SET, struct.pack("<BHH", kind, a, b), what="break at")[0]

@@ -839,9 +839,27 @@ static uint8_t dispatch(uint8_t cmd, const uint8_t *p, uint16_t n)
         }
         return EL_DBG_OK;
     default:
+#if defined(EL_DEBUG_BOARD_COMMANDS) && EL_DEBUG_BOARD_COMMANDS
+        if (cmd >= EL_DBG_CMD_BOARD_FIRST && cmd <= EL_DBG_CMD_BOARD_LAST) {
+            return el_debug_port_command(cmd, p, n);
+        }
+#endif
         return EL_DBG_E_UNKNOWN_CMD;
     }
 }
+
+#if defined(EL_DEBUG_BOARD_COMMANDS) && EL_DEBUG_BOARD_COMMANDS
+bool el_debug_put(const uint8_t *data, uint16_t n)
+{
+    uint16_t i;
+    for (i = 0u; i < n; i++) {
+        if (!put_u8(data[i])) {
+            return false;
+        }
+    }
+    return true;
+}
+#endif
 
 static void send_response(void)
 {

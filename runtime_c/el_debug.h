@@ -126,6 +126,15 @@ uint16_t el_debug_port_read(uint8_t *buf, uint16_t max);
 bool el_debug_port_write(const uint8_t *frame, uint16_t len);
 bool el_debug_port_reset(uint8_t flags);
 
+/* Board commands (EL_DBG_CMD_BOARD_FIRST..LAST), for boards that define
+ * EL_DEBUG_BOARD_COMMANDS to 1 (local execution's interfaces library):
+ * the board runs the request and appends its response payload with
+ * el_debug_put (false when it does not fit); it returns the status. */
+#if defined(EL_DEBUG_BOARD_COMMANDS) && EL_DEBUG_BOARD_COMMANDS
+uint8_t el_debug_port_command(uint8_t cmd, const uint8_t *payload, uint16_t n);
+bool el_debug_put(const uint8_t *data, uint16_t n);
+#endif
+
 #define EL_DEBUG_INSTANT() el_debug_instant()
 #define EL_DEBUG_TASK_BEGIN(task) el_debug_task_begin(task)
 #define EL_DEBUG_TASK_END(task) el_debug_task_end()

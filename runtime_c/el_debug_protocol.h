@@ -52,6 +52,14 @@
 #define EL_DBG_CMD_BP_SET 0x40u
 #define EL_DBG_CMD_BP_CLEAR 0x41u
 #define EL_DBG_CMD_BP_LIST 0x42u
+/* Board commands: answered by boards that have them (local execution),
+ * EL_DBG_E_UNKNOWN_CMD by the others (every firmware). */
+#define EL_DBG_CMD_BOARD_FIRST 0x50u
+#define EL_DBG_CMD_BOARD_LAST 0x5Fu
+#define EL_DBG_CMD_LOAD_BEGIN 0x50u   /* u32 length: a new model text follows */
+#define EL_DBG_CMD_LOAD_DATA 0x51u    /* u32 offset, then bytes of the text */
+#define EL_DBG_CMD_LOAD_COMMIT 0x52u  /* u32 length, u16 CRC-16: check the text, replace the model */
+#define EL_DBG_CMD_LOAD_STATUS 0x53u  /* -> u8 state, u32 program id, message (UTF-8) */
 
 /* ---- status: the first payload byte of every response ------------------ */
 #define EL_DBG_OK 0u
@@ -138,6 +146,14 @@
 
 /* ---- RESET flags ---------------------------------------------------------- */
 #define EL_DBG_RESET_HALT 0x01u  /* halt at the first instant after the reset */
+
+/* ---- model replacement (LOAD_STATUS state) ------------------------------- */
+#define EL_DBG_LOAD_IDLE 0u       /* nothing sent */
+#define EL_DBG_LOAD_RECEIVING 1u  /* LOAD_BEGIN came; LOAD_DATA fills the text */
+#define EL_DBG_LOAD_CHECKING 2u   /* committed: being checked and built */
+#define EL_DBG_LOAD_REPLACED 3u   /* running since an instant; the id is the new program's */
+#define EL_DBG_LOAD_REFUSED 4u    /* refused (the message says why); the old program runs on */
+#define EL_DBG_LOAD_MAX 1048576u  /* longest model text, bytes */
 
 /* ---- counters (GET_COUNTERS: uint16 each, saturating, in this order) ----- */
 #define EL_DBG_C_FRAMES 0u       /* good requests */

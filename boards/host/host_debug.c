@@ -384,26 +384,34 @@ static bool keep_on_exec(int fd)
     return flags >= 0 && fcntl(fd, F_SETFD, flags & ~FD_CLOEXEC) == 0;
 }
 
-bool el_debug_port_reset(uint8_t flags)
+bool el_host_debug_handover(uint8_t flags)
 {
     char fds[64];
+    snprintf(fds, sizeof fds, "%d:%d:%d", (int)mode, mode == PTY ? conn_fd : listen_fd,
+             mode == PTY ? keep_fd : conn_fd);
+    if (!keep_on_exec(conn_fd) || !keep_on_exec(keep_fd) || !keep_on_exec(listen_fd) ||
+        setenv(FDS_ENV, fds, 1) != 0 || setenv(HALT_ENV, (flags & EL_DBG_RESET_HALT) != 0u ? "1" : "0", 1) != 0) {
+        el_host_error("debug interface: cannot hand it over: %s", strerror(errno));
+        return false;
+    }
+    link_made = false; /* the next program keeps the link */
+    return true;
+}
+
+bool el_debug_port_reset(uint8_t flags)
+{
     char **args = read_cmdline();
     if (args == NULL) {
         el_host_error("debug reset: cannot read the command line");
         return false;
     }
-    snprintf(fds, sizeof fds, "%d:%d:%d", (int)mode, mode == PTY ? conn_fd : listen_fd,
-             mode == PTY ? keep_fd : conn_fd);
-    if (!keep_on_exec(conn_fd) || !keep_on_exec(keep_fd) || !keep_on_exec(listen_fd) ||
-        setenv(FDS_ENV, fds, 1) != 0 || setenv(HALT_ENV, (flags & EL_DBG_RESET_HALT) != 0u ? "1" : "0", 1) != 0) {
-        el_host_error("debug reset: %s", strerror(errno));
+    if (!el_host_debug_handover(flags))
         return false;
-    }
     fflush(NULL);
-    link_made = false; /* the next process keeps the link */
     execv("/proc/self/exe", args);
     el_host_error("debug reset: cannot restart %s: %s", args[0], strerror(errno));
     (void)unsetenv(FDS_ENV);
+    link_made = true;
     return false;
 }
 

@@ -1,5 +1,5 @@
 /* EasyLab host board: declarations shared by the board's own files only
- * (host_port.c, host_options.c, host_stimulus.c, host_trace.c,
+ * (host_port.c, host_serve.c, host_options.c, host_stimulus.c, host_trace.c,
  * host_nvram.c). Generated code includes el_board.h, never this.
  *
  * The host board is a POSIX program: unlike the runtime it may use the
@@ -25,7 +25,7 @@
 /* Most descriptors (listening sockets, connections, ptys) served at once. */
 #define EL_HOST_MAX_WATCHED 32u
 
-/* ---- descriptors served between instants (host_port.c) ---- */
+/* ---- descriptors served between instants (host_serve.c) ---- */
 
 /* Called when `fd` is readable or closed (revents as poll() sets them). */
 typedef void (*el_host_fd_handler_t)(int fd, short revents, void *ctx);
@@ -34,6 +34,11 @@ typedef void (*el_host_fd_handler_t)(int fd, short revents, void *ctx);
  * instant in virtual time, and while halted: el_port_idle). */
 bool el_host_watch_fd(int fd, el_host_fd_handler_t handler, void *ctx);
 void el_host_unwatch_fd(int fd);
+/* Wait at most timeout_ms (0: just look) for the watched descriptors, run
+ * the handlers of those that are ready, then el_idle (the interfaces). */
+void el_host_serve_fds(int timeout_ms);
+/* Whether any descriptor is watched. */
+bool el_host_watching(void);
 
 /* ---- messages (host_port.c) ---- */
 
@@ -121,6 +126,12 @@ bool el_host_trace_close(void);
 
 /* The --debug option: open the pty or TCP port and serve it. */
 bool el_host_opt_debug(const char *arg);
+/* Hand the open debug link over to the next program (EL_DBG_RESET_HALT in
+ * `flags`: it starts halted): this process after exec (the protocol's
+ * RESET), or the interfaces library of a model that replaces this one in
+ * local execution; the next el_host_opt_debug with the same spec adopts
+ * it. False (reported) if it cannot. */
+bool el_host_debug_handover(uint8_t flags);
 
 /* ---- service interface (host_modbus.c, host_hmi.c; docs/service.md) ---- */
 
@@ -128,6 +139,10 @@ bool el_host_opt_debug(const char *arg);
  * interfaces are served (opened when the option is read). */
 bool el_host_opt_modbus_tcp(const char *arg);
 bool el_host_opt_modbus_rtu(const char *arg);
+/* Hand the Modbus links (listening socket, TCP clients, RTU pty) over to
+ * the interfaces library of a model that replaces this one in local
+ * execution; its --modbus-tcp / --modbus-rtu / `modbus tcp` adopt them. */
+bool el_host_modbus_handover(void);
 /* --hmi pty:LINK: the example HMI, a line protocol over el_service.h. */
 bool el_host_opt_hmi(const char *arg);
 /* A pseudo-terminal with a symlink `link` to it (removed at exit): returns

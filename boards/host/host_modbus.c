@@ -25,6 +25,12 @@
  * function code implies (EL_MB_PORT_UNTIMED: the runtime's `early` mode).
  * Garbage followed by a silence is dropped with it; garbage glued to a
  * request without a silence spoils that request, as it would on a line.
+ *
+ * Local execution replaces a model's interfaces library while it runs
+ * (host_interp.c): el_host_modbus_handover passes the listening socket,
+ * the TCP clients and the RTU pty to the next library in the environment
+ * variable EL_HOST_MODBUS_FDS, which adopts them instead of opening its
+ * own, so clients stay connected. A reset (exec) closes them instead.
  */
 #ifndef _POSIX_C_SOURCE
 #define _POSIX_C_SOURCE 200809L
@@ -193,6 +199,51 @@ int el_host_make_pty(const char *option, const char *link, int *slave_out)
     return master;
 }
 
+/* ---- descriptors handed over by a replaced interfaces library ---- */
+
+#define MB_FDS_ENV "EL_HOST_MODBUS_FDS"
+
+/* What EL_HOST_MODBUS_FDS holds: "LISTEN RTU KEEP CONN..." (-1: none),
+ * read once; each is taken by the option that opens its kind. */
+static bool handed_read;
+static int handed_listen = -1, handed_rtu = -1, handed_keep = -1;
+static int handed_conns[EL_HOST_MB_TCP_CONNS];
+static size_t handed_conn_count;
+
+static bool open_fd(int fd)
+{
+    return fd >= 0 && fcntl(fd, F_GETFD) >= 0;
+}
+
+static void read_handed(void)
+{
+    const char *text = getenv(MB_FDS_ENV);
+    char *end;
+    long v[3 + EL_HOST_MB_TCP_CONNS];
+    size_t n = 0;
+    if (handed_read)
+        return;
+    handed_read = true;
+    if (text == NULL)
+        return;
+    while (n < sizeof v / sizeof v[0]) {
+        v[n] = strtol(text, &end, 10);
+        if (end == text)
+            break;
+        n++;
+        text = end;
+    }
+    (void)unsetenv(MB_FDS_ENV);
+    if (n < 3u)
+        return;
+    handed_listen = open_fd((int)v[0]) ? (int)v[0] : -1;
+    handed_rtu = open_fd((int)v[1]) ? (int)v[1] : -1;
+    handed_keep = open_fd((int)v[2]) ? (int)v[2] : -1;
+    for (; n > 3u && handed_conn_count < EL_HOST_MB_TCP_CONNS; n--)
+        if (open_fd((int)v[n - 1u]))
+            handed_conns[handed_conn_count++] = (int)v[n - 1u];
+}
+
 /* ---- RTU on a pty ---- */
 
 static int rtu_fd = -1, rtu_keep = -1;
@@ -241,7 +292,19 @@ bool el_host_opt_modbus_rtu(const char *arg)
         el_host_error("--modbus-rtu %s: give pty:LINK (a pseudo-terminal with a symlink LINK to it)", arg);
         return false;
     }
-    rtu_fd = el_host_make_pty("--modbus-rtu", arg + 4, &rtu_keep);
+    read_handed();
+    if (handed_rtu >= 0 && strlen(arg + 4) < sizeof link_paths[0]) { /* the pty of the replaced library */
+        rtu_fd = handed_rtu;
+        rtu_keep = handed_keep;
+        handed_rtu = handed_keep = -1;
+        strcpy(link_paths[link_paths[0][0] == '\0' ? 0u : 1u], arg + 4);
+        if (!atexit_done) {
+            atexit_done = true;
+            (void)atexit(remove_links);
+        }
+    } else {
+        rtu_fd = el_host_make_pty("--modbus-rtu", arg + 4, &rtu_keep);
+    }
     if (rtu_fd < 0)
         return false;
     if (!el_host_watch_fd(rtu_fd, rtu_readable, NULL))
@@ -364,6 +427,20 @@ static bool tcp_listen_on(uint16_t port, const char *what)
     struct sockaddr_in addr;
     int one = 1;
     tcp_init();
+    read_handed();
+    if (handed_listen >= 0) { /* the socket and clients of the replaced library */
+        size_t i;
+        tcp_listen = handed_listen;
+        handed_listen = -1;
+        for (i = 0; i < handed_conn_count; i++) {
+            tcp_conns[i].fd = handed_conns[i];
+            tcp_conns[i].len = 0;
+            if (!el_host_watch_fd(tcp_conns[i].fd, conn_readable, &tcp_conns[i]))
+                el_port_mb_tcp_close((uint8_t)i);
+        }
+        handed_conn_count = 0;
+        return el_host_watch_fd(tcp_listen, accept_ready, NULL);
+    }
     tcp_listen = socket(AF_INET, SOCK_STREAM, 0);
     if (tcp_listen < 0) {
         el_host_error("%s: cannot make a socket: %s", what, strerror(errno));
@@ -449,5 +526,23 @@ bool el_port_mb_tcp_send(uint8_t conn, const uint8_t *adu, uint16_t len)
         el_port_mb_tcp_close(conn); /* a client that does not read its replies */
         return false;
     }
+    return true;
+}
+
+/* ---- local execution: hand the links over to the next library ---- */
+
+bool el_host_modbus_handover(void)
+{
+    char text[16 * (3u + EL_HOST_MB_TCP_CONNS)];
+    size_t i, used;
+    used = (size_t)snprintf(text, sizeof text, "%d %d %d", tcp_listen, rtu_fd, rtu_keep);
+    for (i = 0; i < EL_HOST_MB_TCP_CONNS; i++)
+        if (tcp_conns[i].fd >= 0 && used < sizeof text)
+            used += (size_t)snprintf(text + used, sizeof text - used, " %d", tcp_conns[i].fd);
+    if (setenv(MB_FDS_ENV, text, 1) != 0) {
+        el_host_error("Modbus links: cannot hand them over: %s", strerror(errno));
+        return false;
+    }
+    link_paths[0][0] = link_paths[1][0] = '\0'; /* the next library keeps the links */
     return true;
 }

@@ -198,81 +198,6 @@ static uint64_t monotonic_ns(void)
     return (uint64_t)ts.tv_sec * 1000000000u + (uint64_t)ts.tv_nsec;
 }
 
-/* ---- file descriptors served between instants ---- */
-
-typedef struct {
-    int fd;
-    el_host_fd_handler_t handler;
-    void *ctx;
-} watched_t;
-
-static watched_t watched[EL_HOST_MAX_WATCHED];
-static size_t watched_count;
-
-bool el_host_watch_fd(int fd, el_host_fd_handler_t handler, void *ctx)
-{
-    if (watched_count >= EL_HOST_MAX_WATCHED) {
-        el_host_error("too many open connections (at most %u)", (unsigned)EL_HOST_MAX_WATCHED);
-        return false;
-    }
-    watched[watched_count].fd = fd;
-    watched[watched_count].handler = handler;
-    watched[watched_count].ctx = ctx;
-    watched_count++;
-    return true;
-}
-
-void el_host_unwatch_fd(int fd)
-{
-    size_t i;
-    for (i = 0; i < watched_count; i++) {
-        if (watched[i].fd == fd) {
-            watched[i] = watched[watched_count - 1u];
-            watched_count--;
-            return;
-        }
-    }
-}
-
-/* Wait at most timeout_ms (0: just look) for the watched descriptors and
- * run the handlers of those that are ready. */
-static void serve_fds(int timeout_ms)
-{
-    struct pollfd fds[EL_HOST_MAX_WATCHED];
-    watched_t copy[EL_HOST_MAX_WATCHED];
-    size_t i, n = watched_count;
-    int r;
-    if (n == 0u) {
-        if (timeout_ms > 0) {
-            struct timespec ts;
-            ts.tv_sec = timeout_ms / 1000;
-            ts.tv_nsec = (long)(timeout_ms % 1000) * 1000000L;
-            (void)nanosleep(&ts, NULL);
-        }
-        el_idle();
-        return;
-    }
-    for (i = 0; i < n; i++) {
-        copy[i] = watched[i]; /* handlers may watch or unwatch */
-        fds[i].fd = watched[i].fd;
-        fds[i].events = POLLIN;
-        fds[i].revents = 0;
-    }
-    r = poll(fds, (nfds_t)n, timeout_ms);
-    if (r > 0) {
-        for (i = 0; i < n; i++) {
-            if (fds[i].revents != 0)
-                copy[i].handler(copy[i].fd, fds[i].revents, copy[i].ctx);
-        }
-    }
-    el_idle();
-}
-
-void el_port_idle(uint16_t max_ms)
-{
-    serve_fds((int)max_ms);
-}
-
 /* Sleep until CLOCK_MONOTONIC reads `deadline_ns`, serving the watched
  * descriptors meanwhile; false if a stop signal came. */
 static bool sleep_until(uint64_t deadline_ns)
@@ -283,16 +208,16 @@ static bool sleep_until(uint64_t deadline_ns)
         uint64_t now = monotonic_ns();
         if (stop_signal)
             return false;
-        if (now >= deadline_ns || watched_count == 0u)
+        if (now >= deadline_ns || !el_host_watching())
             break;
         /* poll() counts whole milliseconds: leave the last one to
          * clock_nanosleep so that instants stay exact, but look at the
          * descriptors at least once per instant (ticks of 1 ms or less). */
         if (deadline_ns - now <= 1000000u) {
-            serve_fds(0);
+            el_host_serve_fds(0);
             break;
         }
-        serve_fds((int)((deadline_ns - now - 1000000u) / 1000000u));
+        el_host_serve_fds((int)((deadline_ns - now - 1000000u) / 1000000u));
     }
     ts.tv_sec = (time_t)(deadline_ns / 1000000000u);
     ts.tv_nsec = (long)(deadline_ns % 1000000000u);
@@ -339,7 +264,7 @@ bool el_port_wait_tick(uint32_t tick)
     now_us = t_us;
     if (!el_host_settings.fast)
         return sleep_until(start_ns + mul_sat(mul_sat(t64 - first_tick64, el_tick_us), 1000u));
-    serve_fds(0); /* virtual time: answer what is there, never wait */
+    el_host_serve_fds(0); /* virtual time: answer what is there, never wait */
     return !stop_signal;
 }
 

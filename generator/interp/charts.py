@@ -31,6 +31,9 @@ class ChartRunner:
         self.elapsed = [0] * len(chart.steps)
         self.started = False
         self.active = [False] * len(chart.steps)  # published at the deadline
+        # The debugger's probe (kind name, a, b), where the firmware has
+        # EL_DEBUG_PROBE: set by the engine when it serves a debug interface.
+        self.probe: Callable[[str, int, int], None] | None = None
         compiler = ExprCompiler([s.slot for s in chart.steps])
         self._period_ms = chart.period_ms or 0
 
@@ -46,13 +49,17 @@ class ChartRunner:
 
     def run(self) -> None:
         """One activation of the chart, on its task's local copies."""
-        chart, slots, elapsed, local = self.chart, self.slots, self.elapsed, self.task.local
+        chart, slots, elapsed, local, probe = self.chart, self.slots, self.elapsed, self.task.local, self.probe
+        if probe:
+            probe("chart", chart.id, 0)
         if not self.started:
             self.started = True
             initial = chart.steps[chart.initial]
             slots[initial.slot] = initial.id
             elapsed[initial.id] = 0
             self._act(self._entry[initial.id])
+            if probe:
+                probe("step", chart.id, initial.id)
         else:
             choice: list[int | None] = [None] * chart.slots
             for slot, step in enumerate(slots):
@@ -67,6 +74,8 @@ class ChartRunner:
             firing = [t for t in chart.transitions
                       if all(choice[chart.steps[s].slot] == t.id for s in t.sources)]
             for t in firing:
+                if probe:
+                    probe("transition", chart.id, t.id)
                 for s in t.sources:
                     self._act(self._exit[s])
                     slots[chart.steps[s].slot] = None
@@ -75,6 +84,8 @@ class ChartRunner:
                     slots[chart.steps[s].slot] = s
                     elapsed[s] = 0
                     self._act(self._entry[s])
+                    if probe:
+                        probe("step", chart.id, s)
         for step in chart.steps:
             if slots[step.slot] == step.id:
                 for dataflow in step.runs:

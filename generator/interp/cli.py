@@ -17,6 +17,8 @@ import sys
 import threading
 from fractions import Fraction
 
+from ..sdf.analysis import SCHEDULE_KINDS
+
 EXIT_OK, EXIT_ERROR, EXIT_USAGE = 0, 1, 2
 
 _UNITS = {"us": 1, "ms": 1000, "s": 1_000_000, "m": 60_000_000, "min": 60_000_000, "h": 3_600_000_000}
@@ -74,8 +76,19 @@ def add_parser(sub) -> None:
                         help="logical time runs X times as fast as real time (default 1: real time)")
     p.add_argument("--watch", action="store_true",
                    help="replace the running model when its files change (state kept for what did not change)")
-    p.add_argument("--schedule", choices=("sas", "min-buffer"),
+    p.add_argument("--schedule", choices=SCHEDULE_KINDS,
                    help="schedule kind of every dataflow (default: each dataflow's own, else sas)")
+    served = p.add_argument_group("debug and service interfaces (the firmware's servers, as on the host board)")
+    served.add_argument("--debug", metavar="pty:LINK|tcp:PORT[,halt]",
+                        help="serve the debug interface on a new pseudo-terminal (LINK: a symlink to it) or on "
+                             "127.0.0.1:PORT; ,halt halts before the first instant")
+    served.add_argument("--modbus-tcp", metavar="PORT", help="serve the model's `modbus tcp` interface on "
+                                                             "127.0.0.1:PORT (default: the model's port)")
+    served.add_argument("--modbus-rtu", metavar="pty:LINK", help="serve its `modbus rtu` interface on a new "
+                                                                 "pseudo-terminal")
+    served.add_argument("--nvram", metavar="FILE", help="keep `persist` params in FILE (default: in memory)")
+    served.add_argument("--maps", metavar="DIR", help="write debug_map.json and service_map.* into DIR (at start "
+                                                      "and at each replacement)")
     p.set_defaults(func=cmd_run)
 
 
@@ -86,7 +99,9 @@ def _say(text: str) -> None:
 def cmd_run(args) -> int:
     """Run a model until its duration, a signal, or forever."""
     from ..frontend import lower_file
-    from .engine import Clock, Engine
+    from pathlib import Path
+
+    from .engine import Clock, Engine, InterfaceError, InterfaceOptions
     from .plugins import PluginCache, PluginError
     from .stimulus import StimulusError
     from .stimulus import load as load_stimulus
@@ -139,9 +154,30 @@ def cmd_run(args) -> int:
         _say(f"easylab run: at {report.time_us / 1e6:.6f} s the program id changed from "
              f"0x{report.old_id:08x} to 0x{report.new_id:08x}" + (f" ({'; '.join(notes)})" if notes else ""))
 
-    engine = Engine(program, cache, stimulus, trace, on_replace=replaced)
+    interfaces = None
+    if args.debug or args.modbus_tcp or args.modbus_rtu or args.nvram or args.maps:
+        interfaces = InterfaceOptions(args.debug, args.modbus_tcp, args.modbus_rtu, args.nvram,
+                                      Path(args.maps) if args.maps else None, Path(args.file), args.schedule)
     clock = Clock(None if args.fast else (args.pace or 1.0))
-    previous_handlers = _on_signals(clock)
+    previous_handlers = _on_signals(clock)  # before the interfaces chain their own
+    try:
+        engine = Engine(program, cache, stimulus, trace, on_replace=replaced, interfaces=interfaces, say=_say)
+        engine.clock = clock
+        engine.boot()
+    except (PluginError, InterfaceError, OSError) as err:
+        if isinstance(err, PluginError):
+            _say(f"easylab: error: {err}")
+        elif isinstance(err, OSError):
+            _say(f"easylab run: --maps {args.maps}: {err.strerror or err}")
+        _restore(previous_handlers)
+        if trace is not None:  # nothing ran: no trace file, as the host board
+            trace.file.close()
+            Path(args.trace).unlink(missing_ok=True)
+        return EXIT_ERROR if isinstance(err, PluginError) else EXIT_USAGE
+    if interfaces is not None and interfaces.maps is None:
+        maps = engine.io.library.directory
+        _say(f"easylab run: maps of program 0x{program.program_id:08x}: {maps}/debug_map.json, "
+             f"{maps}/service_map.json")
     watcher = ModelWatcher(args.file, engine, _say, args.schedule) if args.watch else None
     status = EXIT_OK
     try:
@@ -154,8 +190,7 @@ def cmd_run(args) -> int:
     finally:
         if watcher:
             watcher.stop()
-        for sig, handler in previous_handlers.items():
-            signal.signal(sig, handler)
+        _restore(previous_handlers)
         try:
             engine.shutdown()
         except TraceError as err:
@@ -164,6 +199,11 @@ def cmd_run(args) -> int:
     if engine.overruns:
         _say("easylab run: overruns: " + " ".join(f"{name} {n}" for name, n in engine.overruns.items()))
     return status
+
+
+def _restore(handlers: dict) -> None:
+    for sig, handler in handlers.items():
+        signal.signal(sig, handler)
 
 
 def _on_signals(clock) -> dict:

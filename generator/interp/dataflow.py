@@ -30,12 +30,20 @@ class ActorState:
     """One actor instance: its plug-in, its state and its run-time
     parameters' cells (what ``el_plugin_step`` receives)."""
 
-    def __init__(self, instance: ActorInstance, spec: ActorSpec, plugin: Plugin):
+    def __init__(self, instance: ActorInstance, spec: ActorSpec, plugin: Plugin,
+                 memory: tuple[int, int] | None = None):
         self.instance = instance
         self.spec = spec
         self.plugin = plugin
-        words = max(1, (plugin.state_size + 7) // 8)  # 8-byte aligned, zeroed as static C storage
-        self.state = (ctypes.c_uint64 * words)()
+        if memory is not None:  # (address, size): the state in the interfaces library, zero at load
+            address, size = memory
+            if size != plugin.state_size:
+                raise ValueError(f"actor {instance.name}: its state has {size} bytes in the interfaces library, "
+                                 f"{plugin.state_size} in its plug-in")
+            self.state = (ctypes.c_uint8 * max(1, size)).from_address(address)
+        else:
+            words = max(1, (plugin.state_size + 7) // 8)  # 8-byte aligned, zeroed as static C storage
+            self.state = (ctypes.c_uint64 * words)()
         self.state_address = ctypes.addressof(self.state)
         self.param_cells = [(V.ctype(t) * 1)() for t in spec.runtime_params.values()]
         self.params = (ctypes.c_void_p * max(1, len(self.param_cells)))(
@@ -54,7 +62,7 @@ class ActorState:
 
     def take_state_from(self, other: "ActorState") -> None:
         """Carry another instance's state over (same plug-in: same layout)."""
-        ctypes.memmove(self.state, other.state, ctypes.sizeof(self.state))
+        ctypes.memmove(self.state, other.state, self.plugin.state_size)
 
 
 @dataclass
@@ -113,7 +121,13 @@ class DataflowRunner:
         self._run_batch = run_batch
         self._externals = {e.node: e for e in dataflow.externals}
         self.calls: list[tuple[Callable, tuple]] = []
+        # The same activation with the debugger's actor probe before each
+        # firing, one operation per call (used while a debugger is armed).
+        self.probed_calls: list[tuple[Callable, tuple]] = []
+        self.probe_actor: Callable[[int], None] | None = None
+        self.armed: Callable[[], bool] = lambda: False
         self._batch: list[BatchOp] = []  # C operations not yet in a call
+        self._batch_actors: list[int | None] = []  # the instance id of each firing in _batch
         self._keep: list = []  # pointer and operation arrays the calls refer to
         fired: dict[str, int] = {}
         for node in dataflow.schedule.firings():
@@ -135,25 +149,37 @@ class DataflowRunner:
         local = self.task.local
         for cell, evaluate in self.param_evaluators:
             cell[0] = evaluate(local, None, None)
-        for call, args in self.calls:
+        for call, args in (self.probed_calls if self.armed() else self.calls):
             call(*args)
+
+    def _probe(self, instance: int) -> None:
+        self.probe_actor(instance)
 
     # ------------------------------------------------------------ plan
 
     def _copy(self, dst: int, src: int, size: int) -> None:
         self._batch.append(BatchOp(dst=dst, src=src, bytes=size))
+        self._batch_actors.append(None)
 
     def _python(self, call: Callable, args: tuple) -> None:
         self._flush()
         self.calls.append((call, args))
+        self.probed_calls.append((call, args))
 
     def _flush(self) -> None:
-        """The C operations so far become one call of the batch runner."""
+        """The C operations so far become one call of the batch runner (and,
+        for the probed activation, one call per operation, each firing
+        after its probe)."""
         if self._batch:
             ops = (BatchOp * len(self._batch))(*self._batch)
             self._keep.append(ops)
             self.calls.append((self._run_batch, (ctypes.addressof(ops), len(self._batch))))
+            for k, instance in enumerate(self._batch_actors):
+                if instance is not None:
+                    self.probed_calls.append((self._probe, (instance,)))
+                self.probed_calls.append((self._run_batch, (ctypes.addressof(ops) + k * ctypes.sizeof(BatchOp), 1)))
             self._batch = []
+            self._batch_actors = []
 
     def _edges_from(self, node: str, port: str | None) -> list[EdgeBuffer]:
         return [e for e in self.buffers if e.buffer.src == node and e.buffer.src_port == port]
@@ -186,6 +212,7 @@ class DataflowRunner:
         self._batch.append(BatchOp(step=actor.plugin.step_address, state=actor.state_address,
                                    inputs=self._pointers(inputs), outputs=self._pointers(outputs),
                                    params=ctypes.addressof(actor.params)))
+        self._batch_actors.append(actor.instance.id)
         for copy in copies:
             self._copy(*copy)
 

@@ -11,17 +11,21 @@ state of whatever did not change.
 
 from __future__ import annotations
 
+import queue
+import shutil
 import threading
 import time
 from collections import deque
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import Callable
 
 from ..ir import Instant, Item, Program, Task
 from . import values as V
 from .charts import ChartRunner
 from .dataflow import ActorState, DataflowRunner
-from .plugins import Plugin, PluginCache
+from .interfaces import LOAD_REFUSED, LOAD_REPLACED, PROBE, Interfaces, Library
+from .plugins import Plugin, PluginCache, PluginError
 from .stimulus import Stimulus
 from .trace import Sampler, TraceWriter, columns_of
 
@@ -71,13 +75,17 @@ class ProgramState:
     (``plugins[spec id]``, ``run_batch`` the batch runner of
     plugins.BATCH_SOURCE), as the firmware holds it at boot."""
 
-    def __init__(self, program: Program, plugins: list[Plugin], run_batch: Callable[[int, int], None]):
+    def __init__(self, program: Program, plugins: list[Plugin], run_batch: Callable[[int, int], None],
+                 io: Interfaces | None = None):
         self.program = program
         self.plugins = plugins
+        self.io = io
         self.published: list[list] = [[V.literal(i.type, i.initial)] * i.count for i in program.items]
         self.tasks = [TaskState(t, program) for t in program.tasks]
         self.channels = [deque(V.literal(c.type, v) for v in c.initial) for c in program.channels]
-        self.actors = [ActorState(inst, program.specs[inst.spec], plugins[inst.spec]) for inst in program.instances]
+        self.actors = [ActorState(inst, program.specs[inst.spec], plugins[inst.spec],
+                                  io.actor_states[inst.id] if io is not None else None)
+                       for inst in program.instances]
         self.dataflows: list[DataflowRunner | None] = []
         for df in program.dataflows:
             if df.task is None:  # run by no task: never runs
@@ -90,6 +98,30 @@ class ProgramState:
         self.instants = program.instants or [Instant(0, [], [])]  # as the C table: one empty instant
         self.readers = [(d.id, set(d.read_by)) for d in program.devices if d.read_by]
         self.charts_of_task = [[cid for kind, cid in t.runs if kind == "chart"] for t in program.tasks]
+        if io is not None and io.has_debug:  # the debugger's probes where the firmware has them
+            for runner in self.dataflows:
+                if runner is not None:
+                    runner.probe_actor = self._probe_actor
+                    runner.armed = lambda: io.armed
+            for chart in self.charts:
+                chart.probe = self.probe
+
+    def serve(self, call: Callable, *args) -> None:
+        """Call into the interfaces library (which may serve clients): the
+        published items go in before, what clients wrote comes back after."""
+        io = self.io
+        io.push(self.published, self.charts)
+        call(*args)
+        io.pull(self.published)
+
+    def probe(self, kind: str, a: int, b: int = 0) -> None:
+        """The debugger's probe (EL_DEBUG_PROBE): a call into the server
+        only when it is armed (a breakpoint, a step or a break pending)."""
+        if self.io.armed:
+            self.serve(self.io.probe, PROBE[kind], a, b)
+
+    def _probe_actor(self, instance: int) -> None:
+        self.probe("actor", instance)
 
     def run_dataflow(self, dataflow: int) -> None:
         self.dataflows[dataflow].run()
@@ -107,11 +139,19 @@ class ProgramState:
             task_state.cursor[ch] = 0
 
     def body(self, task_state: TaskState) -> None:
+        io = self.io
+        if io is not None:  # EL_DEBUG_TASK_BEGIN
+            if io.armed:
+                self.serve(io.task_begin, task_state.task.id)
+            else:
+                io.task_begin(task_state.task.id)
         for kind, ident in task_state.task.runs:
             if kind == "dataflow":
                 self.dataflows[ident].run()
             else:
                 self.charts[ident].run()
+        if io is not None:
+            io.task_end()
 
     def publish(self, task_state: TaskState) -> None:
         """The task's outputs, channel tokens and chart activity become
@@ -311,19 +351,30 @@ class Clock:
     def stop(self) -> None:
         self.stopped = True
 
-    def wait_until(self, time_us: int) -> bool:
-        """Wait for logical time ``time_us``; False when stopped."""
+    def wait_until(self, time_us: int, idle: Callable[[float], None] | None = None) -> bool:
+        """Wait for logical time ``time_us``; False when stopped. ``idle(s)``
+        waits at most s seconds (serving the interfaces' links)."""
         if self.pace is None:
             return not self.stopped
-        if self._start is None:
-            self._start, self._first_us = time.monotonic(), time_us
-        target = self._start + (time_us - self._first_us) / 1e6 / self.pace
         while not self.stopped:
-            left = target - time.monotonic()
+            left = self.remaining_s(time_us)
             if left <= 0:
                 break
-            time.sleep(min(left, 0.05))
+            (idle or time.sleep)(min(left, 0.05))
         return not self.stopped
+
+    def remaining_s(self, time_us: int) -> float:
+        """Real seconds until logical time ``time_us`` is due (the first
+        time asked for is due at once: it anchors the clock)."""
+        if self._start is None:
+            self._start, self._first_us = time.monotonic(), time_us
+        return self._start + (time_us - self._first_us) / 1e6 / self.pace - time.monotonic()
+
+    def resync(self, time_us: int) -> None:
+        """Logical time ``time_us`` is due now: after a halt, real time
+        resumes from here instead of catching up."""
+        if self.pace is not None:
+            self._start, self._first_us = time.monotonic(), time_us
 
     def late_us(self, time_us: int) -> int:
         """How far (logical µs) real time is past ``time_us``."""
@@ -333,6 +384,30 @@ class Clock:
 
 
 # ====================================================================== the engine
+
+
+@dataclass
+class InterfaceOptions:
+    """What the interpreter serves (the host board's options): ``debug``
+    ``pty:LINK`` or ``tcp:PORT`` (``,halt`` to start halted), ``modbus_tcp``
+    a port, ``modbus_rtu`` ``pty:LINK``, ``nvram`` the file of persistent
+    params (None: in memory); ``maps`` a folder for debug_map.json and
+    service_map.* (rewritten at each replacement); ``model`` and
+    ``schedule`` read a model sent over the debug link (its imports are
+    relative to ``model``)."""
+
+    debug: str | None = None
+    modbus_tcp: str | None = None
+    modbus_rtu: str | None = None
+    nvram: str | None = None
+    maps: Path | None = None
+    model: Path | None = None
+    schedule: str | None = None
+
+
+class InterfaceError(Exception):
+    """A link of the interfaces that cannot be opened (the library printed
+    why on stderr)."""
 
 
 class Engine:
@@ -345,8 +420,13 @@ class Engine:
 
     def __init__(self, program: Program, plugin_cache: PluginCache | None = None,
                  stimulus: Stimulus | None = None, trace: TraceWriter | None = None,
-                 on_replace: Callable[[Replacement], None] | None = None):
+                 on_replace: Callable[[Replacement], None] | None = None,
+                 interfaces: InterfaceOptions | None = None, say: Callable[[str], None] | None = None):
         self.cache = plugin_cache or PluginCache()
+        self.interfaces = interfaces
+        self.say = say or (lambda text: None)
+        self._load_results: queue.Queue = queue.Queue()  # from the thread checking a sent model
+        self._loading = False  # a model sent over the debug link is being checked or swapped in
         self.state = self._prepare(program)
         self.stimulus = stimulus
         self.trace = trace
@@ -369,7 +449,74 @@ class Engine:
         return self.state.program
 
     def _prepare(self, program: Program) -> ProgramState:
-        return ProgramState(program, self.cache.load_all(program.specs), self.cache.batch_runner)
+        plugins = self.cache.load_all(program.specs)
+        io = None
+        if self.interfaces is not None:
+            io = Interfaces(Library(program, self.cache))
+            if self.interfaces.debug is not None and not io.has_debug:
+                raise PluginError(f"model '{program.name}' has no debug interface, which this run serves "
+                                  "(declare one: `debug on uart0`)")
+        return ProgramState(program, plugins, self.cache.batch_runner, io)
+
+    @property
+    def io(self) -> Interfaces | None:
+        """The running program's interfaces library (None without --debug,
+        --modbus-*)."""
+        return self.state.io
+
+    def _open_interfaces(self, state: ProgramState) -> None:
+        """Open (or adopt) the links, take what persistent storage holds,
+        and write the maps."""
+        o = self.interfaces
+        if not state.io.open(o.debug, o.modbus_tcp, o.modbus_rtu, o.nvram):
+            raise InterfaceError("the debug or service interface cannot be opened")
+        state.io.pull(state.published)
+        if o.maps is not None:
+            o.maps.mkdir(parents=True, exist_ok=True)
+            for name, path in state.io.library.files.items():
+                if name.endswith((".json", ".csv", ".md")):
+                    shutil.copyfile(path, o.maps / name)
+
+    def serve_interfaces(self, call: Callable, *args) -> None:
+        """A call into the interfaces library (see ProgramState.serve), then
+        what it asked for: a model to check, a clock to resynchronise."""
+        state, io = self.state, self.state.io
+        while not self._load_results.empty():
+            io.load_result(*self._load_results.get())
+        state.serve(call, *args)
+        if io.take_resync():
+            self.clock.resync(self.next_time_us())
+        text = io.take_load()
+        if text is not None:
+            self._loading = True
+            threading.Thread(target=self._check_sent_model, args=(text,), name="easylab-load", daemon=True).start()
+
+    def _check_sent_model(self, text: bytes) -> None:
+        """Front end and build of a model sent over the debug link; a good
+        one is swapped in at the next instant, a bad one is refused."""
+        from ..frontend import lower_file
+
+        running = f"program 0x{self.program.program_id:08x} runs on"
+        path = self.interfaces.model or Path(self.program.source)
+        try:
+            program, result = lower_file(path, self.interfaces.schedule, text=text.decode("utf-8"))
+        except (UnicodeDecodeError, OSError, ValueError) as err:
+            program, result = None, None
+            message = f"{path}: {err}"
+        if program is None:
+            if result is not None:
+                first = result.diagnostics.sorted()
+                message = first[0].render(result.sources).splitlines()[0] if first else "refused"
+            self.say(f"easylab run: a model sent by the debugger was refused: {message}; {running}")
+            self._load_results.put((LOAD_REFUSED, 0, message))
+            self._loading = False
+            return
+        try:
+            self.replace_model(program)
+        except PluginError as err:
+            self.say(f"easylab run: a model sent by the debugger was refused: {err}; {running}")
+            self._load_results.put((LOAD_REFUSED, 0, str(err).splitlines()[0]))
+            self._loading = False
 
     # ------------------------------------------------------------ running
 
@@ -379,6 +526,8 @@ class Engine:
         if not self._booted:
             self._booted = True
             self.state.boot()
+            if self.state.io is not None:
+                self._open_interfaces(self.state)
 
     def shutdown(self) -> None:
         """Actors' ``stop`` code, then close the trace (ending the VCD after
@@ -386,6 +535,8 @@ class Engine:
         if self._booted:
             self._booted = False
             self.state.shutdown()
+            if self.state.io is not None:
+                self.state.io.close()
         if self.trace is not None:
             end = None if self.last_time_us is None else self.last_time_us + self.program.tick_us
             self.trace.close(end)
@@ -409,12 +560,32 @@ class Engine:
         while instants is None or done < instants:
             t = self.next_time_us()
             if duration_us is not None and t >= duration_us:
-                self.clock.wait_until(duration_us)  # a real-time run lasts its duration
+                self._wait(duration_us)  # a real-time run lasts its duration
                 break
-            if not self.clock.wait_until(t):
+            if not self._wait(t):
                 break
             self.step()
             done += 1
+
+    def _wait(self, time_us: int) -> bool:
+        """Wait for logical time ``time_us`` (the interfaces served meanwhile,
+        at least once per instant); False when the clock was stopped."""
+        io = self.state.io
+        if io is None:
+            return self.clock.wait_until(time_us)
+        if self.clock.pace is None:  # virtual time: answer what is there, never wait
+            self.serve_interfaces(io.idle, 0)
+            return not self.clock.stopped
+
+        def idle(seconds: float) -> None:
+            if seconds >= 0.001:
+                self.serve_interfaces(io.idle, int(seconds * 1000))
+            else:  # below poll()'s millisecond: look, then sleep the rest
+                self.serve_interfaces(io.idle, 0)
+                time.sleep(max(0.0, seconds))
+        if self.clock.remaining_s(time_us) <= 0:
+            self.serve_interfaces(io.idle, 0)
+        return self.clock.wait_until(time_us, idle)
 
     def step(self) -> None:
         """One instant (docs/ir.md): publish, inputs, device reads, release,
@@ -441,6 +612,10 @@ class Engine:
             return
         if self.stimulus is not None:
             self.stimulus.apply_inputs(t, state.published)
+        if state.io is not None:  # EL_DEBUG_INSTANT: queued writes apply; halts at an instant
+            state.io.set_tick(t // self.program.tick_us)
+            self.serve_interfaces(state.io.instant)
+            state = self.state
         released = instant.release
         if released:
             if self.stimulus is not None:
@@ -510,6 +685,13 @@ class Engine:
     def _swap(self, t: int, new: ProgramState) -> None:
         old = self.state
         report = Replacement(t, old.program.program_id, new.program.program_id)
+        if old.io is not None:  # the links move to the new library: clients stay connected
+            old.io.handover()
+            old.io.close()
+            self._open_interfaces(new)
+            if self._loading:
+                new.io.load_result(LOAD_REPLACED, new.program.program_id)
+                self._loading = False
         for task_state in old.tasks:
             if task_state.pending:
                 self.carried.append(_carry(old, task_state))

@@ -16,7 +16,13 @@ from .repetitions import compute_repetitions
 from .sas import best_sas, flat_sas
 from .schedule import Schedule
 
-SCHEDULE_KINDS = ("sas", "min-buffer")
+# sas: the looped single-appearance schedule of least buffer memory found;
+# flat: the flat single-appearance schedule (each actor's firings in one
+# run, in topological order: the simplest loops, the largest buffers);
+# min-buffer: a flat schedule of least total buffer memory.
+SCHEDULE_KINDS = ("sas", "flat", "min-buffer")
+# How reports name them.
+SCHEDULE_NAMES = {"sas": "single-appearance", "flat": "flat single-appearance", "min-buffer": "minimum-buffer"}
 # The text report shows at most this much of a schedule; JSON has it all.
 _REPORT_SCHEDULE_CHARS = 600
 
@@ -84,7 +90,7 @@ class Analysis:
 
     def render_text(self, name: str) -> str:
         """A human-readable report with a table of buffers."""
-        kind = "single-appearance" if self.kind == "sas" else "minimum-buffer flat"
+        kind = SCHEDULE_NAMES[self.kind] + (" flat" if self.kind == "min-buffer" else "")
         if self.kind == "sas" and not self.single_appearance:
             kind = "looped (not single-appearance)"
         lines = [f"SDF analysis of {name}"]
@@ -132,10 +138,12 @@ def analyze(
     """Repetition vector, deadlock check, schedule and buffer sizes.
 
     ``schedule`` is ``"sas"`` (looped single-appearance schedule of least
-    buffer memory found by APGAN/RPMC + DPPO) or ``"min-buffer"`` (flat
-    schedule of least total buffer memory).  Raises InconsistentGraphError or
-    DeadlockError for graphs that have no valid schedule.  The schedule is
-    verified by simulation before it is returned.
+    buffer memory found by APGAN/RPMC + DPPO), ``"flat"`` (flat
+    single-appearance schedule: every actor's firings in one run) or
+    ``"min-buffer"`` (flat schedule of least total buffer memory).  Raises
+    InconsistentGraphError or DeadlockError for graphs that have no valid
+    schedule, ScheduleError when the kind asked for has none.  The schedule
+    is verified by simulation before it is returned.
     """
     if schedule not in SCHEDULE_KINDS:
         raise ValueError(f"schedule must be one of {', '.join(SCHEDULE_KINDS)}, not {schedule!r}")
@@ -148,7 +156,12 @@ def analyze(
     flat_total = None
     if flat is not None:
         flat_total = _total(ig, check_schedule(ig, flat, repetitions))
-    if schedule == "sas":
+    if schedule == "flat":
+        if flat is None:
+            raise ScheduleError("this graph has no flat single-appearance schedule (a cycle of edges whose "
+                                "initial tokens do not cover an iteration); use the sas or min-buffer schedule")
+        chosen, method, single_appearance, optimal = flat, "topological order", True, None
+    elif schedule == "sas":
         result = best_sas(ig, repetitions, options)
         chosen, method = result.schedule, result.method
         single_appearance, optimal = result.single_appearance, None

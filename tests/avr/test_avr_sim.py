@@ -259,3 +259,19 @@ def test_a_sim_build_warns_of_what_simavr_does_not_simulate(tmp_path):
                      'dataflow D { knob.count -> x }\ntask t period 10 ms { run D }\n')
     out = avr_build(model, tmp_path / "o", "--mcu", "atmega2560", "--sim", "--release").proc.stdout
     assert "warning: simavr 1.6 simulates the atmega2560's pin-change interrupts on port B only: encoder 'knob'" in out
+
+
+def test_cd_to_dat_with_the_flat_schedule_gives_the_same_trace(sim_builds, host_builds, tmp_path):
+    """The flat single-appearance schedule (the benchmark's like-for-like
+    comparison with hand-written C) on the ATmega2560: the host trace of
+    the example's own schedule, byte for byte."""
+    from avr_testlib import avr_build
+
+    flat = avr_build(ROOT / "examples" / "cd_to_dat.elab", tmp_path / "flat", "--mcu", "atmega2560", "--sim",
+                     "--schedule", "flat")
+    assert "(147 src) (147 b)" in (tmp_path / "flat" / "model.c").read_text()
+    host_trace, avr_trace = tmp_path / "host.csv", tmp_path / "avr.csv"
+    args = ["--fast", "--duration", "1s"]
+    run(host_builds["cd_to_dat"], *args, "--trace", host_trace)
+    assert run(flat.simulator, *args, "--trace", avr_trace).stderr == ""
+    assert avr_trace.read_bytes() == host_trace.read_bytes() and host_trace.read_bytes().count(b"\n") > 10

@@ -40,12 +40,14 @@ def build(model: Path, out: Path, release: bool = False, cc: str | None = None) 
 class Firmware:
     """A host firmware process serving its debug interface on a new pty."""
 
+    start_timeout = 10.0  # seconds until the debug link exists
+
     def __init__(self, exe: Path, tmp: Path, *args: str, halt: bool = True, fast: bool = True,
                  duration: str | None = None, transport: str | None = None):
         self.exe = Path(exe)
         self.link = tmp / f"{self.exe.name}.pty"
         self.trace = tmp / f"{self.exe.name}.trace.csv"
-        self.map_path = self.exe.parent / "debug_map.json"
+        self.map_path = self.maps_dir(tmp) / "debug_map.json"
         spec = transport or f"pty:{self.link}"
         cmd = self.command(spec, halt, list(args))
         if fast:
@@ -54,12 +56,16 @@ class Firmware:
             cmd += ["--duration", duration]
         self.proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
         if transport is None:
-            deadline = time.monotonic() + 10
+            deadline = time.monotonic() + self.start_timeout
             while not self.link.exists():
                 if self.proc.poll() is not None or time.monotonic() > deadline:
                     raise AssertionError(f"{cmd} did not start: {self.proc.communicate()}")
                 time.sleep(0.01)
         self.clients: list[DebugClient] = []
+
+    def maps_dir(self, tmp: Path) -> Path:
+        """Where the debug map of this firmware is."""
+        return self.exe.parent
 
     def command(self, spec: str, halt: bool, args: list[str]) -> list[str]:
         return [str(self.exe), "--debug", spec + (",halt" if halt else ""), "--trace", str(self.trace), *args]
@@ -114,6 +120,23 @@ class AvrFirmware(Firmware):
         hw = json.loads((self.exe.parent / "hw_map.json").read_text())
         uart = next(n for n, u in hw["uarts"].items() if u["use"] == "debug")
         return [str(self.exe), f"--uart{uart}", spec, "--trace", str(self.trace), *args] + (["--halt"] if halt else [])
+
+
+class InterpFirmware(Firmware):
+    """Local execution: `easylab run MODEL` (exe is the model file)
+    interpreting the model and serving its debug interface on a new pty (or
+    TCP port): the same options and the same client side as Firmware; the
+    maps are written with --maps."""
+
+    start_timeout = 120.0  # the first run of a model compiles its plug-ins and interfaces library
+
+    def maps_dir(self, tmp: Path) -> Path:
+        return tmp / f"{self.exe.stem}.maps"
+
+    def command(self, spec: str, halt: bool, args: list[str]) -> list[str]:
+        import sys
+        return [sys.executable, "-m", "easylab", "run", str(self.exe), "--debug", spec + (",halt" if halt else ""),
+                "--trace", str(self.trace), "--maps", str(self.map_path.parent), *args]
 
 
 def env_with_tools() -> dict:
@@ -183,13 +206,17 @@ def built_avr(name: str) -> Path:
 # The boards the debug suite runs on: the host board's process, and the AVR
 # firmware (ATmega2560) in simavr with its debug UART on a pty. A test runs
 # on both with @on_boards, on the host only with @host_only(reason).
-BOARDS = ("host", "avr")
+BOARDS = ("host", "avr", "interp")
 on_boards = pytest.mark.parametrize("board", BOARDS, indirect=True)
 
 
-def host_only(reason: str):
-    return pytest.mark.parametrize("board", ["host", pytest.param(
-        "avr", marks=pytest.mark.skip(reason=f"host-only: {reason}"))], indirect=True)
+def host_only(reason: str, interp: bool = True):
+    """On the host board (and in local execution unless `interp` is False),
+    the AVR board skipped for `reason`."""
+    boards = ["host", pytest.param("avr", marks=pytest.mark.skip(reason=f"host-only: {reason}"))]
+    if interp:
+        boards.append("interp")
+    return pytest.mark.parametrize("board", boards, indirect=True)
 
 
 @pytest.fixture
@@ -211,6 +238,8 @@ class _Builds:
         self.board = board
 
     def __getitem__(self, name: str) -> Path:
+        if self.board == "interp":  # local execution runs the model itself
+            return EXAMPLES / f"{name}.elab" if (EXAMPLES / f"{name}.elab").exists() else MODELS / f"{name}.elab"
         return built_avr(name) if self.board == "avr" else built(name)
 
 
@@ -229,7 +258,7 @@ def firmware(tmp_path, request):
     board = _board_of(request)
 
     def start(exe, *args, **kw):
-        fw = (AvrFirmware if board == "avr" else Firmware)(exe, tmp_path, *args, **kw)
+        fw = {"avr": AvrFirmware, "interp": InterpFirmware}.get(board, Firmware)(exe, tmp_path, *args, **kw)
         started.append(fw)
         return fw
 

@@ -9,7 +9,9 @@ import subprocess
 import sys
 import time
 
-from debug_testlib import builds, env_with_tools, firmware  # noqa: F401 (fixtures)
+import pytest
+
+from debug_testlib import board, builds, env_with_tools, firmware  # noqa: F401 (fixtures)
 
 ENV = env_with_tools()
 
@@ -20,7 +22,8 @@ def console(*args, timeout=30):
     return proc.returncode, proc.stdout, proc.stderr
 
 
-def test_commands_from_c_and_read_output(builds, firmware):
+@pytest.mark.parametrize("board", ["host", "interp"], indirect=True)  # the firmware, and `easylab run`
+def test_commands_from_c_and_read_output(board, builds, firmware):
     fw = firmware(builds["pneumatic_cylinder"])
     status, out, err = console("--map", fw.map_path, fw.link, "-c",
                                "read target timeout start_cmd; write start_cmd 1; break at Cylinder.Extending; "
@@ -38,7 +41,8 @@ def test_commands_from_c_and_read_output(builds, firmware):
     assert err == ""
 
 
-def test_json_output_and_script(builds, firmware, tmp_path):
+@pytest.mark.parametrize("board", ["host", "interp"], indirect=True)
+def test_json_output_and_script(board, builds, firmware, tmp_path):
     fw = firmware(builds["pneumatic_cylinder"])
     script = tmp_path / "s.dbg"
     script.write_text("# a script\nread kp ki\ntx begin\nwrite kp 500\nwrite ki 30\nread kp\ntx commit\n"
@@ -98,3 +102,39 @@ def test_a_port_that_goes_away_is_one_line(builds, firmware):
     out, err = proc.communicate(timeout=20)
     assert proc.returncode == 1
     assert err.startswith("easylab-debug: error: ") and err.count("\n") == 1 and "Traceback" not in err
+
+
+def test_load_replaces_the_model_in_local_execution(tmp_path):
+    """`load FILE` sends a model to `easylab run --debug`: a broken one is
+    refused with the checker's message (status 1, the program runs on), a
+    good one replaces the program, and the console reloads the map that
+    --maps rewrote; a firmware cannot load and says so."""
+    from debug_testlib import EXAMPLES, Firmware, InterpFirmware, built
+
+    model = tmp_path / "blink.elab"
+    model.write_text((EXAMPLES / "blink.elab").read_text())
+    faster = tmp_path / "faster.elab"
+    faster.write_text(model.read_text().replace("= 500  range", "= 20  range"))
+    broken = tmp_path / "broken.elab"
+    broken.write_text(model.read_text().replace("wave.y -> led.level", "wave.y -> nowhere"))
+    fw = InterpFirmware(model, tmp_path, halt=False, fast=False)
+    try:
+        status, out, err = console("--map", fw.map_path, fw.link, "-c", f"load {broken}")
+        assert status == 1 and "refused, the program runs on" in err and "'nowhere'" in err, err
+        status, out, err = console("--map", fw.map_path, fw.link, "-c", f"read half_period; load {faster}; "
+                                   "read half_period; info")
+        assert status == 0, err
+        lines = out.splitlines()
+        assert lines[0] == "half_period = 500" and lines[1].startswith("replaced: program 0x")
+        assert lines[2] == "half_period = 20"
+        new_id = lines[1].split()[2]
+        assert any(line.startswith("firmware") and f"program {new_id}" in line for line in lines)
+        assert json.loads(fw.map_path.read_text())["program_id"] == new_id
+    finally:
+        fw.stop()
+    host = Firmware(built("blink"), tmp_path, halt=False)
+    try:
+        status, out, err = console("--map", host.map_path, host.link, "-c", f"load {faster}")
+        assert status == 1 and "cannot replace its model" in err, err
+    finally:
+        host.stop()

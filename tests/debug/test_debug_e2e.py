@@ -268,7 +268,7 @@ def test_reset_restarts_the_program(builds, firmware):
         except TransportTimeout:
             assert time.monotonic() < deadline
     assert h.program_id == m.program_id
-    f = c.flags()
+    f = fw.wait_halted(c)  # the restarted program may answer before its first instant
     assert f.halted and f.why == "start" and f.tick == 0
     assert c.read(ids(fw, "kp", "start_cmd")) == [400, False]
     assert c.stack().charts == [[None]]

@@ -19,9 +19,11 @@ def test_fuzz_frames_and_requests(tmp_path):
     exe = tmp_path / "debug_fuzz"
     cmd = ["clang", "-g", "-O1", "-std=c99", "-Wall", "-Wextra", "-Werror",
            "-fsanitize=fuzzer,address,undefined", "-fno-sanitize-recover=all", "-DEL_DEBUG=1",
+           "-DEL_DEBUG_BOARD_COMMANDS=1",  # local execution's model upload (boards/host/host_load.c) too
            f"-I{FUZZ / 'debug_include'}", f"-I{ROOT / 'runtime_c'}", str(FUZZ / "debug_fuzz.c"),
            str(FUZZ / "debug_fuzz_model.c"), *(str(ROOT / "runtime_c" / f) for f in
-                                                ("el_debug.c", "el_debug_cobs.c", "el_crc16.c")), "-o", str(exe)]
+                                                ("el_debug.c", "el_debug_cobs.c", "el_crc16.c")),
+           str(ROOT / "boards" / "host" / "host_load.c"), "-o", str(exe)]
     proc = subprocess.run(cmd, capture_output=True, text=True)
     if proc.returncode != 0 and "fuzzer" in proc.stderr and "cannot find" in proc.stderr:
         pytest.skip("clang's libFuzzer runtime is missing (Debian: libclang-rt-14-dev)")

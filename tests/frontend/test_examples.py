@@ -217,3 +217,21 @@ def test_all_features_model():
         "acquire": (2000, 0, 2000, None), "control": (10_000, 1000, 8000, 500), "report": (16_000, 1000, 16_000, None)}
     assert {n: s.branch for n, s in m.charts["Sequence"].steps.items()} == {
         "Idle": (), "Work": ((0, 0),), "Watch": ((0, 1),), "WorkDone": ((0, 0),), "WatchDone": ((0, 1),)}
+
+
+def test_schedule_kinds_in_the_model_and_their_errors():
+    """`schedule flat` is the flat single-appearance schedule; a dataflow
+    that has none is an error at its name, and sas schedules it."""
+    from easylab.analysis import analyze_dataflow
+    from easylab.source import Diagnostics
+
+    model = Path(__file__).parent / "models" / "no_flat_schedule.elab"
+    result = check_file(model)
+    (d,) = result.diagnostics.sorted()
+    assert (d.span.line, d.span.column) == (20, 10)
+    assert "dataflow 'D': this graph has no flat single-appearance schedule" in d.message
+    good = check_file(model, schedule="sas")
+    assert good.model is not None and str(good.model.dataflows["D"].analysis.result.schedule) == "t(2pq)"
+    cd = check_file(ROOT / "examples" / "cd_to_dat.elab", schedule="flat").model.dataflows["Convert"]
+    assert str(cd.analysis.result.schedule) == "(147 src) (147 b) (98 c) (28 d) (32 e) (160 f) sum out:checksum"
+    assert analyze_dataflow(cd, Diagnostics(), "flat").result.buffer_total == 1182  # 1181 + the output token

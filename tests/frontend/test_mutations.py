@@ -34,7 +34,7 @@ INSERTS = [
     "task", "step", "initial", "transition", "when", "run", "entry", "exit", "in", "out", "rate", "delay",
     "part", "claims", "driver", "impl", "state", "start", "stop", "period", "offset", "deadline", "wcet",
     "debug", "modbus", "rtu", "tcp", "on", "baud", "parity", "unit", "port", "range", "service", "persist",
-    "ro", "rw", "schedule", "sas", "min-buffer", "std", "true", "false", "not", "and", "or",
+    "ro", "rw", "schedule", "sas", "flat", "min-buffer", "std", "true", "false", "not", "and", "or",
     "int8", "uint8", "int16", "uint16", "int32", "uint32", "float32", "bool", "time", "string", "number",
     "integer", "T", "x", "y", "0", "1", "-1", "255", "65536", "4294967296", "0x", "0b2", "1.5", "1e40", "007",
     "ms", "s", "us", '"PB5"', '"\\q"', "adc", "uart0", "pin",

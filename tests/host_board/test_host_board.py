@@ -33,7 +33,11 @@ VALID_COLUMNS = ("valid columns: time_us, gain, limit, count, over, delta, level
 
 
 def _sources():
-    return sorted(str(p) for p in BOARD.glob("*.c")) + [str(HERE / "model.c")]
+    """The firmware's board sources (board.toml; the folder also holds local
+    execution's interfaces library files) and the fixture's model."""
+    from easylab.boards import load_board
+
+    return [str(BOARD / s) for s in load_board("host").sources] + [str(HERE / "model.c")]
 
 
 def _build(out: Path, cc: str, flags: list[str]) -> Path:

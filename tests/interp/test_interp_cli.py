@@ -100,3 +100,22 @@ def test_real_time_and_pace(tmp_path):
     assert traces["real"][0] >= 0.4
     assert traces["pace"][0] >= 0.1
     assert traces["real"][1] == traces["pace"][1] == traces["fast"][1]
+
+
+def test_interface_errors_are_reported_before_anything_runs(tmp_path, capfd):
+    """A model without a debug interface cannot serve --debug (status 1);
+    a debug port that is taken is a usage error (status 2). Neither run
+    leaves a trace file."""
+    import socket
+
+    trace = tmp_path / "i.csv"
+    assert run_interp(MODEL, trace, "10ms", None, "--debug", f"pty:{tmp_path / 'dbg'}") == 1
+    assert "has no debug interface" in capfd.readouterr().err
+    assert not trace.exists() and not (tmp_path / "dbg").exists()
+    with socket.socket() as taken:
+        taken.bind(("127.0.0.1", 0))
+        taken.listen(1)
+        port = taken.getsockname()[1]
+        assert run_interp(EXAMPLES / "blink.elab", trace, "10ms", None, "--debug", f"tcp:{port}") == 2
+    assert f"--debug tcp:{port}: cannot listen" in capfd.readouterr().err
+    assert not trace.exists()

@@ -79,7 +79,7 @@ def test_random_expressions(seed, host_firmware, tmp_path):
         assert interp.read_bytes() == host.read_bytes()
 
 
-@pytest.mark.parametrize("name, schedule", [("cd_to_dat", "min-buffer"), ("multirate", "sas")])
+@pytest.mark.parametrize("name, schedule", [("cd_to_dat", "min-buffer"), ("cd_to_dat", "flat"), ("multirate", "sas")])
 def test_other_schedules(name, schedule, tmp_path):
     """`--schedule` changes the firmware's buffers (rings, or linear ones with
     delays and a self-loop), not the values."""

@@ -11,6 +11,7 @@ integrator's tally); the edited outputs are checked against the formula.
 
 from __future__ import annotations
 
+import contextlib
 import csv
 import io
 import re
@@ -33,6 +34,7 @@ EDITED = LIVE.replace("g   = Gain<int16>(k = 1000)", "g   = Gain<int16>(k = 2000
                                                        "    lim = Limit<int16>(min = -1000, max = 500)") \
              .replace("g.y   -> out", "g.y   -> lim.x\n    lim.y -> out")
 BROKEN = LIVE.replace("g.y   -> out", "g.y   -> nowhere")
+DEBUG = "debug on uart0\n"  # the debug interface, for the tests that send models over it
 
 
 def edited_out(smooth: int) -> int:
@@ -166,6 +168,24 @@ def test_what_changed_starts_afresh(programs, tmp_path):
     assert engine.activations["filter"] == 100
 
 
+@contextlib.contextmanager
+def easylab_run(errors: Path, *args):
+    """`easylab run ARGS` (stderr into ``errors``) for the body of a with
+    statement; then, 0.4 s later, SIGINT ends it with status 0 (killed if
+    the body failed)."""
+    with open(errors, "w") as err:
+        proc = subprocess.Popen([sys.executable, "-m", "easylab", "run", *map(str, args)], stderr=err,
+                                stdout=subprocess.DEVNULL)
+    try:
+        yield proc
+        time.sleep(0.4)
+        proc.send_signal(signal.SIGINT)
+        assert proc.wait(20) == 0
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+
+
 def _wait_for(path: Path, pattern: str, timeout: float) -> re.Match:
     deadline = time.monotonic() + timeout
     while time.monotonic() < deadline:
@@ -186,11 +206,8 @@ def test_watch_command_line(programs, reference, tmp_path):
     write_model(model, LIVE)
     old_id = lower(model).program_id
     trace, errors = tmp_path / "live.csv", tmp_path / "stderr.txt"
-    cmd = [sys.executable, "-m", "easylab", "run", str(model), "--watch", "--duration", "60s",
-           "--stimulus", str(STIMULUS), "--trace", str(trace)]
-    with open(errors, "w") as err:
-        proc = subprocess.Popen(cmd, stderr=err, stdout=subprocess.DEVNULL)
-    try:
+    with easylab_run(errors, model, "--watch", "--duration", "60s", "--stimulus", STIMULUS,
+                     "--trace", trace) as proc:
         deadline = time.monotonic() + 20
         while not trace.exists() and time.monotonic() < deadline:  # created when the run starts
             time.sleep(0.05)
@@ -201,17 +218,17 @@ def test_watch_command_line(programs, reference, tmp_path):
         write_model(model, EDITED)
         changed = _wait_for(errors, r"at (\d+\.\d+) s the program id changed from (0x[0-9a-f]{8}) to "
                                     r"(0x[0-9a-f]{8})", 20)
-        time.sleep(0.4)
-        proc.send_signal(signal.SIGINT)
-        assert proc.wait(20) == 0
-    finally:
-        if proc.poll() is None:
-            proc.kill()
     text = errors.read_text()
     assert "'nowhere'" in text and "Traceback" not in text
+    check_swap(changed, old_id, new_id, rows(trace), reference)
+
+
+def check_swap(changed: re.Match, old_id: int, new_id: int, live: dict, reference: dict) -> None:
+    """The run's "program id changed" line names the two programs; the
+    trace is the reference's until the swap and the edited model's after
+    it, with the untouched actors' state (average, chart, tally) intact."""
     assert (changed.group(2), changed.group(3)) == (f"0x{old_id:08x}", f"0x{new_id:08x}")
     swap_us = round(float(changed.group(1)) * 1e6)
-    live = rows(trace)
     assert swap_us % 10000 == 0 and swap_us + 200_000 <= max(live) < 30_000_000
     for t, row in live.items():
         ref = reference[t]
@@ -219,3 +236,63 @@ def test_watch_command_line(programs, reference, tmp_path):
             assert row[column] == ref[column], (t, column)
         expected = int(ref["out"]) if t <= swap_us else edited_out(int(ref["smooth"]))
         assert int(row["out"]) == expected, t
+
+
+def test_replacement_over_the_debug_link(programs, reference, tmp_path):
+    """The debugger sends models to `easylab run --debug` (LOAD_*, the
+    console's `load`): a broken one is refused with the checker's message
+    while the run goes on; the edited one swaps in at the next instant, the
+    debug link and its client stay connected, the program id and the maps
+    change, and the trace shows the new behaviour from the next activation
+    on with the untouched actors' state intact."""
+    from easylab.host_tools.debug_map import DebugMap
+    from easylab.host_tools.debug_protocol import DebugClient
+
+    model = write_model(tmp_path / "live.elab", LIVE + DEBUG)
+    old_id = lower(model).program_id
+    trace, errors, link, maps = tmp_path / "live.csv", tmp_path / "stderr.txt", tmp_path / "dbg", tmp_path / "maps"
+    with easylab_run(errors, model, "--duration", "60s", "--stimulus", STIMULUS, "--trace", trace,
+                     "--debug", f"pty:{link}", "--maps", maps) as proc:
+        deadline = time.monotonic() + 60
+        while not link.exists() and time.monotonic() < deadline:
+            assert proc.poll() is None, errors.read_text()
+            time.sleep(0.05)
+        client = DebugClient.open(str(link), 2.0)
+        assert client.hello().program_id == old_id == DebugMap.load(maps / "debug_map.json").program_id
+        refused = client.replace_model((BROKEN + DEBUG).encode())
+        assert refused.state == "refused" and "'nowhere'" in refused.message
+        assert proc.poll() is None and client.program_id() == old_id
+        status = client.replace_model((EDITED + DEBUG).encode())
+        assert status.state == "replaced" and status.program_id != old_id
+        assert client.hello().program_id == status.program_id == DebugMap.load(maps / "debug_map.json").program_id
+        client.close()
+    text = errors.read_text()
+    assert "refused" in text and "Traceback" not in text
+    changed = re.search(r"at (\d+\.\d+) s the program id changed from (0x[0-9a-f]{8}) to (0x[0-9a-f]{8})", text)
+    check_swap(changed, old_id, status.program_id, rows(trace), reference)
+
+
+def test_firmware_refuses_to_load_a_model(tmp_path):
+    """LOAD_* are board commands: a firmware (the host board's) answers
+    E_UNKNOWN_CMD, and the console says what to do instead."""
+    from easylab.build import build
+    from easylab.host_tools.debug_protocol import DebugClient, DebugError, K
+
+    model = write_model(tmp_path / "live.elab", LIVE + DEBUG)
+    exe = build(lower(model), "host", tmp_path / "fw").executable
+    link = tmp_path / "dbg"
+    proc = subprocess.Popen([str(exe), "--debug", f"pty:{link}", "--duration", "2s"],
+                            stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
+    try:
+        deadline = time.monotonic() + 10
+        while not link.exists() and time.monotonic() < deadline:
+            time.sleep(0.02)
+        client = DebugClient.open(str(link), 2.0)
+        client.hello()
+        with pytest.raises(DebugError) as err:
+            client.send_model((LIVE + DEBUG).encode())
+        assert err.value.status == K.E_UNKNOWN_CMD
+        client.close()
+    finally:
+        proc.kill()
+        proc.wait()

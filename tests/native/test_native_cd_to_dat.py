@@ -1,6 +1,6 @@
 """CD to DAT (examples/cd_to_dat.elab): the checksum of every activation
 against an independent Python interpretation of the same SDF graph, built
-with both schedule kinds (and ASan/UBSan: min-buffer schedules use circular
+with every schedule kind (and ASan/UBSan: min-buffer schedules use circular
 buffers), whose traces must be byte-identical."""
 
 from __future__ import annotations
@@ -9,6 +9,7 @@ from concurrent.futures import ThreadPoolExecutor
 
 import pytest
 
+from easylab.sdf.analysis import SCHEDULE_KINDS
 from native_testlib import DATA, M32, ROOT, SANITIZE, Sdf, VarSink, build, run
 
 ACTIVATIONS = 20  # the task runs every 20 ms
@@ -70,8 +71,8 @@ def traces(tmp_path_factory):
     d = tmp_path_factory.mktemp("cd_to_dat")
     model = ROOT / "examples" / "cd_to_dat.elab"
     with ThreadPoolExecutor(max_workers=2) as pool:
-        exes = dict(zip(("sas", "min-buffer"), pool.map(
-            lambda kind: build(model, d / kind, cflags=SANITIZE, schedule=kind), ("sas", "min-buffer"))))
+        exes = dict(zip(SCHEDULE_KINDS, pool.map(
+            lambda kind: build(model, d / kind, cflags=SANITIZE, schedule=kind), SCHEDULE_KINDS)))
     return {kind: run(exe, d / f"{kind}.csv", duration=f"{20 * ACTIVATIONS}ms",
                       stimulus=DATA / "cd_to_dat.stimulus.csv").trace_text for kind, exe in exes.items()}
 
@@ -109,7 +110,7 @@ def test_checksum_per_activation(traces, kind):
 
 
 def test_schedules_give_identical_traces(traces, example_runs):
-    assert traces["sas"] == traces["min-buffer"]
+    assert traces["sas"] == traces["flat"] == traces["min-buffer"]
     # The example's own schedule (sas by default), 10 activations.
     own = example_runs("cd_to_dat").trace_text.splitlines()
     assert own == traces["sas"].splitlines()[:len(own)] and len(own) == 11

@@ -44,7 +44,11 @@ def test_cd2dat_figures(label, graph, with_g):
     assert best.buffer_total == min_total
     assert best.optimal
 
-    for analysis in (sas, best):
+    flat = analyze(graph, "flat")  # every actor's firings in one run, in topological order
+    assert flat.buffer_total == flat_total and flat.single_appearance
+    assert [(f.actor, f.count) for f in flat.schedule.body] == list(expected_reps.items())
+
+    for analysis in (sas, best, flat):
         sizes = verify(graph, analysis.schedule)
         peaks = simulate(graph, analysis.firings(), expected_reps)
         assert dict(analysis.buffers) == sizes == peaks
@@ -53,7 +57,7 @@ def test_cd2dat_figures(label, graph, with_g):
 
 def test_cd2dat_seventh_actor_adds_160_everywhere():
     plain, extended = cd2dat(), cd2dat(with_g=True)
-    for kind in ("sas", "min-buffer"):
+    for kind in ("sas", "flat", "min-buffer"):
         a, b = analyze(plain, kind), analyze(extended, kind)
         assert b.buffer_total - a.buffer_total == 160
         assert b.sas_lower_bound - a.sas_lower_bound == 160

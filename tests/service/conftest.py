@@ -18,7 +18,7 @@ from pathlib import Path
 
 import pytest
 
-from svc_testlib import AVR_NO_TCP, DATA, EXAMPLES, ROOT, AvrFirmware, Firmware
+from svc_testlib import AVR_NO_TCP, DATA, EXAMPLES, ROOT, AvrFirmware, Firmware, InterpFirmware
 SANITIZE = "-g -fsanitize=address,undefined -fno-sanitize-recover=all -fno-omit-frame-pointer"
 
 # ---------------------------------------------------------------- packaging shim
@@ -114,6 +114,27 @@ def build_avr(model: Path, out: Path, env: dict) -> Built:
     return _BUILDS[key]
 
 
+def build_interp(model: Path, out: Path) -> Built:
+    """Local execution needs no build: `exe` is the model file, and the maps
+    are those `easylab run` writes (made here once per session)."""
+    import shutil
+
+    from easylab.frontend import lower_file
+    from easylab.interp.interfaces import Library
+    from easylab.interp.plugins import PluginCache
+
+    key = ("interp", str(model))
+    if key not in _BUILDS:
+        program, result = lower_file(str(model))
+        assert program is not None, result.report()
+        out.mkdir(parents=True, exist_ok=True)
+        for name, path in Library(program, PluginCache()).files.items():
+            if name.startswith("service_map"):
+                shutil.copyfile(path, out / name)
+        _BUILDS[key] = Built(out, model)
+    return _BUILDS[key]
+
+
 # The boards the Modbus RTU conformance tests run on: the host board's
 # process (RTU on a pty), and the AVR firmware (ATmega2560) in simavr with
 # the model's Modbus UART on a pty. A test runs on both with @on_boards
@@ -140,6 +161,8 @@ def builds(shim, tool_env, board, tmp_path_factory):
         model = DATA / f"{name}.elab" if (DATA / f"{name}.elab").exists() else EXAMPLES / f"{name}.elab"
         if board == "avr":  # sanitizers are the host's; a debug build (release: no debug server, same Modbus)
             return build_avr(model, d / name, tool_env)
+        if board == "interp":
+            return build_interp(model, d / f"{name}_interp")
         tag = name + ("_asan" if cflags else "") + ("_rel" if release else "")
         return build_model(model, d / tag, cflags, release)
     return get
@@ -161,7 +184,7 @@ def firmware(tmp_path, board):
     started: list[Firmware] = []
 
     def start(exe, **kw) -> Firmware:
-        fw = (AvrFirmware if board == "avr" else Firmware)(exe, tmp_path, **kw).start()
+        fw = {"avr": AvrFirmware, "interp": InterpFirmware}.get(board, Firmware)(exe, tmp_path, **kw).start()
         started.append(fw)
         return fw
     yield start

@@ -135,6 +135,23 @@ class AvrFirmware(Firmware):
         time.sleep(0.02)  # the link is there before the firmware has opened its UART (about 1 ms of its time)
 
 
+class InterpFirmware(Firmware):
+    """Local execution: `easylab run MODEL` (exe is the model file, real
+    time) serving Modbus TCP and RTU like the host firmware, with the same
+    options and the same life cycle. No HMI."""
+
+    def __init__(self, exe: Path, workdir: Path, tcp: bool = True, rtu: bool = True, hmi: bool = False,
+                 nvram: Path | None = None, extra: list[str] | None = None):
+        import sys
+        assert not hmi, "local execution has no HMI"
+        super().__init__(exe, workdir, tcp, rtu, False, nvram, extra)
+        self.args = [sys.executable, "-m", "easylab", "run", str(exe), *self.args[1:],
+                     "--maps", str(workdir / f"maps{id(self)}")]
+
+    def wait_ready(self, timeout: float = 120.0) -> None:
+        super().wait_ready(timeout)  # the first run of a model compiles its plug-ins and interfaces library
+
+
 # ---------------------------------------------------------------- raw Modbus
 
 
@@ -237,15 +254,17 @@ def read_regs_pdu(fc: int, address: int, count: int) -> bytes:
 def _boards_mark(avr_reason: str | None):
     import pytest
     avr = "avr" if avr_reason is None else pytest.param("avr", marks=pytest.mark.skip(reason=f"host-only: {avr_reason}"))
-    return pytest.mark.parametrize("board", ["host", avr], indirect=True)
+    return pytest.mark.parametrize("board", ["host", avr, "interp"], indirect=True)
 
 
 def host_only(reason: str):
-    """Parametrise a test by board, the AVR board skipped for `reason`."""
+    """Parametrise a test by board, the AVR board skipped for `reason`
+    (local execution runs it: it is the host's)."""
     return _boards_mark(reason)
 
 
-# Run a test on both boards (the fixtures board, builds, svc_all, firmware).
+# Run a test on every board (the fixtures board, builds, svc_all, firmware):
+# the host board, the AVR in simavr, local execution.
 on_boards = _boards_mark(None)
 
 

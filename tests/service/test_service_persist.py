@@ -14,7 +14,7 @@ import time
 
 import pytest
 
-from svc_testlib import Firmware, RawTcp, crc16
+from svc_testlib import Firmware, InterpFirmware, RawTcp, crc16
 
 RECORD, SLOT = 10, 20
 # service_all.elab's persist params in map order: (name, holding address, type, lo, hi, initial)
@@ -91,14 +91,16 @@ def plain(builds):
     return builds("service_all")
 
 
-def start(exe, tmp_path, nvram) -> tuple[Firmware, RawTcp]:
-    fw = Firmware(exe, tmp_path, rtu=False, nvram=nvram).start()
+def start(exe, tmp_path, nvram, board: str = "host") -> tuple[Firmware, RawTcp]:
+    fw = (InterpFirmware if board == "interp" else Firmware)(exe, tmp_path, rtu=False, nvram=nvram).start()
     return fw, RawTcp(fw.port)
 
 
-def test_persisted_params_survive_a_restart(svc_all, tmp_path):
+@pytest.mark.parametrize("board", ["host", "interp"], indirect=True)
+def test_persisted_params_survive_a_restart(svc_all, tmp_path, board):
+    """On the host board and in local execution (`easylab run --nvram`)."""
     nv = tmp_path / "nv.bin"
-    fw, c = start(svc_all.exe, tmp_path, nv)
+    fw, c = start(svc_all.exe, tmp_path, nv, board)
     try:
         assert read_all(c) == {p[0]: p[5] for p in PERSIST}            # erased storage: initial values
         assert not nv.exists()                                          # nothing written before a change
@@ -111,7 +113,7 @@ def test_persisted_params_survive_a_restart(svc_all, tmp_path):
     finally:
         c.close()
         fw.stop()
-    fw, c = start(svc_all.exe, tmp_path, nv)
+    fw, c = start(svc_all.exe, tmp_path, nv, board)
     try:
         assert read_all(c) == new
         assert c.ask(struct.pack(">BHH", 0x03, 100, 1)) == bytes([0x03, 2, 0, 7])

@@ -1,5 +1,6 @@
 """`easylab-service` (host_tools/service_cli.py) against running host
-firmware: list, read, write in the model's units, monitor with a CSV file,
+firmware (and, for reads, writes, backup and restore, against local
+execution: `easylab run`): list, read, write in the model's units, monitor with a CSV file,
 backup and restore; timeouts, exceptions, unknown names and a wrong device
 give one clear line and an exit status, never a traceback."""
 
@@ -44,7 +45,8 @@ def test_list_needs_no_device(svc):
     assert any(line.split()[:3] == ["p_far", "holding", "100"] for line in out.splitlines())
 
 
-def test_read_and_write_in_model_units(svc):
+@pytest.mark.parametrize("board", ["host", "interp"], indirect=True)
+def test_read_and_write_in_model_units(board, svc):
     out = svc(*svc.tcp, "read", "p_i16", "p_f32", "p_time", "p_flag", "m_u32").stdout
     assert out.splitlines() == ["p_i16 = -300 0.1 degC", "p_f32 = 1.5 bar", "p_time = 2000 ms", "p_flag = 0",
                                 "m_u32 = 3000000000"]
@@ -98,7 +100,8 @@ def test_monitor_writes_a_table_and_a_csv(svc, tmp_path):
     assert times == sorted(times) and times[-1] >= 0.14
 
 
-def test_backup_and_restore(svc, tmp_path):
+@pytest.mark.parametrize("board", ["host", "interp"], indirect=True)
+def test_backup_and_restore(board, svc, tmp_path):
     backup = tmp_path / "params.json"
     assert svc(*svc.tcp, "backup", str(backup)).stdout.startswith("backed up 10 params")
     saved = json.loads(backup.read_text())

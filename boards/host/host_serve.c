@@ -1,0 +1,96 @@
+/* EasyLab host board: the file descriptors served between instants (the
+ * debug and Modbus transports, the HMI) and el_port_idle.
+ *
+ * Shared by the host firmware (host_port.c waits for ticks through it) and
+ * by the interfaces library of local execution (host_interp.c), which
+ * serves the same transports for the interpreter.
+ */
+#ifndef _POSIX_C_SOURCE
+#define _POSIX_C_SOURCE 200809L
+#endif
+
+#include "host_internal.h"
+#include "el_dispatch.h"
+
+#include <poll.h>
+#include <time.h>
+
+/* ---- file descriptors served between instants ---- */
+
+typedef struct {
+    int fd;
+    el_host_fd_handler_t handler;
+    void *ctx;
+} watched_t;
+
+static watched_t watched[EL_HOST_MAX_WATCHED];
+static size_t watched_count;
+
+bool el_host_watch_fd(int fd, el_host_fd_handler_t handler, void *ctx)
+{
+    if (watched_count >= EL_HOST_MAX_WATCHED) {
+        el_host_error("too many open connections (at most %u)", (unsigned)EL_HOST_MAX_WATCHED);
+        return false;
+    }
+    watched[watched_count].fd = fd;
+    watched[watched_count].handler = handler;
+    watched[watched_count].ctx = ctx;
+    watched_count++;
+    return true;
+}
+
+void el_host_unwatch_fd(int fd)
+{
+    size_t i;
+    for (i = 0; i < watched_count; i++) {
+        if (watched[i].fd == fd) {
+            watched[i] = watched[watched_count - 1u];
+            watched_count--;
+            return;
+        }
+    }
+}
+
+/* Wait at most timeout_ms (0: just look) for the watched descriptors and
+ * run the handlers of those that are ready. */
+void el_host_serve_fds(int timeout_ms)
+{
+    struct pollfd fds[EL_HOST_MAX_WATCHED];
+    watched_t copy[EL_HOST_MAX_WATCHED];
+    size_t i, n = watched_count;
+    int r;
+    if (n == 0u) {
+        if (timeout_ms > 0) {
+            struct timespec ts;
+            ts.tv_sec = timeout_ms / 1000;
+            ts.tv_nsec = (long)(timeout_ms % 1000) * 1000000L;
+            (void)nanosleep(&ts, NULL);
+        }
+        el_idle();
+        return;
+    }
+    for (i = 0; i < n; i++) {
+        copy[i] = watched[i]; /* handlers may watch or unwatch */
+        fds[i].fd = watched[i].fd;
+        fds[i].events = POLLIN;
+        fds[i].revents = 0;
+    }
+    r = poll(fds, (nfds_t)n, timeout_ms);
+    if (r > 0) {
+        for (i = 0; i < n; i++) {
+            if (fds[i].revents != 0)
+                copy[i].handler(copy[i].fd, fds[i].revents, copy[i].ctx);
+        }
+    }
+    el_idle();
+}
+
+bool el_host_watching(void)
+{
+    return watched_count != 0u;
+}
+
+void el_port_idle(uint16_t max_ms)
+{
+    el_host_serve_fds((int)max_ms);
+}

@@ -1,0 +1,226 @@
+"""The debug and service interfaces of local execution (docs/local.md,
+"Debug and service interfaces").
+
+The interpreter serves the firmware's own servers, not a copy of them: per
+program, the generator's debug and service tables and
+``templates/interp_interfaces.c.j2`` (the model's items, actor state and
+chart slots as C symbols) are compiled with the runtime's debug server,
+Modbus slave and persistent parameters and the host board's transports
+(``boards/host/host_interp.c`` is the port) into one shared library,
+cached like the actor plug-ins. :class:`Interfaces` drives it:
+
+- the actors' state lives in the library (the plug-ins run on it), so the
+  debugger reads and writes the very state the actors use;
+- the published items live in the interpreter; they are copied into the
+  library before each call that may serve a client and back after it, so
+  a client always sees the published values and its writes reach the
+  program at the points the firmware applies them;
+- the interpreter calls the debugger's hooks where the firmware does
+  (instant, task, chart, step, transition, actor), waits for real time in
+  the library (serving the links), and resynchronises its clock after a
+  halt;
+- a model sent with the debug protocol's LOAD requests is handed to the
+  engine, which replaces the program; the links move to the new program's
+  library without a client noticing (``el_interp_handover``).
+"""
+
+from __future__ import annotations
+
+import ctypes
+import hashlib
+import os
+import subprocess
+import threading
+from pathlib import Path
+
+from .. import cgen
+from ..boards import load_board, runtime_dir, templates_dir
+from ..debuggen import protocol_constants
+from ..ir import Program
+from . import values as V
+from .plugins import PluginCache, PluginError
+
+# Runtime and host-board sources of the library (the model's files come
+# from the generator). Everything else the firmware has (dispatcher,
+# stimulus, trace) is the interpreter's.
+RUNTIME_SOURCES = ("el_crc16.c", "el_debug.c", "el_debug_cobs.c", "el_modbus.c", "el_service.c", "el_persist.c",
+                   "el_arith.c")
+BOARD_SOURCES = ("host_interp.c", "host_load.c", "host_serve.c", "host_debug.c", "host_modbus.c", "host_nvram.c", "host_shared.c")
+CFLAGS = ["-std=c99", "-O2", "-Wall", "-Wextra", "-Werror", "-pedantic", "-D_POSIX_C_SOURCE=200809L", "-fPIC",
+          "-shared", "-DEL_DEBUG=1", "-DEL_DEBUG_BOARD_COMMANDS=1"]
+LDFLAGS = ["-Wl,--no-undefined", "-lm"]
+
+# The debug protocol's numbers (probe kinds, LOAD states), from its header.
+K = protocol_constants()
+
+
+class Library:
+    """One program's compiled interfaces library and its generated files
+    (debug_map.json, service_map.json, ... in ``directory``)."""
+
+    def __init__(self, program: Program, cache: PluginCache):
+        self.program = program
+        board = load_board("host")
+        files = cgen.render_interfaces(program, board, templates_dir())
+        runtime, board_dir = runtime_dir(), board.path
+        sources = [runtime / n for n in RUNTIME_SOURCES] + [board_dir / n for n in BOARD_SOURCES]
+        h = hashlib.sha256()
+        for part in ["easylab interfaces library", " ".join(CFLAGS + LDFLAGS), cache.compiler,
+                     cache.compiler_identity, *(f"{n}\0{t}" for n, t in sorted(files.items())),
+                     *(p.read_text(encoding="utf-8") for p in sorted(runtime.glob("*.h"))),
+                     *(p.read_text(encoding="utf-8") for p in sorted(board_dir.glob("*.h"))),
+                     *(p.read_text(encoding="utf-8") for p in sources)]:
+            h.update(part.encode("utf-8"))
+            h.update(b"\0")
+        self.directory = cache.directory / f"interfaces-{h.hexdigest()[:32]}"
+        self.path = self.directory / "libinterfaces.so"
+        if not self.path.is_file():
+            self._compile(files, sources, cache.compiler, runtime, board_dir)
+        try:
+            self.lib = ctypes.CDLL(str(self.path))
+        except OSError as err:
+            raise PluginError(f"cannot load the interfaces library {self.path}: {err}") from None
+        self.files = {name: self.directory / name for name in files}
+
+    def _compile(self, files: dict[str, str], sources: list[Path], compiler: str, runtime: Path,
+                 board_dir: Path) -> None:
+        gen = self.directory
+        try:
+            gen.mkdir(parents=True, exist_ok=True)
+            for name, text in files.items():
+                (gen / name).write_text(text, encoding="utf-8")
+        except OSError as err:
+            raise PluginError(f"cannot write to the plug-in cache {gen}: {err.strerror or err}") from None
+        temp = gen / f"libinterfaces.{os.getpid()}.{threading.get_ident()}.tmp"
+        c_files = [gen / n for n in files if n.endswith(".c")]
+        cmd = [compiler, *CFLAGS, f"-I{gen}", f"-I{runtime}", f"-I{board_dir}", "-o", str(temp),
+               *map(str, c_files + sources), *LDFLAGS]
+        proc = subprocess.run(cmd, capture_output=True, text=True)
+        if proc.returncode != 0:
+            temp.unlink(missing_ok=True)
+            raise PluginError(f"the interfaces library of model '{self.program.name}' does not compile "
+                              f"({compiler}, sources in {gen}):\n{(proc.stdout + proc.stderr).rstrip()}")
+        os.replace(temp, self.path)
+
+
+class Interfaces:
+    """The running side of one program's library: links, item copies,
+    debugger hooks. ``open`` starts the links (adopting those of the
+    library it replaces); every other method is for the engine's thread."""
+
+    def __init__(self, library: Library):
+        self.library = library
+        self.program = library.program
+        lib = library.lib
+        self._fn(lib.el_interp_open, ctypes.c_bool,
+                 [ctypes.c_char_p, ctypes.c_char_p, ctypes.c_char_p, ctypes.c_char_p])
+        for name, res, args in (
+                ("el_interp_set_tick", None, [ctypes.c_uint64]), ("el_interp_idle", None, [ctypes.c_uint16]),
+                ("el_interp_take_resync", ctypes.c_uint8, []), ("el_interp_has_debug", ctypes.c_bool, []),
+                ("el_interp_armed", ctypes.c_uint8, []), ("el_interp_instant", None, []),
+                ("el_interp_task_begin", None, [ctypes.c_uint8]), ("el_interp_task_end", None, []),
+                ("el_interp_probe", None, [ctypes.c_uint8, ctypes.c_uint16, ctypes.c_uint16]),
+                ("el_interp_abort_halt", None, []), ("el_interp_handover", ctypes.c_bool, []),
+                ("el_interp_close", None, []),
+                ("el_interp_take_load", ctypes.c_uint32, [ctypes.POINTER(ctypes.c_void_p)]),
+                ("el_interp_load_result", None, [ctypes.c_uint8, ctypes.c_uint32, ctypes.c_char_p])):
+            self._fn(getattr(lib, name), res, args)
+        self.has_debug = bool(lib.el_interp_has_debug())
+        n_items, n_actors = len(self.program.items), len(self.program.instances)
+        items = (ctypes.c_void_p * max(1, n_items)).in_dll(lib, "el_interp_items")
+        self.items = [(V.ctype(i.type) * i.count).from_address(items[i.id]) for i in self.program.items]
+        states = (ctypes.c_void_p * max(1, n_actors)).in_dll(lib, "el_interp_actor_state")
+        sizes = (ctypes.c_size_t * max(1, n_actors)).in_dll(lib, "el_interp_actor_state_size")
+        self.actor_states = [(states[k], sizes[k]) for k in range(n_actors)]
+        slots = (ctypes.c_void_p * max(1, len(self.program.charts))).in_dll(lib, "el_interp_chart_slots")
+        self.chart_slots = [(ctypes.c_uint8 * c.slots).from_address(slots[c.id]) for c in self.program.charts]
+        self._armed = lib.el_interp_armed
+        self._opened = False
+
+    @staticmethod
+    def _fn(fn, restype, argtypes) -> None:
+        fn.restype = restype
+        fn.argtypes = argtypes
+
+    # ------------------------------------------------------------ life
+
+    def open(self, debug: str | None, modbus_tcp: str | None, modbus_rtu: str | None, nvram: str | None) -> bool:
+        """Open the links (or adopt those handed over) and start the
+        interfaces, as the firmware does at boot. False when a link cannot
+        be opened (the library has said why on stderr)."""
+        # Kept for the library's life: the host board keeps pointers to them (the nvram path).
+        self._open_args = tuple(None if a is None else str(a).encode() for a in (debug, modbus_tcp, modbus_rtu, nvram))
+        self._opened = bool(self.library.lib.el_interp_open(*self._open_args))
+        return self._opened
+
+    def handover(self) -> bool:
+        """Hand the links over to the next program's library."""
+        return bool(self.library.lib.el_interp_handover())
+
+    def close(self) -> None:
+        self.library.lib.el_interp_close()
+
+    def abort_halt(self) -> None:
+        """Let a halted program go, for good (shutting down)."""
+        self.library.lib.el_interp_abort_halt()
+
+    # ------------------------------------------------------------ items
+
+    def push(self, published: list[list], charts) -> None:
+        """The interpreter's published items and chart slots into the library."""
+        for array, values in zip(self.items, published):
+            array[:] = values
+        for array, runner in zip(self.chart_slots, charts):
+            array[:] = [0xFF if s is None else s for s in runner.slots]
+
+    def pull(self, published: list[list]) -> None:
+        """What clients wrote (or persistent storage restored) back into the
+        interpreter's published items."""
+        for k, array in enumerate(self.items):
+            values = array[:]
+            if values != published[k]:
+                published[k] = values
+
+    # ------------------------------------------------------------ hooks
+
+    @property
+    def armed(self) -> bool:
+        """Whether a probe must call into the debug server."""
+        return bool(self._armed())
+
+    def set_tick(self, tick: int) -> None:
+        self.library.lib.el_interp_set_tick(tick)
+
+    def idle(self, max_ms: int) -> None:
+        self.library.lib.el_interp_idle(max_ms)
+
+    def instant(self) -> None:
+        self.library.lib.el_interp_instant()
+
+    def task_begin(self, task: int) -> None:
+        self.library.lib.el_interp_task_begin(task)
+
+    def task_end(self) -> None:
+        self.library.lib.el_interp_task_end()
+
+    def probe(self, kind: int, a: int, b: int = 0) -> None:
+        self.library.lib.el_interp_probe(kind, a, b)
+
+    def take_resync(self) -> bool:
+        return bool(self.library.lib.el_interp_take_resync())
+
+    # ------------------------------------------------------------ model replacement
+
+    def take_load(self) -> bytes | None:
+        """A model text a client committed with LOAD_COMMIT, once."""
+        where = ctypes.c_void_p()
+        size = self.library.lib.el_interp_take_load(ctypes.byref(where))
+        return ctypes.string_at(where.value, size) if size else None
+
+    def load_result(self, state: int, program_id: int = 0, message: str = "") -> None:
+        """What LOAD_STATUS reports (EL_DBG_LOAD_REFUSED, _REPLACED)."""
+        self.library.lib.el_interp_load_result(state, program_id, message.encode("utf-8", "replace"))
+
+
+PROBE = {name: getattr(K, f"P_{name.upper()}") for name in ("instant", "task", "chart", "step", "transition", "actor")}
+LOAD_REFUSED, LOAD_REPLACED = K.LOAD_REFUSED, K.LOAD_REPLACED
