@@ -426,7 +426,8 @@ class Session:
                 self.map = fresh
             else:
                 note = f"; the map {self.map.path} is not the new program's: give its map with --map"
-        self.emit(f"replaced: program 0x{status.program_id:08x} runs" + note,
+        self.emit(f"replaced: program 0x{status.program_id:08x} runs"
+                  + (f" ({status.message})" if status.message else "") + note,
                   {"replaced": True, "program_id": f"0x{status.program_id:08x}"})
 
     def cmd_delete(self, args):

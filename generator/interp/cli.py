@@ -2,7 +2,9 @@
 
 The options mirror the host board's command line (boards/host/README.md):
 ``--fast``, ``--duration T``, ``--stimulus FILE.csv``, ``--trace
-FILE.csv|FILE.vcd``, with the same formats and the same trace, plus
+FILE.csv|FILE.vcd``, with the same formats and the same trace, the
+interfaces ``--debug``, ``--modbus-tcp``, ``--modbus-rtu`` and ``--nvram``
+(served by the firmware's own servers: interfaces.py), plus ``--maps DIR``,
 ``--watch`` (live replacement) and ``--pace X`` (virtual time at X times
 real time). Exit status: 0 the run ended (duration, SIGINT, SIGTERM); 1 a
 model or plug-in error, or an I/O error during the run; 2 a bad command

@@ -511,6 +511,10 @@ class Engine:
             self._load_results.put((LOAD_REFUSED, 0, message))
             self._loading = False
             return
+        if self.is_running(program):  # nothing to replace
+            self._load_results.put((LOAD_REPLACED, program.program_id, "unchanged: the running program"))
+            self._loading = False
+            return
         try:
             self.replace_model(program)
         except PluginError as err:
@@ -668,6 +672,20 @@ class Engine:
             self._index = 0
 
     # ------------------------------------------------------------ replacement
+
+    def is_running(self, program: Program) -> bool:
+        """Whether ``program`` is the running one: the same IR (program id)
+        and the same actor code (plug-in digests)."""
+        from .plugins import plugin_source
+
+        running = self.state
+        if program.program_id != running.program.program_id:
+            return False
+        try:
+            digests = [self.cache.digest(plugin_source(s)) for s in program.specs]
+        except (OSError, ValueError):
+            return False
+        return digests == [p.digest for p in running.plugins]
 
     def replace_model(self, new_program: Program) -> None:
         """Swap in ``new_program`` at the next instant.

@@ -87,8 +87,10 @@ class Library:
         gen = self.directory
         try:
             gen.mkdir(parents=True, exist_ok=True)
-            for name, text in files.items():
-                (gen / name).write_text(text, encoding="utf-8")
+            for name, text in files.items():  # whole files only: another run may be compiling them
+                temp = gen / f"{name}.{os.getpid()}.{threading.get_ident()}.tmp"
+                temp.write_text(text, encoding="utf-8")
+                os.replace(temp, gen / name)
         except OSError as err:
             raise PluginError(f"cannot write to the plug-in cache {gen}: {err.strerror or err}") from None
         temp = gen / f"libinterfaces.{os.getpid()}.{threading.get_ident()}.tmp"

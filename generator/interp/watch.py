@@ -20,7 +20,7 @@ from ..ir import Program
 from ..loader import library_path, load
 from ..source import Diagnostics, SourceCache
 from .engine import Engine
-from .plugins import PluginError, plugin_source
+from .plugins import PluginError
 
 
 def model_files(path: Path, program: Program | None) -> list[Path]:
@@ -95,20 +95,9 @@ class ModelWatcher(threading.Thread):
             self.say(f"{result.report()}\neasylab run: {self.path}: {count} error{'s' if count != 1 else ''}; "
                      f"{running}")
             return
-        if self._unchanged(program):
+        if self.engine.is_running(program):
             return
         try:
             self.engine.replace_model(program)
         except PluginError as err:
             self.say(f"easylab run: error: {err}\neasylab run: {running}")
-
-    def _unchanged(self, program: Program) -> bool:
-        """The same IR and the same actor code: nothing to replace."""
-        running = self.engine.state
-        if program.program_id != running.program.program_id:
-            return False
-        try:
-            digests = [self.engine.cache.digest(plugin_source(s)) for s in program.specs]
-        except (OSError, ValueError):
-            return False
-        return digests == [p.digest for p in running.plugins]

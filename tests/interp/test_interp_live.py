@@ -259,6 +259,8 @@ def test_replacement_over_the_debug_link(programs, reference, tmp_path):
             time.sleep(0.05)
         client = DebugClient.open(str(link), 2.0)
         assert client.hello().program_id == old_id == DebugMap.load(maps / "debug_map.json").program_id
+        same = client.replace_model((LIVE + DEBUG).encode())  # the running model: nothing to swap
+        assert (same.state, same.program_id, same.message) == ("replaced", old_id, "unchanged: the running program")
         refused = client.replace_model((BROKEN + DEBUG).encode())
         assert refused.state == "refused" and "'nowhere'" in refused.message
         assert proc.poll() is None and client.program_id() == old_id
