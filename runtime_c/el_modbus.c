@@ -1,9 +1,11 @@
 /* EasyLab runtime: the Modbus slave (see el_modbus.h). Everything that
  * comes from outside is bounds-checked here: request lengths, quantities,
- * byte counts and address ranges, before any table is touched. */
+ * byte counts and address ranges, before anything is written (a read
+ * checks each address as it fills the response: it changes nothing). */
 #include "el_modbus.h"
 #include "el_crc16.h"
 #include "el_service.h"
+#include "el_model.h" /* EL_T_... */
 
 #define NOT_FOUND 0xFFFFu
 #define ID_STRING_MAX 244u /* one object always fits in a response */
@@ -79,11 +81,14 @@ static bool covered(const el_svc_map_t *m, uint8_t t, uint16_t start, uint16_t q
     return k != NOT_FOUND;
 }
 
-/* The checks every read request (01 to 04) passes, in the specification's
- * order: length and quantity (03), then the address range (02). Returns 0
- * with *start and *qty set, or the length of the exception response. */
-static uint16_t check_read(const el_svc_map_t *m, uint8_t t, uint8_t fc, const uint8_t *req, uint16_t len,
-                           uint16_t max_qty, uint8_t *resp, uint16_t *start, uint16_t *qty)
+/* The checks every read request (01 to 04) passes first, in the
+ * specification's order: length and quantity (03), then the end of the
+ * address range (02). Returns 0 with *start and *qty set, or the length of
+ * the exception response. That every address is served (02 too) is checked
+ * while the response is filled: a read changes nothing, so a hole found
+ * half-way still answers with nothing but the exception. */
+static uint16_t check_read(uint8_t fc, const uint8_t *req, uint16_t len, uint16_t max_qty, uint8_t *resp,
+                           uint16_t *start, uint16_t *qty)
 {
     if (len != 5u)
         return exception(fc, EL_MB_EX_ILLEGAL_VALUE, resp);
@@ -91,17 +96,42 @@ static uint16_t check_read(const el_svc_map_t *m, uint8_t t, uint8_t fc, const u
     *qty = get16(req + 3);
     if (*qty < 1u || *qty > max_qty)
         return exception(fc, EL_MB_EX_ILLEGAL_VALUE, resp);
-    if ((uint32_t)*start + *qty > 0x10000UL || !covered(m, t, *start, *qty))
+    if ((uint32_t)*start + *qty > 0x10000UL)
         return exception(fc, EL_MB_EX_ILLEGAL_ADDRESS, resp);
     return 0u;
+}
+
+/* The entry of table t covering address start + i, from the one covering
+ * the address before (k, for i > 0); NOT_FOUND at a hole. */
+static uint16_t cover(const el_svc_map_t *m, uint8_t t, uint16_t k, uint16_t start, uint16_t i)
+{
+    if (i == 0u)
+        return locate(m, t, start);
+    return next_cover(m, t, k, (uint16_t)(start + i));
+}
+
+/* The register at `address` of the entry at position k of m->order. A
+ * 16-bit value is its own register (most registers are: read directly);
+ * the others go through the service's value conversion. */
+static uint16_t register_at(const el_svc_map_t *m, uint16_t k, uint16_t address)
+{
+    const el_svc_entry_t *e = at(m, k);
+    el_svc_value_t v;
+    uint16_t regs[2];
+    if (e->type == EL_T_I16 || e->type == EL_T_U16)
+        return *(const uint16_t *)e->addr; /* int16_t read as uint16_t: the register's bits */
+    v.u = 0u;
+    (void)el_service_get(m->order[k], &v);
+    el_service_to_regs(e->type, &v, regs);
+    return regs[(uint16_t)(address - e->address) & 1u];
 }
 
 /* ---- 01 / 02: read coils / discrete inputs ---- */
 static uint16_t read_bits(const el_svc_map_t *m, uint8_t fc, const uint8_t *req, uint16_t len, uint8_t *resp)
 {
     uint8_t t = (uint8_t)(fc == 0x01u ? EL_SVC_COIL : EL_SVC_DISCRETE);
-    uint16_t start, qty, i, k, bytes;
-    uint16_t refused = check_read(m, t, fc, req, len, EL_MB_MAX_READ_BITS, resp, &start, &qty);
+    uint16_t start, qty, i, k = NOT_FOUND, bytes;
+    uint16_t refused = check_read(fc, req, len, EL_MB_MAX_READ_BITS, resp, &start, &qty);
     if (refused != 0u)
         return refused;
     bytes = (uint16_t)((qty + 7u) / 8u);
@@ -109,11 +139,11 @@ static uint16_t read_bits(const el_svc_map_t *m, uint8_t fc, const uint8_t *req,
     resp[1] = (uint8_t)bytes;
     for (i = 0u; i < bytes; i++)
         resp[2u + i] = 0u;
-    k = locate(m, t, start);
     for (i = 0u; i < qty; i++) {
         el_svc_value_t v;
-        if (i > 0u)
-            k = next_cover(m, t, k, (uint16_t)(start + i));
+        k = cover(m, t, k, start, i);
+        if (k == NOT_FOUND)
+            return exception(fc, EL_MB_EX_ILLEGAL_ADDRESS, resp);
         if (el_service_get(m->order[k], &v) == EL_SVC_OK && v.u != 0u)
             resp[2u + i / 8u] = (uint8_t)(resp[2u + i / 8u] | (1u << (i % 8u)));
     }
@@ -124,25 +154,17 @@ static uint16_t read_bits(const el_svc_map_t *m, uint8_t fc, const uint8_t *req,
 static uint16_t read_regs(const el_svc_map_t *m, uint8_t fc, const uint8_t *req, uint16_t len, uint8_t *resp)
 {
     uint8_t t = (uint8_t)(fc == 0x03u ? EL_SVC_HOLDING : EL_SVC_INPUT);
-    uint16_t start, qty, i, k;
-    uint16_t refused = check_read(m, t, fc, req, len, EL_MB_MAX_READ_REGS, resp, &start, &qty);
+    uint16_t start, qty, i, k = NOT_FOUND;
+    uint16_t refused = check_read(fc, req, len, EL_MB_MAX_READ_REGS, resp, &start, &qty);
     if (refused != 0u)
         return refused;
     resp[0] = fc;
     resp[1] = (uint8_t)(2u * qty);
-    k = locate(m, t, start);
     for (i = 0u; i < qty; i++) {
-        const el_svc_entry_t *e;
-        el_svc_value_t v;
-        uint16_t regs[2];
-        uint16_t address = (uint16_t)(start + i);
-        if (i > 0u)
-            k = next_cover(m, t, k, address);
-        e = at(m, k);
-        v.u = 0u;
-        (void)el_service_get(m->order[k], &v);
-        el_service_to_regs(e->type, &v, regs);
-        put16(resp + 2u + 2u * i, regs[(uint16_t)(address - e->address) & 1u]);
+        k = cover(m, t, k, start, i);
+        if (k == NOT_FOUND)
+            return exception(fc, EL_MB_EX_ILLEGAL_ADDRESS, resp);
+        put16(resp + 2u + 2u * i, register_at(m, k, (uint16_t)(start + i)));
     }
     return (uint16_t)(2u + 2u * qty);
 }
