@@ -28,7 +28,9 @@ from __future__ import annotations
 
 import ctypes
 import hashlib
+import itertools
 import os
+import shutil
 import subprocess
 import threading
 from pathlib import Path
@@ -45,13 +47,19 @@ from .plugins import PluginCache, PluginError
 # stimulus, trace) is the interpreter's.
 RUNTIME_SOURCES = ("el_crc16.c", "el_debug.c", "el_debug_cobs.c", "el_modbus.c", "el_service.c", "el_persist.c",
                    "el_arith.c")
-BOARD_SOURCES = ("host_interp.c", "host_load.c", "host_serve.c", "host_debug.c", "host_modbus.c", "host_nvram.c", "host_shared.c")
+BOARD_SOURCES = ("host_interp.c", "host_load.c", "host_serve.c", "host_debug.c", "host_modbus.c", "host_nvram.c",
+                 "host_shared.c")
 CFLAGS = ["-std=c99", "-O2", "-Wall", "-Wextra", "-Werror", "-pedantic", "-D_POSIX_C_SOURCE=200809L", "-fPIC",
           "-shared", "-DEL_DEBUG=1", "-DEL_DEBUG_BOARD_COMMANDS=1"]
 LDFLAGS = ["-Wl,--no-undefined", "-lm"]
 
 # The debug protocol's numbers (probe kinds, LOAD states), from its header.
 K = protocol_constants()
+
+# Libraries loaded by this process (see Library._load_fresh).
+_LOADED: set[Path] = set()
+_LOADED_LOCK = threading.Lock()
+_COPIES = itertools.count()
 
 
 class Library:
@@ -76,11 +84,31 @@ class Library:
         self.path = self.directory / "libinterfaces.so"
         if not self.path.is_file():
             self._compile(files, sources, cache.compiler, runtime, board_dir)
-        try:
-            self.lib = ctypes.CDLL(str(self.path))
-        except OSError as err:
-            raise PluginError(f"cannot load the interfaces library {self.path}: {err}") from None
+        self.lib = self._load_fresh()
         self.files = {name: self.directory / name for name in files}
+
+    def _load_fresh(self) -> ctypes.CDLL:
+        """Load the library with its own static storage. A library loaded
+        before in this process (the program ran earlier, was replaced, and
+        comes back) would be the same copy, with that run's links, state and
+        watch table: such a one is loaded from a private copy instead."""
+        with _LOADED_LOCK:
+            again = self.path in _LOADED
+            _LOADED.add(self.path)
+        source = self.path
+        if again:
+            source = self.directory / f"libinterfaces.{os.getpid()}.{next(_COPIES)}.so"
+            try:
+                shutil.copyfile(self.path, source)
+            except OSError as err:
+                raise PluginError(f"cannot copy the interfaces library {self.path}: {err.strerror or err}") from None
+        try:
+            return ctypes.CDLL(str(source))
+        except OSError as err:
+            raise PluginError(f"cannot load the interfaces library {source}: {err}") from None
+        finally:
+            if again:
+                source.unlink(missing_ok=True)  # loaded: the file is no longer needed
 
     def _compile(self, files: dict[str, str], sources: list[Path], compiler: str, runtime: Path,
                  board_dir: Path) -> None:
@@ -137,7 +165,6 @@ class Interfaces:
         slots = (ctypes.c_void_p * max(1, len(self.program.charts))).in_dll(lib, "el_interp_chart_slots")
         self.chart_slots = [(ctypes.c_uint8 * c.slots).from_address(slots[c.id]) for c in self.program.charts]
         self._armed = lib.el_interp_armed
-        self._opened = False
 
     @staticmethod
     def _fn(fn, restype, argtypes) -> None:
@@ -152,8 +179,7 @@ class Interfaces:
         be opened (the library has said why on stderr)."""
         # Kept for the library's life: the host board keeps pointers to them (the nvram path).
         self._open_args = tuple(None if a is None else str(a).encode() for a in (debug, modbus_tcp, modbus_rtu, nvram))
-        self._opened = bool(self.library.lib.el_interp_open(*self._open_args))
-        return self._opened
+        return bool(self.library.lib.el_interp_open(*self._open_args))
 
     def handover(self) -> bool:
         """Hand the links over to the next program's library."""
