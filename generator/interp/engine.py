@@ -416,7 +416,10 @@ class Engine:
 
     ``stimulus`` feeds device data (and, if it has such columns, params and
     vars); ``trace`` records every instant. ``on_replace`` is called with a
-    :class:`Replacement` after every swap."""
+    :class:`Replacement` after every swap. With ``interfaces`` each program
+    runs with its interfaces library (interfaces.py): the debug and service
+    interfaces are served, and a model sent over the debug link replaces
+    the program; ``say`` prints what the run reports (a refused model)."""
 
     def __init__(self, program: Program, plugin_cache: PluginCache | None = None,
                  stimulus: Stimulus | None = None, trace: TraceWriter | None = None,
