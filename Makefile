@@ -20,11 +20,14 @@ DEB_PACKAGES := gcc make pkg-config graphviz tmux socat \
 help:
 	@echo "make setup   install Debian packages (when missing) and the virtual environment"
 	@echo "make test    run the test suite (does set-up first)"
-	@echo "make demo    check, analyse and draw the shipped example models"
-	@echo "make bench   run the benchmarks, results in bench/results/"
-	@echo "make flash BOARD=avr MODEL=m.elab PORT=/dev/ttyACM0 [MCU=atmega2560] [PROGRAMMER=..]  build and burn (avrdude)"
-	@echo "make sim   BOARD=avr MODEL=m.elab [MCU=..] [STIMULUS=s.csv] [TRACE=t.csv] [DURATION=10s]  run in simavr"
+	@echo "make demo    build the PT100 smart sensor for the host board and run it"
+	@echo "make bench   run the benchmarks, results in bench/results/ and docs/benchmarks.md"
+	@echo "make flash BOARD=avr MODEL=m.elab PORT=/dev/ttyACM0 [MCU=..] [PROGRAMMER=..] [BUILD_FLAGS=--release]"
+	@echo "             build and burn with the board's programmer (\`make -n flash ...\` shows the commands)"
+	@echo "make sim   BOARD=avr MODEL=m.elab [MCU=..] [STIMULUS=s.csv] [TRACE=t.csv] [DURATION=10s]"
+	@echo "             build and run in the board's simulator, serial links on ptys in the build folder"
 	@echo "make clean   remove build outputs and the virtual environment"
+	@echo "Boards: $(EASYLAB) boards (EASYLAB_BOARD_PATH adds folders of your own)"
 
 setup: deps venv
 
@@ -37,16 +40,21 @@ deps:
 		echo "Installing Debian packages:" $$missing; \
 		SUDO=$$( [ "$$(id -u)" = 0 ] || echo sudo ); \
 		$$SUDO apt-get update -qq && \
-		DEBIAN_FRONTEND=noninteractive $$SUDO apt-get install -y -qq --no-install-recommends $$missing >/dev/null; \
+		DEBIAN_FRONTEND=noninteractive $$SUDO apt-get install -y -qq -o DPkg::Lock::Timeout=600 \
+			--no-install-recommends $$missing >/dev/null; \
 	fi
 
 venv: $(VENV)/.installed
 
-$(VENV)/.installed: pyproject.toml
-	$(PYTHON) -m venv $(VENV)
-	$(PY) -m pip install -q --upgrade "pip>=23" "setuptools>=64" wheel
-	$(PY) -m pip install -q -e ".[test]"
-	touch $@
+# pip's and setuptools' chatter goes to a log, shown only when the
+# install fails.
+$(VENV)/.installed: pyproject.toml setup.py
+	@echo "Installing the virtual environment in $(VENV)/ (log: $(VENV)/install.log)"
+	@$(PYTHON) -m venv $(VENV)
+	@{ $(PY) -m pip install --upgrade "pip>=23" "setuptools>=64" wheel && \
+	   $(PY) -m pip install -e ".[test]"; } > $(VENV)/install.log 2>&1 || \
+	   { cat $(VENV)/install.log; echo "make: installing the virtual environment failed"; exit 1; }
+	@touch $@
 
 test: setup
 	$(PY) -m pytest -q
@@ -57,34 +65,31 @@ demo: setup
 bench: setup
 	$(PY) bench/run.py
 
-# ---- The AVR board (docs/boards.md): flash with avrdude, simulate in simavr.
-# `make -n flash ...` shows the exact avrdude command. The part names and
-# programmers mirror boards/avr/board.toml: the Uno's bootloader speaks the
-# "arduino" protocol, the Mega 2560's the "wiring" one.
-MCU         ?= atmega328p
-PROGRAMMER  ?= $(if $(filter atmega2560,$(MCU)),wiring,arduino)
-UPLOAD_BAUD ?= 115200
-AVR_PART    := $(if $(filter atmega2560,$(MCU)),m2560,$(if $(filter atmega328p,$(MCU)),m328p,$(MCU)))
-MODEL_NAME  := $(shell sed -n 's/^[[:space:]]*model[[:space:]][[:space:]]*\([A-Za-z_][A-Za-z0-9_]*\).*/\1/p' $(MODEL) 2>/dev/null | head -n 1)
+# ---- Flashing and simulating, for any board (docs/boards.md). The board
+# says which MCU is its default, how it is flashed and how its simulator
+# runs (`easylab flash --print`, `easylab sim --print`); `make -n flash ...`
+# shows the exact commands.
+MODEL_NAME   = $(shell sed -n 's/^[[:space:]]*model[[:space:]][[:space:]]*\([A-Za-z_][A-Za-z0-9_]*\).*/\1/p' $(MODEL) 2>/dev/null | head -n 1)
+MCU_NAME     = $(or $(MCU),$(shell $(EASYLAB) boards --default-mcu $(BOARD)))
+MCU_FLAG     = $(if $(MCU_NAME),--mcu $(MCU_NAME))
+TARGET_NAME  = $(MODEL_NAME)$(if $(MCU_NAME),-$(MCU_NAME),-$(BOARD))
 BUILD_FLAGS ?=
-FLASH_DIR   := build/flash/$(MODEL_NAME)-$(MCU)
-SIM_DIR     := build/sim/$(MODEL_NAME)-$(MCU)
-SIM_UARTS   := $(if $(filter atmega2560,$(MCU)),0 1 2 3,0)
-SIM_ARGS    ?= $(foreach u,$(SIM_UARTS),--uart$(u) pty:$(SIM_DIR)/uart$(u)) \
-	$(if $(STIMULUS),--stimulus $(STIMULUS)) $(if $(TRACE),--trace $(TRACE)) $(if $(DURATION),--duration $(DURATION))
+FLASH_DIR    = build/flash/$(TARGET_NAME)
+SIM_DIR      = build/sim/$(TARGET_NAME)
+FLASH_FLAGS  = $(if $(PROGRAMMER),--programmer $(PROGRAMMER)) $(if $(UPLOAD_BAUD),--baud $(UPLOAD_BAUD))
+SIM_ARGS    ?= $(if $(STIMULUS),--stimulus $(STIMULUS)) $(if $(TRACE),--trace $(TRACE)) \
+	$(if $(DURATION),--duration $(DURATION))
 
 flash: setup
-	$(if $(filter avr,$(BOARD)),,$(error make flash: only BOARD=avr can be flashed))
 	$(if $(PORT),,$(error make flash: give the board's serial port, e.g. PORT=/dev/ttyACM0))
 	$(if $(MODEL_NAME),,$(error make flash: MODEL=$(MODEL) has no model line))
-	$(EASYLAB) build $(MODEL) --board avr --mcu $(MCU) -o $(FLASH_DIR) $(BUILD_FLAGS)
-	avrdude -p $(AVR_PART) -c $(PROGRAMMER) -P $(PORT) -b $(UPLOAD_BAUD) -D -U flash:w:$(FLASH_DIR)/$(MODEL_NAME).hex:i
+	$(EASYLAB) build $(MODEL) --board $(BOARD) $(MCU_FLAG) -o $(FLASH_DIR) $(BUILD_FLAGS)
+	$(or $(shell $(EASYLAB) flash $(MODEL) --board $(BOARD) $(MCU_FLAG) --port $(PORT) -o $(FLASH_DIR) $(FLASH_FLAGS) --print),$(error make flash: board $(BOARD) gives no flash command))
 
 sim: setup
-	$(if $(filter avr,$(BOARD)),,$(error make sim: only BOARD=avr has a simulator))
 	$(if $(MODEL_NAME),,$(error make sim: MODEL=$(MODEL) has no model line))
-	$(EASYLAB) build $(MODEL) --board avr --mcu $(MCU) --sim -o $(SIM_DIR) $(BUILD_FLAGS)
-	$(SIM_DIR)/$(MODEL_NAME)-sim $(SIM_ARGS)
+	$(EASYLAB) build $(MODEL) --board $(BOARD) $(MCU_FLAG) --sim -o $(SIM_DIR) $(BUILD_FLAGS)
+	$(or $(shell $(EASYLAB) sim $(MODEL) --board $(BOARD) $(MCU_FLAG) -o $(SIM_DIR) --print),$(error make sim: board $(BOARD) has no simulator)) $(SIM_ARGS)
 
 clean:
 	rm -rf build bench/results $(VENV) *.egg-info .pytest_cache

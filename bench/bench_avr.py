@@ -122,31 +122,26 @@ def _load(name: str):
 
 def _generate(model: Path, out: Path, mcu: str, schedule: str | None = None):
     """model.c and the AVR board's generated headers of a release build."""
-    from easylab import avrgen
-    from easylab.boards import load_board
+    from easylab.board.registry import load_board
     from easylab.build import generate
-    from easylab.frontend import lower_file
+    from easylab.pipeline import lower_file
 
     program, result = lower_file(model, schedule=schedule)
     if program is None:
         raise SystemExit(result.report())
-    board = avrgen.configure(load_board("avr"), mcu)
-    out.mkdir(parents=True, exist_ok=True)
-    generate(program, board, out, release=True)
-    avrgen.produce(program, board, out, True, avrgen.check(program, board))
+    board = load_board("avr").configure(mcu)
+    generate(program, board, out, release=True, checked=board.check(program))
     return program, board
 
 
 def _compile(board, work: Path, name: str, source: str, extra: list[Path]) -> Path:
-    from easylab.boards import runtime_dir
+    from easylab.board.cbuild import include_flags, runtime_sources
 
     (work / f"{name}.c").write_text(source)
     elf = work / f"{name}.elf"
-    board_sources = [board.path / s for s in board.sources]
-    runtime = [p for p in sorted(runtime_dir().glob("*.c")) if not p.name.startswith("el_debug")]
-    cmd = ["avr-gcc", *board.cflags, *CFLAGS_EXTRA, f"-I{work}", f"-I{runtime_dir()}",
-           *[f"-I{board.path / d}" for d in board.include_dirs], "-o", str(elf), str(work / f"{name}.c"),
-           *map(str, extra), *map(str, board_sources), *map(str, runtime), *board.ldflags]
+    cmd = ["avr-gcc", *board.cflags, *CFLAGS_EXTRA, *include_flags(work, board.description), "-o", str(elf),
+           str(work / f"{name}.c"), *map(str, extra), *map(str, board.description.source_paths),
+           *map(str, runtime_sources(release=True)), *board.description.toolchain.ldflags]
     proc = subprocess.run(cmd, capture_output=True, text=True)
     if proc.returncode != 0:
         raise SystemExit(f"avr-gcc failed for {name}:\n{proc.stderr}")
@@ -154,10 +149,9 @@ def _compile(board, work: Path, name: str, source: str, extra: list[Path]) -> Pa
 
 
 def _flash(elf: Path) -> int:
-    from easylab import avrgen
-    from easylab.boards import load_board
+    from easylab.board.cbuild import elf_sections
 
-    s = avrgen.sections(load_board("avr"), elf)
+    s = elf_sections("avr-size", elf)
     return s.get(".text", 0) + s.get(".data", 0)
 
 
@@ -169,16 +163,16 @@ def _cycles(runner: Path, elf: Path) -> tuple[int, int]:
     return int(cycles), int(check)
 
 
-def measure(name: str, case: dict, tmp: Path, runner: Path) -> dict:
-    from easylab import cgen
+def measure(name: str, case: dict, tmp: Path, runner: Path, tiny: bool = False) -> dict:
+    from easylab.codegen import c_model
 
     work = tmp / re.sub(r"\W+", "_", name)
     program, board = _generate(ROOT / case["model"], work, MCU, case.get("schedule"))
-    view = cgen.build_view(program, board)
+    view = c_model.build_view(program, board)
     df = next(d for d in program.dataflows if d.name == case["dataflow"])
     fields = {k: view.items[program.item(v).id].local for k, v in case["names"].items()}
-    fmt = dict(fields, task=f"el_t{df.task}", fn=f"el_df{df.id}_{cgen.ident(df.name)}")
-    n = max(1, case["activations"] // 10)
+    fmt = dict(fields, task=f"el_t{df.task}", fn=f"el_df{df.id}_{c_model.ident(df.name)}")
+    n = 2 if tiny else max(1, case["activations"] // 10)
     hand = HERE / "handwritten" / case["handwritten"]
     progs = {
         "generated": PROGRAM.format(decls=case["decls"], body=case["generated"].format(**fmt), n=n, setup=""),
@@ -274,13 +268,15 @@ def footprint(tmp: Path) -> list[dict]:
     return rows
 
 
-def examples_sizes(tmp: Path) -> list[dict]:
+def examples_sizes(tmp: Path, tiny: bool = False) -> list[dict]:
     """Every example on the ATmega2560 (debug builds), blink and cd_to_dat
-    on the ATmega328P."""
+    on the ATmega328P (tiny: blink only)."""
     rows = []
     builds = [(p.stem, "atmega2560", []) for p in sorted((ROOT / "examples").glob("*.elab"))]
     builds += [("blink", "atmega328p", []), ("blink", "atmega328p", ["--release"]),
                ("cd_to_dat", "atmega328p", ["--release", "--schedule", "min-buffer"])]
+    if tiny:
+        builds = [b for b in builds if b[0] == "blink"][:1]
     for name, mcu, flags in builds:
         out = tmp / "examples" / f"{name}-{mcu}-{'-'.join(flags) or 'debug'}"
         cmd = [sys.executable, "-m", "easylab", "build", str(ROOT / "examples" / f"{name}.elab"), "--board", "avr",
@@ -304,7 +300,7 @@ uint8_t mb_response[256];
 void el_svc_gen_boot(void);"""
 
 
-def modbus_response(tmp: Path, runner: Path) -> dict:
+def modbus_response(tmp: Path, runner: Path, tiny: bool = False) -> dict:
     """Cycles the slave needs to answer a 125-register read (function 04)
     on the ATmega2560: the request's PDU handled into its response, then
     the RTU frame's CRC over the 251-byte response, as the UART sends it."""
@@ -314,7 +310,7 @@ def modbus_response(tmp: Path, runner: Path) -> dict:
     model.write_text(MODBUS_MODEL)
     program, board = _generate(model, work, MCU)
     extra = [p for p in work.glob("*.c") if p.name not in ("model.c",)]
-    n = 10
+    n = 1 if tiny else 10
     bodies = {
         "pdu": "check += el_mb_pdu(mb_request, 5u, mb_response, false);",
         "pdu_crc": "{ uint16_t len = el_mb_pdu(mb_request, 5u, mb_response, false); "
@@ -334,7 +330,7 @@ def modbus_response(tmp: Path, runner: Path) -> dict:
             "pdu_and_crc_us_at_16mhz": round(frame / 16, 1)}
 
 
-def main(out_dir: Path) -> dict:
+def main(out_dir: Path, tiny: bool = False) -> dict:
     sys.path.insert(0, str(ROOT))
     codegen = _load("bench_codegen")
     results = {}
@@ -346,10 +342,10 @@ def main(out_dir: Path) -> dict:
         (tmp / "runner.c").write_text(RUNNER)
         subprocess.run(["gcc", "-O2", "-o", str(runner), str(tmp / "runner.c"), *pc.stdout.split(), "-lelf"],
                        check=True)
-        results["cycles"] = [measure(name, case, tmp, runner) for name, case in codegen.CASES.items()]
+        results["cycles"] = [measure(name, case, tmp, runner, tiny) for name, case in codegen.CASES.items()]
         results["footprint"] = footprint(tmp)
-        results["examples"] = examples_sizes(tmp)
-        results["modbus"] = modbus_response(tmp, runner)
+        results["examples"] = examples_sizes(tmp, tiny)
+        results["modbus"] = modbus_response(tmp, runner, tiny)
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
     (out_dir / "avr.json").write_text(json.dumps(results, indent=2) + "\n")

@@ -113,12 +113,14 @@ def _instructions(exe: Path, n: int, which: str, fn: str, tmp: Path) -> int:
     return int(m.group(1))
 
 
-def measure(name: str, case: dict, tmp: Path) -> dict:
+def measure(name: str, case: dict, tmp: Path, tiny: bool = False) -> dict:
     """Instructions per activation of the generated and hand-written code."""
     sys.path.insert(0, str(ROOT))
-    from easylab import cgen
-    from easylab.boards import load_board, runtime_dir, templates_dir
-    from easylab.frontend import lower_file
+    from easylab.board.registry import load_board
+    from easylab.codegen import c_model
+    from easylab.codegen.render import render
+    from easylab.core.paths import runtime_dir
+    from easylab.pipeline import lower_file
 
     program, result = lower_file(ROOT / case["model"], schedule=case.get("schedule"))
     if program is None:
@@ -127,18 +129,18 @@ def measure(name: str, case: dict, tmp: Path) -> dict:
     work = tmp / re.sub(r"\W+", "_", name)
     work.mkdir()
     # A release build, as on the AVR (bench_avr.py): no debug interface in the way.
-    (work / "model.c").write_text(cgen.render(program, board, templates_dir(), release=True)["model.c"])
-    view = cgen.build_view(program, board)
+    (work / "model.c").write_text(render(program, board, release=True)["model.c"])
+    view = c_model.build_view(program, board)
     df = next(d for d in program.dataflows if d.name == case["dataflow"])
     fields = {k: view.items[program.item(v).id].local for k, v in case["names"].items()}
-    fmt = dict(fields, task=f"el_t{df.task}", fn=f"el_df{df.id}_{cgen.ident(df.name)}")
+    fmt = dict(fields, task=f"el_t{df.task}", fn=f"el_df{df.id}_{c_model.ident(df.name)}")
     harness = HARNESS.format(decls=case["decls"], generated=case["generated"].format(**fmt), hand=case["hand"])
     (work / "harness.c").write_text(harness)
     exe = work / "bench"
     subprocess.run(["gcc", *CFLAGS, f"-I{runtime_dir()}", f"-I{ROOT / 'boards' / 'host'}", f"-I{work}",
                     "-o", str(exe), str(work / "harness.c"), str(runtime_dir() / "el_arith.c"),
                     str(HANDWRITTEN / case["handwritten"]), "-lm"], check=True)
-    n = case["activations"]
+    n = 5 if tiny else case["activations"]
     same = subprocess.run([str(exe), str(n), "c"], capture_output=True, text=True)
     if same.returncode != 0:
         raise SystemExit(f"{name}: generated and hand-written code disagree: {same.stdout}{same.stderr}")
@@ -149,13 +151,13 @@ def measure(name: str, case: dict, tmp: Path) -> dict:
             "ratio": round(generated / handwritten, 3)}
 
 
-def main(out_dir: Path) -> list[dict]:
+def main(out_dir: Path, tiny: bool = False) -> list[dict]:
     if shutil.which("valgrind") is None:
         raise SystemExit("valgrind is not installed (Debian package: valgrind)")
     rows = []
     with tempfile.TemporaryDirectory() as tmp:
         for name, case in CASES.items():
-            rows.append(measure(name, case, Path(tmp)))
+            rows.append(measure(name, case, Path(tmp), tiny))
     out_dir.mkdir(parents=True, exist_ok=True)
     (out_dir / "codegen.json").write_text(json.dumps(rows, indent=2) + "\n")
     print("generated C against hand-written C (x86-64, gcc -O2, callgrind instructions per activation)")

@@ -83,7 +83,7 @@ def wire_figures(n: int, size: int) -> dict:
 def measure(out_dir: Path, iterations: int = 300) -> dict:
     """Round-trip times over a pty against a host build with 32 int32 vars."""
     from easylab.build import build
-    from easylab.frontend import lower_file
+    from easylab.pipeline import lower_file
 
     with tempfile.TemporaryDirectory() as tmp:
         tmp = Path(tmp)
@@ -127,12 +127,12 @@ def measure(out_dir: Path, iterations: int = 300) -> dict:
     return result
 
 
-def main(out_dir: str | Path = "bench/results") -> dict:
+def main(out_dir: str | Path = "bench/results", tiny: bool = False) -> dict:
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
     wire = {"read_1_int16": wire_figures(1, 2), "read_1_int32": wire_figures(1, 4),
             f"read_{N_VARS}_int16": wire_figures(N_VARS, 2), f"read_{N_VARS}_int32": wire_figures(N_VARS, 4)}
-    measured = measure(out_dir)
+    measured = measure(out_dir, iterations=5 if tiny else 300)
     results = {"baud": BAUD, "bits_per_byte": BITS_PER_BYTE, "max_frame": K.MAX_FRAME,
                "protocol_version": K.PROTOCOL_VERSION, "wire": wire, "measured_pty": measured}
     (out_dir / "debug.json").write_text(json.dumps(results, indent=1) + "\n")

@@ -57,9 +57,10 @@ def _firings_per_activation(program, task_name: str) -> int:
     return total
 
 
-def measure(name: str, activations: int, work: Path) -> dict:
+def measure(name: str, activations: int, work: Path,
+            repeats: tuple[int, int] = (INTERP_REPEATS, NATIVE_REPEATS)) -> dict:
     from easylab.build import build
-    from easylab.frontend import lower_file
+    from easylab.pipeline import lower_file
     from easylab.interp import Engine, PluginCache
     from easylab.interp.engine import InterfaceOptions
 
@@ -85,21 +86,21 @@ def measure(name: str, activations: int, work: Path) -> dict:
         engine.run(duration_us)
         engine.shutdown()
         assert engine.activations[task.name] == activations
-    interp_s = _best(interpret, INTERP_REPEATS)
+    interp_s = _best(interpret, repeats[0])
 
     def interpret_served():
         engine = Engine(program, cache, interfaces=InterfaceOptions())
         engine.run(duration_us)
         engine.shutdown()
         assert engine.activations[task.name] == activations
-    served_s = _best(interpret_served, INTERP_REPEATS)
+    served_s = _best(interpret_served, repeats[0])
 
     exe = build(program, "host", work / f"fw_{name}", release=True).executable
 
     def native(duration: str):
         return lambda: subprocess.run([str(exe), "--fast", "--duration", duration], check=True)
-    startup = _best(native("0us"), NATIVE_REPEATS)
-    native_s = max(_best(native(f"{duration_us}us"), NATIVE_REPEATS) - startup, 1e-9)
+    startup = _best(native("0us"), repeats[1])
+    native_s = max(_best(native(f"{duration_us}us"), repeats[1]) - startup, 1e-9)
     return {
         "model": name, "task": task.name, "activations": activations, "firings_per_activation": firings,
         "interp_s": interp_s, "native_s": native_s, "native_startup_s": startup,
@@ -114,11 +115,12 @@ def measure(name: str, activations: int, work: Path) -> dict:
     }
 
 
-def main(out_dir) -> dict:
+def main(out_dir, tiny: bool = False) -> dict:
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     with tempfile.TemporaryDirectory() as tmp:
-        results = [measure(name, n, Path(tmp)) for name, n in CASES.items()]
+        results = [measure(name, 20 if tiny else n, Path(tmp), (1, 1) if tiny else (INTERP_REPEATS, NATIVE_REPEATS))
+                   for name, n in CASES.items()]
     (out / "interp.json").write_text(json.dumps({"cases": results, "python": sys.version.split()[0],
                                                   "cpus": os.cpu_count()}, indent=2))
     print(f"{'model':<14} {'activations':>11} {'firings/act':>11} {'interp firings/s':>17} "

@@ -35,7 +35,7 @@ if __package__ in (None, ""):
         sys.modules["easylab"] = module
         spec.loader.exec_module(module)
 
-from easylab.sdf import SdfGraph, analyze, check_deadlock, repetition_vector
+from easylab.analysis.sdf import SdfGraph, analyze, check_deadlock, repetition_vector
 
 SIZES = (100, 1_000, 10_000)
 SHAPES = ("chain", "tree", "bigq")
@@ -136,7 +136,9 @@ def _short(value) -> str:
     return f"{value:.2e}" if value >= 10**8 else str(value)
 
 
-def main(out_dir: str | Path = "bench/results", sizes=SIZES, seed: int = SEED) -> list[dict]:
+def main(out_dir: str | Path = "bench/results", tiny: bool = False, sizes=SIZES, seed: int = SEED) -> list[dict]:
+    if tiny:
+        sizes = sizes[:1]
     """Run the benchmark, print a table, write ``out_dir/sdf.json``."""
     rng = random.Random(seed)
     rows = [measure(random_graph(size, shape, rng)) for size in sizes for shape in SHAPES]

@@ -70,19 +70,19 @@ def _client(port: int, stop_at: float, counts: list, k: int) -> None:
 def _rate(port: int, clients: int) -> float:
     counts = [0] * clients
     start = time.monotonic()
-    stop_at = start + DURATION_S
+    stop_at = start + seconds
     threads = [threading.Thread(target=_client, args=(port, stop_at, counts, k)) for k in range(clients)]
     for t in threads:
         t.start()
     for t in threads:
-        t.join(timeout=DURATION_S + 30)
+        t.join(timeout=seconds + 30)
     return sum(counts) / (time.monotonic() - start)
 
 
 def _build_firmware(work: Path) -> Path:
     sys.path.insert(0, str(_package_root(work)))
     from easylab.build import build
-    from easylab.frontend import lower_file
+    from easylab.pipeline import lower_file
     program, result = lower_file(str(MODEL))
     if program is None:
         raise RuntimeError(result.report())
@@ -102,7 +102,7 @@ def _package_root(work: Path) -> Path:
         return shim
 
 
-def tcp_rates(work: Path) -> dict:
+def tcp_rates(work: Path, seconds: float = DURATION_S) -> dict:
     exe = _build_firmware(work)
     port = _free_port()
     proc = subprocess.Popen([str(exe), "--modbus-tcp", str(port), "--duration", "120s"], stdout=subprocess.DEVNULL,
@@ -231,13 +231,13 @@ def avr_sizes(work: Path) -> dict:
     return sizes
 
 
-def main(out_dir) -> dict:
+def main(out_dir, tiny: bool = False) -> dict:
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
     with tempfile.TemporaryDirectory() as tmp:
         work = Path(tmp)
         result = {
-            "tcp_requests_per_s": tcp_rates(work),
+            "tcp_requests_per_s": tcp_rates(work, 0.2 if tiny else DURATION_S),
             "request": "03 read 12 holding registers, loopback, one request in flight per client",
             "instructions": callgrind_instructions(work),
             "avr_text_bytes": avr_sizes(work),

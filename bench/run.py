@@ -27,6 +27,10 @@ def _load(name: str):
 
 
 def main(argv: list[str]) -> int:
+    """``run.py [--tiny] [OUT_DIR [BENCHMARK ...]]``: --tiny runs each at a
+    tiny size (the test suite does, so that no benchmark rots)."""
+    tiny = "--tiny" in argv
+    argv = [a for a in argv if a != "--tiny"]
     out = Path(argv[0]) if argv else HERE / "results"
     wanted = argv[1:] or BENCHMARKS
     failed = []
@@ -36,13 +40,18 @@ def main(argv: list[str]) -> int:
         print(f"\n=== {name}")
         start = time.perf_counter()
         try:
-            _load(name).main(out)
+            _load(name).main(out, tiny=tiny)
         except SystemExit as err:
             if err.code not in (None, 0):
                 print(f"{name}: {err}", file=sys.stderr)
                 failed.append(name)
+        except Exception as err:  # a broken benchmark: report it, run the others
+            print(f"{name}: {type(err).__name__}: {err}", file=sys.stderr)
+            failed.append(name)
         print(f"({name}: {time.perf_counter() - start:.1f} s)")
     print(f"\nresults in {out}/")
+    if failed:
+        print(f"failed: {', '.join(failed)}", file=sys.stderr)
     return 1 if failed else 0
 
 

@@ -15,13 +15,13 @@ from dataclasses import dataclass, field
 from types import SimpleNamespace
 
 from .transport import FrameTransport, TransportError, TransportTimeout
-from ..crc import crc16  # the frames' CRC (re-exported for the tests)
+from ..core.crc import crc16  # the frames' CRC (re-exported for the tests)
 
 # ====================================================================== constants
 
 # The one parser of runtime_c/el_debug_protocol.h, shared with the generator.
-from ..debuggen import parse_protocol_header as parse_header  # noqa: E402
-from ..debuggen import protocol_header_path as header_path  # noqa: E402
+from ..codegen.debug import parse_protocol_header as parse_header  # noqa: E402
+from ..codegen.debug import protocol_header_path as header_path  # noqa: E402
 
 CONSTANTS: dict[str, int] = parse_header(header_path().read_text(encoding="utf-8"))
 K = SimpleNamespace(**CONSTANTS)

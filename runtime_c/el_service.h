@@ -102,6 +102,12 @@ typedef struct {
     uint32_t program_id;
 } el_svc_map_t;
 
+/* The Modbus interfaces the model declares (generated in service_tables.c),
+ * so that a board's command line can refuse to serve one the model lacks. */
+#define EL_SVC_LINK_RTU 0x01u
+#define EL_SVC_LINK_TCP 0x02u
+extern const uint8_t el_svc_modbus_links;
+
 /* Use `map` from now on and load the persisted params (el_persist_load).
  * Called once at boot by the generated interface glue, before the first
  * release. */

@@ -29,7 +29,12 @@ def installed(tmp_path_factory):
     shutil.copytree(ROOT, src, ignore=shutil.ignore_patterns(".venv", "build", ".git", "__pycache__",
                                                              "*.egg-info", ".pytest_cache", ".hypothesis"))
     dist = tmp / "dist"
-    _run([sys.executable, "-m", "pip", "wheel", "--no-deps", "--no-build-isolation", "-q", "-w", str(dist), str(src)])
+    built = _run([sys.executable, "-m", "pip", "wheel", "--no-deps", "--no-build-isolation", "-v", "-w", str(dist),
+                  str(src)])
+    # Every folder of the package is declared (setup.py): setuptools has
+    # nothing to warn about.
+    chatter = built.stdout + built.stderr
+    assert "would be ignored" not in chatter and "SetuptoolsDeprecationWarning" not in chatter, chatter[-3000:]
     wheels = list(dist.glob("easylab-*.whl"))
     assert len(wheels) == 1
     env_dir = tmp / "venv"
@@ -62,16 +67,21 @@ def test_wheel_checks_and_draws_an_example_outside_the_tree(installed):
     out = _run([str(exe), "build", model.name, "--board", "host", "-o", "fw"], cwd=work, env=clean_env)
     program = work / out.stdout.strip().splitlines()[-1]
     assert program.is_file() and program.parent == work / "fw"
+    # The installed boards are found and their backends load from the wheel.
+    out = _run([str(exe), "boards"], cwd=work, env=clean_env)
+    assert out.stdout.startswith("avr: ") and "\nhost: " in out.stdout
 
 
 def test_wheel_carries_the_package_data(installed):
     env_dir, _ = installed
     site = next((env_dir / "lib").glob("python3*/site-packages/easylab"))
-    for rel in ("elab.lark", "stdlib/std.elab", "stdlib/actors/pt100_linearize.c", "templates/model.c.j2",
+    for rel in ("frontend/elab.lark", "stdlib/std.elab", "stdlib/actors/pt100_linearize.c", "templates/model.c.j2",
                 "templates/actor.c.j2", "runtime_c/el_dispatch.c", "runtime_c/el_debug_protocol.h",
                 "boards/host/board.toml", "boards/host/host_port.c", "boards/avr/board.toml",
                 "boards/avr/sim/avr_sim.c", "host_tools/debug_console.py", "interp/engine.py",
                 # local execution's interfaces library is built from these at run time
                 "templates/interp_interfaces.c.j2", "boards/host/host_interp.c", "boards/host/host_load.c",
-                "boards/host/host_serve.c", "interp/interfaces.py"):
+                "boards/host/host_serve.c", "interp/interfaces.py",
+                # the boards' backends and the contract they implement
+                "boards/host/backend.py", "boards/avr/backend.py", "boards/avr/devices.py", "board/contract.py"):
         assert (site / rel).is_file(), rel

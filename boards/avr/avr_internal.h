@@ -2,7 +2,7 @@
  * (avr_port.c, avr_uart.c, avr_nv.c, avr_interfaces.c, the drivers).
  * Generated code includes el_board.h, never this.
  *
- * el_avr_config.h is generated for each build (generator/avrgen.py): the
+ * el_avr_config.h is generated for each build (the board's backend, devices.py): the
  * MCU, the tick timer's settings, the UARTs the model uses and their ring
  * sizes, the debug and Modbus UARTs, the watchdog, EL_AVR_SIM.
  */

@@ -41,6 +41,7 @@
 
 #include "host_internal.h"
 #include "el_modbus_port.h"
+#include "el_service.h"
 
 #include <arpa/inet.h>
 #include <errno.h>
@@ -292,6 +293,11 @@ bool el_host_opt_modbus_rtu(const char *arg)
         el_host_error("--modbus-rtu %s: give pty:LINK (a pseudo-terminal with a symlink LINK to it)", arg);
         return false;
     }
+    if ((el_svc_modbus_links & EL_SVC_LINK_RTU) == 0u) {
+        el_host_error("--modbus-rtu: model %s has no Modbus RTU interface (declare one: `modbus rtu on uart0`)",
+                      el_model_name);
+        return false;
+    }
     read_handed();
     if (handed_rtu >= 0 && strlen(arg + 4) < sizeof link_paths[0]) { /* the pty of the replaced library */
         rtu_fd = handed_rtu;
@@ -474,6 +480,11 @@ bool el_host_opt_modbus_tcp(const char *arg)
     port = strtoul(arg, &end, 10);
     if (arg[0] < '0' || arg[0] > '9' || *end != '\0' || errno != 0 || port < 1u || port > 65535u) {
         el_host_error("--modbus-tcp %s: give a TCP port, 1..65535", arg);
+        return false;
+    }
+    if ((el_svc_modbus_links & EL_SVC_LINK_TCP) == 0u) {
+        el_host_error("--modbus-tcp: model %s has no Modbus TCP interface (declare one: `modbus tcp port %lu`)",
+                      el_model_name, port);
         return false;
     }
     tcp_port_option = (uint16_t)port;

@@ -1,8 +1,11 @@
 """Local execution (mode 2): an interpreter of the IR with the actors' C code
 in compiled plug-ins (docs/local.md).
 
-- :mod:`.engine`: the LET dispatcher, tasks, channels, devices, live
-  replacement (:class:`Engine`, :meth:`Engine.replace_model`);
+- :mod:`.engine`: the LET dispatcher and the run (:class:`Engine`, live
+  replacement with :meth:`Engine.replace_model`);
+- :mod:`.state`: one program at run time (items, tasks, channels, devices);
+- :mod:`.replacement`: what a live replacement carries over;
+- :mod:`.clock`: real time, paced and flat-out virtual time;
 - :mod:`.dataflow`: SDF schedules over the IR's buffers and external nodes;
 - :mod:`.charts`: chart evolution with continuation slots;
 - :mod:`.exprs` and :mod:`.values`: typed expressions with the C arithmetic;
@@ -11,7 +14,9 @@ in compiled plug-ins (docs/local.md).
 - :mod:`.watch` and :mod:`.cli`: ``easylab run [--watch]``.
 """
 
-from .engine import Clock, Engine, Replacement
+from .clock import Clock
+from .engine import Engine
+from .replacement import Replacement
 from .plugins import PluginCache, PluginError
 
 __all__ = ["Clock", "Engine", "PluginCache", "PluginError", "Replacement"]

@@ -13,7 +13,7 @@ from __future__ import annotations
 
 from typing import Callable
 
-from ..ir import Action, Chart, Program
+from ..ir.program import Action, Chart, Program
 from . import values as V
 from .exprs import ExprCompiler
 

@@ -20,7 +20,7 @@ import ctypes
 from dataclasses import dataclass, field
 from typing import Callable
 
-from ..ir import ActorInstance, ActorSpec, Buffer, Dataflow, Program
+from ..ir.program import ActorInstance, ActorSpec, Buffer, Dataflow, Program
 from . import values as V
 from .exprs import Evaluator, ExprCompiler
 from .plugins import BatchOp, Plugin

@@ -5,7 +5,7 @@ Python functions with the arithmetic of the generated C (docs/ir.md,
 An expression becomes the source of one Python function of the task's
 local copies, the chart's step times and its slots, evaluated with
 :func:`eval` once; evaluating it is then one Python call. The node types
-decide the operations exactly as ``cgen.ExprWriter`` does for C: integer
+decide the operations exactly as ``codegen.c_syntax.ExprWriter`` does for C: integer
 ``+ - *`` and negation wrap at the operand type, ``/`` and ``%`` follow
 ``el_div_*``/``el_mod_*``, ``float32`` rounds to single precision after
 every operation (NaNs as the host's FPU makes them), ``time`` saturates,
@@ -17,8 +17,8 @@ from __future__ import annotations
 import math
 from typing import Callable
 
-from .. import irexpr as I
-from .. import types as T
+from ..core import expr as I
+from ..core import types as T
 from . import values as V
 
 # The signature of every compiled expression: (locals, step times, slots).

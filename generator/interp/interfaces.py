@@ -35,10 +35,11 @@ import subprocess
 import threading
 from pathlib import Path
 
-from .. import cgen
-from ..boards import load_board, runtime_dir, templates_dir
-from ..debuggen import protocol_constants
-from ..ir import Program
+from ..board.registry import load_board
+from ..codegen.debug import protocol_constants
+from ..codegen.render import render_interfaces
+from ..core.paths import runtime_dir
+from ..ir.program import Program
 from . import values as V
 from .plugins import PluginCache, PluginError
 
@@ -69,8 +70,8 @@ class Library:
     def __init__(self, program: Program, cache: PluginCache):
         self.program = program
         board = load_board("host")
-        files = cgen.render_interfaces(program, board, templates_dir())
-        runtime, board_dir = runtime_dir(), board.path
+        files = render_interfaces(program, board)
+        runtime, board_dir = runtime_dir(), board.description.folder
         sources = [runtime / n for n in RUNTIME_SOURCES] + [board_dir / n for n in BOARD_SOURCES]
         h = hashlib.sha256()
         for part in ["easylab interfaces library", " ".join(CFLAGS + LDFLAGS), cache.compiler,

@@ -3,7 +3,7 @@ a shared library on first use, cached, and loaded with ctypes.
 
 The C code of an actor is the firmware's, character for character: the
 plug-in source is the actor block of ``templates/model.c.j2`` rendered for
-the specialisation's ``cgen.SpecView`` (state struct, defines, impl prelude,
+the specialisation's ``SpecView`` (state struct, defines, impl prelude,
 start/step/stop functions), followed by a small wrapper that exports the
 fixed plug-in ABI (docs/local.md):
 
@@ -41,9 +41,10 @@ from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 from pathlib import Path
 
-from .. import cgen
-from ..boards import runtime_dir, templates_dir
-from ..ir import ActorSpec
+from ..codegen.c_model import SpecView, spec_view as c_spec_view
+from ..codegen.render import environment
+from ..core.paths import runtime_dir
+from ..ir.program import ActorSpec
 
 PLUGIN_ABI_VERSION = 1
 COMPILER = "gcc"
@@ -75,7 +76,7 @@ def cache_dir() -> Path:
 # ====================================================================== source
 
 
-def spec_view(spec: ActorSpec) -> cgen.SpecView:
+def spec_view(spec: ActorSpec) -> SpecView:
     """The C backend's view of one specialisation, for a stand-alone file.
 
     The specialisation is renamed to id 0 and its type's name, and its
@@ -84,17 +85,17 @@ def spec_view(spec: ActorSpec) -> cgen.SpecView:
     on where the specialisation sits in the program or its file.
     """
     standalone = dataclasses.replace(spec, id=0, c_name=spec.type_name, location=spec.location.rsplit(":", 1)[0])
-    return cgen.spec_view(standalone)
+    return c_spec_view(standalone)
 
 
-def _render_actor_block(view: cgen.SpecView) -> str:
+def _render_actor_block(view: SpecView) -> str:
     """The firmware's actor code for one specialisation (templates/actor.c.j2,
     which model.c.j2 includes), without the debugger's probe: a plug-in is
     not linked with the debug server."""
-    return cgen.environment(templates_dir()).get_template("actor.c.j2").render(s=view, debug=False)
+    return environment().get_template("actor.c.j2").render(s=view, debug=False)
 
 
-def _wrapper(spec: ActorSpec, view: cgen.SpecView) -> str:
+def _wrapper(spec: ActorSpec, view: SpecView) -> str:
     """The exported ABI functions around the block's static functions."""
     prefix = f"el_spec{view.spec.id}_{view.spec.c_name}"
     state = view.state_type

@@ -17,8 +17,8 @@ import re
 from bisect import bisect_right
 from dataclasses import dataclass, field
 
-from .. import types as T
-from ..ir import Program
+from ..core import types as T
+from ..ir.program import Program
 from . import values as V
 
 LINE_MAX = 65536

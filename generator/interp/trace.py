@@ -19,8 +19,8 @@ import math
 from dataclasses import dataclass
 from typing import Callable
 
-from .. import types as T
-from ..ir import Program
+from ..core import types as T
+from ..ir.program import Program
 from . import values as V
 
 _NAN_BITS = {False: 0x7FC00000, True: 0xFFC00000}  # C's NAN and -NAN

@@ -12,7 +12,7 @@ arguments) is a canonical Python value of its language type:
 The functions here are the one place where C's conversions are mirrored:
 storing into a variable (:func:`store`), wrapping integer arithmetic,
 rounding to single precision (:func:`f32`), and the value a C literal
-written by the C backend (``cgen.c_literal``) has in the compiled program
+written by the C backend (``codegen.c_syntax.c_literal``) has in the compiled program
 (:func:`literal`).
 """
 
@@ -24,7 +24,7 @@ import platform
 import struct
 from fractions import Fraction
 
-from .. import types as T
+from ..core import types as T
 
 _FLOAT = struct.Struct("<f")
 _FLOAT_BITS = struct.Struct("<I")
@@ -94,7 +94,7 @@ def zero(t: T.ValueType):
 
 
 def literal(t: T.ValueType, value):
-    """The run-time value of ``cgen.c_literal(t, value)`` once compiled.
+    """The run-time value of ``c_literal(t, value)`` once compiled.
 
     A float32 literal is the decimal text ``repr(float(value))`` with an
     ``f`` suffix, which the C compiler rounds once, from the decimal, to

@@ -15,26 +15,9 @@ import threading
 from pathlib import Path
 from typing import Callable
 
-from ..frontend import lower_file
-from ..ir import Program
-from ..loader import library_path, load
-from ..source import Diagnostics, SourceCache
+from ..pipeline import lower_file, model_files
 from .engine import Engine
 from .plugins import PluginError
-
-
-def model_files(path: Path, program: Program | None) -> list[Path]:
-    """The files a model depends on: itself, its imports, and the impl files
-    of its actors."""
-    files = [path]
-    loaded = load(path, SourceCache(), Diagnostics())
-    if loaded is not None:
-        for module in loaded.modules:
-            name = module.file
-            files.append(library_path(name[1:-1]) if name.startswith("<") and name.endswith(">") else Path(name))
-    if program is not None:
-        files += [Path(s.impl) for s in program.specs if s.impl]
-    return list(dict.fromkeys(files))
 
 
 def _stamp(files: list[Path]) -> tuple:

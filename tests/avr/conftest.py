@@ -1,5 +1,6 @@
 """Session fixtures of the AVR tests: each build made once (in parallel
-threads: avr-gcc, gcc and the harness build are separate processes)."""
+threads: avr-gcc, gcc and the harness build are separate processes), in
+the session's shared build cache."""
 
 from __future__ import annotations
 
@@ -8,24 +9,22 @@ from pathlib import Path
 
 import pytest
 
-from avr_testlib import EXAMPLES, avr_build, host_build
+from avr_testlib import EXAMPLE_NAMES
 
 
 @pytest.fixture(scope="session")
-def sim_builds(tmp_path_factory) -> dict:
+def sim_builds(build_cache) -> dict:
     """example name -> Built: a simulation build for the ATmega2560 (debug
     build, with its simavr harness)."""
-    root = tmp_path_factory.mktemp("avr_sim")
     with ThreadPoolExecutor(max_workers=2) as pool:
-        futures = {p.stem: pool.submit(avr_build, p, root / p.stem, "--mcu", "atmega2560", "--sim")
-                   for p in EXAMPLES}
+        futures = {name: pool.submit(build_cache.example, "avr", name, "--mcu", "atmega2560", "--sim")
+                   for name in EXAMPLE_NAMES}
         return {name: f.result() for name, f in futures.items()}
 
 
 @pytest.fixture(scope="session")
-def host_builds(tmp_path_factory) -> dict:
+def host_builds(build_cache) -> dict:
     """example name -> the host board's program."""
-    root = tmp_path_factory.mktemp("avr_host_ref")
     with ThreadPoolExecutor(max_workers=2) as pool:
-        futures = {p.stem: pool.submit(host_build, p, root / p.stem) for p in EXAMPLES}
-        return {name: Path(f.result()) for name, f in futures.items()}
+        futures = {name: pool.submit(build_cache.example, "host", name) for name in EXAMPLE_NAMES}
+        return {name: Path(f.result().executable) for name, f in futures.items()}

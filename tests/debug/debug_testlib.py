@@ -30,7 +30,7 @@ from easylab.host_tools.debug_protocol import DebugClient  # noqa: E402
 def build(model: Path, out: Path, release: bool = False, cc: str | None = None) -> Path:
     """Build a model for the host board; returns the executable."""
     from easylab.build import build as do_build
-    from easylab.frontend import lower_file
+    from easylab.pipeline import lower_file
 
     program, result = lower_file(model)
     assert program is not None, result.report()

@@ -10,9 +10,10 @@ import subprocess
 import pytest
 
 from debug_testlib import EXAMPLES, MODELS, build
-from easylab import cgen
-from easylab.boards import load_board, templates_dir
-from easylab.frontend import lower_file
+from easylab.board.registry import load_board
+from easylab.codegen import render as cgen
+from easylab.core.paths import templates_dir
+from easylab.pipeline import lower_file
 
 
 def render(model, release=False):

@@ -9,7 +9,7 @@ from pathlib import Path
 
 import pytest
 
-from easylab.frontend import check_file
+from easylab.pipeline import check_file
 
 ROOT = Path(__file__).resolve().parents[2]
 

@@ -13,8 +13,8 @@ from textwrap import dedent
 
 import pytest
 
-from easylab.frontend import check_file
-from easylab.loader import library_path
+from easylab.pipeline import check_file
+from easylab.frontend.loader import library_path
 
 
 @dataclass(frozen=True)

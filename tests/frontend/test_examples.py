@@ -8,8 +8,8 @@ from pathlib import Path
 
 import pytest
 
-from easylab import types as T
-from easylab.frontend import check_file
+from easylab.core import types as T
+from easylab.pipeline import check_file
 
 ROOT = Path(__file__).resolve().parents[2]
 EXAMPLES = sorted((ROOT / "examples").glob("*.elab"))
@@ -222,8 +222,8 @@ def test_all_features_model():
 def test_schedule_kinds_in_the_model_and_their_errors():
     """`schedule flat` is the flat single-appearance schedule; a dataflow
     that has none is an error at its name, and sas schedules it."""
-    from easylab.analysis import analyze_dataflow
-    from easylab.source import Diagnostics
+    from easylab.analysis.dataflow import analyze_dataflow
+    from easylab.core.source import Diagnostics
 
     model = Path(__file__).parent / "models" / "no_flat_schedule.elab"
     result = check_file(model)

@@ -10,9 +10,11 @@ import interegular  # noqa: F401  (strict mode needs it to look for terminal col
 import lark
 import pytest
 
-from easylab import parser as P
-from easylab.loader import library_path
-from easylab.source import ModelError
+from easylab.frontend import parser as P
+from easylab.frontend import syntax_errors as E
+from easylab.frontend.grammar import grammar_text
+from easylab.frontend.loader import library_path
+from easylab.core.source import ModelError
 
 ROOT = Path(__file__).resolve().parents[2]
 
@@ -21,16 +23,16 @@ ROOT = Path(__file__).resolve().parents[2]
 def test_grammar_is_strict_lalr(lexer):
     """No shift/reduce or reduce/reduce conflict, no two terminals that can
     match the same text (strict mode raises GrammarError or LexError)."""
-    lark.Lark(P._grammar_text(), parser="lalr", lexer=lexer, strict=True)
+    lark.Lark(grammar_text(), parser="lalr", lexer=lexer, strict=True)
 
 
 def test_strict_mode_really_looks_for_collisions():
-    colliding = P._grammar_text() + '\nFOO_NAME: /f[a-z]+/\nstart2: FOO_NAME\n'
+    colliding = grammar_text() + '\nFOO_NAME: /f[a-z]+/\nstart2: FOO_NAME\n'
     with pytest.raises(lark.exceptions.LexError, match="Collision"):
         lark.Lark(colliding, parser="lalr", lexer="basic", strict=True, start=["start", "start2"])
-    conflicting = P._grammar_text().replace("?sum_expr: product | sum_expr (PLUS | MINUS) product -> binary",
+    conflicting = grammar_text().replace("?sum_expr: product | sum_expr (PLUS | MINUS) product -> binary",
                                             "?sum_expr: product | sum_expr (PLUS | MINUS) sum_expr -> binary")
-    assert conflicting != P._grammar_text()
+    assert conflicting != grammar_text()
     with pytest.raises(lark.exceptions.GrammarError, match="conflict"):
         lark.Lark(conflicting, parser="lalr", strict=True)
 
@@ -95,7 +97,7 @@ def test_inline_c_keeps_positions_and_text():
     assert (var.span.line, var.span.column) == (6, 1)  # lines after the block are where they were
 
 
-@pytest.mark.parametrize("label, example", [(label, example) for label, examples in P._EXAMPLES.items()
+@pytest.mark.parametrize("label, example", [(label, example) for label, examples in E._EXAMPLES.items()
                                             for example in examples])
 def test_every_example_mistake_still_fails_with_its_message(label, example):
     """The table of common mistakes is matched by parser state: a grammar
@@ -103,6 +105,6 @@ def test_every_example_mistake_still_fails_with_its_message(label, example):
     with pytest.raises(ModelError) as info:
         P.parse_text(example)
     [diagnostic] = info.value.diagnostics
-    if label == P._EQUALS_IN_EXPRESSION:
+    if label == E._EQUALS_IN_EXPRESSION:
         label = "compare with '==': '=' only assigns"
     assert diagnostic.message.endswith(": " + label)

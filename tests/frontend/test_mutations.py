@@ -17,7 +17,7 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from easylab.frontend import check_file
+from easylab.pipeline import check_file
 
 ROOT = Path(__file__).resolve().parents[2]
 # The examples, and a model with every construct of the language once.

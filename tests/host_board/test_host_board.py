@@ -35,9 +35,9 @@ VALID_COLUMNS = ("valid columns: time_us, gain, limit, count, over, delta, level
 def _sources():
     """The firmware's board sources (board.toml; the folder also holds local
     execution's interfaces library files) and the fixture's model."""
-    from easylab.boards import load_board
+    from easylab.board.registry import load_board
 
-    return [str(BOARD / s) for s in load_board("host").sources] + [str(HERE / "model.c")]
+    return [str(BOARD / s) for s in load_board("host").description.sources] + [str(HERE / "model.c")]
 
 
 def _build(out: Path, cc: str, flags: list[str]) -> Path:

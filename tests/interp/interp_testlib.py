@@ -11,10 +11,10 @@ import struct
 import subprocess
 from pathlib import Path
 
-from easylab import types as T
+from easylab.core import types as T
 from easylab.build import build
 from easylab.cli import main as easylab_main
-from easylab.frontend import lower_file
+from easylab.pipeline import lower_file
 
 HERE = Path(__file__).resolve().parent
 ROOT = HERE.parents[1]

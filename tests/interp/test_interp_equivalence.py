@@ -84,7 +84,7 @@ def test_other_schedules(name, schedule, tmp_path):
     """`--schedule` changes the firmware's buffers (rings, or linear ones with
     delays and a self-loop), not the values."""
     from easylab.build import build
-    from easylab.frontend import lower_file
+    from easylab.pipeline import lower_file
 
     model, stimulus, duration = CASES[name]
     program, result = lower_file(model, schedule=schedule)

@@ -12,11 +12,11 @@ import subprocess
 
 import pytest
 
-from easylab import types as T
-from easylab.boards import runtime_dir
+from easylab.core import types as T
+from easylab.core.paths import runtime_dir
 from easylab.interp import values as V
 from easylab.interp.exprs import ExprCompiler
-from easylab import irexpr as I
+from easylab.core import expr as I
 
 
 def _run_c(tmp_path, body: str) -> list[str]:

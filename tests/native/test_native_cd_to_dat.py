@@ -9,7 +9,7 @@ from concurrent.futures import ThreadPoolExecutor
 
 import pytest
 
-from easylab.sdf.analysis import SCHEDULE_KINDS
+from easylab.analysis.sdf.analysis import SCHEDULE_KINDS
 from native_testlib import DATA, M32, ROOT, SANITIZE, Sdf, VarSink, build, run
 
 ACTIVATIONS = 20  # the task runs every 20 ms

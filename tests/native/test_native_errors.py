@@ -34,9 +34,9 @@ def test_compiler_given_with_cc_is_missing(tmp_path):
 def test_board_compiler_missing_names_the_debian_package(board, tmp_path):
     """With no compiler on PATH, the board's own compiler is reported with
     the Debian package that provides it."""
-    from easylab.boards import load_board
+    from easylab.board.registry import load_board
 
-    cc = load_board(board).cc
+    cc = load_board(board).description.toolchain.cc
     empty = tmp_path / "bin"
     empty.mkdir()
     env = dict(os.environ, PATH=str(empty))

@@ -8,7 +8,7 @@ from fractions import Fraction
 
 from hypothesis import strategies as st
 
-from easylab.sdf import SdfGraph
+from easylab.analysis.sdf import SdfGraph
 
 # Repetition counts drawn from the divisors of 12 keep every reduced ratio
 # q[u] : q[v] within 12, so rates up to 12 can always balance an edge.

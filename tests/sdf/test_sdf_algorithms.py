@@ -9,8 +9,8 @@ from pathlib import Path
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from easylab.sdf import DeadlockError, SdfGraph, analyze, check_deadlock, repetition_vector, verify
-from easylab.sdf.dppo import dppo, nesting_cost
+from easylab.analysis.sdf import DeadlockError, SdfGraph, analyze, check_deadlock, repetition_vector, verify
+from easylab.analysis.sdf.dppo import dppo, nesting_cost
 from sdf_testlib import consistent_graphs, simulate
 
 

@@ -4,7 +4,7 @@ from pathlib import Path
 
 import pytest
 
-from easylab.sdf import analyze, load_sdf3, repetition_vector, verify
+from easylab.analysis.sdf import analyze, load_sdf3, repetition_vector, verify
 from sdf_testlib import cd2dat, simulate
 
 DATA = Path(__file__).parent / "data"

@@ -4,22 +4,9 @@ import re
 
 import pytest
 
-from easylab.sdf import (
-    DeadlockError,
-    Fire,
-    GraphError,
-    InconsistentGraphError,
-    Loop,
-    Schedule,
-    ScheduleError,
-    SdfEdge,
-    SdfGraph,
-    SdfOptions,
-    analyze,
-    check_deadlock,
-    repetition_vector,
-    verify,
-)
+from easylab.analysis.sdf import (DeadlockError, Fire, GraphError, InconsistentGraphError, Loop, Schedule,
+                                  ScheduleError, SdfEdge, SdfGraph, SdfOptions, analyze, check_deadlock,
+                                  repetition_vector, verify)
 from sdf_testlib import cycle_completes
 
 

@@ -8,15 +8,8 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from easylab.sdf import (
-    DeadlockError,
-    InconsistentGraphError,
-    SdfEdge,
-    SdfGraph,
-    analyze,
-    repetition_vector,
-    verify,
-)
+from easylab.analysis.sdf import (DeadlockError, InconsistentGraphError, SdfEdge, SdfGraph, analyze,
+                                  repetition_vector, verify)
 from sdf_testlib import consistent_graphs, cycle_completes, simulate
 
 SETTINGS = settings(

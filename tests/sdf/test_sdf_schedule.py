@@ -2,7 +2,7 @@
 
 import pytest
 
-from easylab.sdf import Fire, Loop, Schedule, repeat, verify
+from easylab.analysis.sdf import Fire, Loop, Schedule, repeat, verify
 from sdf_testlib import cd2dat, simulate
 
 CD2DAT_SCHEDULE = Schedule((

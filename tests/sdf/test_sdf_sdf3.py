@@ -4,7 +4,7 @@ from pathlib import Path
 
 import pytest
 
-from easylab.sdf import Sdf3Error, analyze, load_sdf3
+from easylab.analysis.sdf import Sdf3Error, analyze, load_sdf3
 
 DATA = Path(__file__).parent / "data"
 

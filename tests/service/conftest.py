@@ -79,7 +79,7 @@ _BUILDS: dict = {}
 
 def build_model(model: Path, out: Path, cflags: str = "", release: bool = False) -> Built:
     from easylab.build import build
-    from easylab.frontend import lower_file
+    from easylab.pipeline import lower_file
 
     key = (str(model), cflags, release)
     if key not in _BUILDS:
@@ -119,7 +119,7 @@ def build_interp(model: Path, out: Path) -> Built:
     are those `easylab run` writes (made here once per session)."""
     import shutil
 
-    from easylab.frontend import lower_file
+    from easylab.pipeline import lower_file
     from easylab.interp.interfaces import Library
     from easylab.interp.plugins import PluginCache
 

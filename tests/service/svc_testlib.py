@@ -158,7 +158,7 @@ class InterpFirmware(Firmware):
 
 def crc16(data: bytes) -> int:
     """CRC-16/MODBUS (easylab.crc, the project's one Python copy)."""
-    from easylab.crc import crc16 as crc
+    from easylab.core.crc import crc16 as crc
 
     return crc(data)
 

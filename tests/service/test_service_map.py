@@ -29,7 +29,7 @@ var i: int8 service ro
 
 
 def lower(tmp_path, text: str, name: str = "m.elab"):
-    from easylab.frontend import lower_file
+    from easylab.pipeline import lower_file
     path = tmp_path / name
     path.write_text(text)
     program, result = lower_file(str(path))
@@ -38,7 +38,7 @@ def lower(tmp_path, text: str, name: str = "m.elab"):
 
 
 def test_tables_and_addresses(shim, tmp_path):
-    from easylab import servicegen
+    from easylab.codegen import service as servicegen
     smap = servicegen.build_map(lower(tmp_path, MODEL))
     got = {e.name: (e.id, e.table, e.address, e.registers) for e in smap.entries}
     assert got == {
@@ -56,7 +56,7 @@ def test_tables_and_addresses(shim, tmp_path):
 
 
 def test_automatic_addresses_are_stable(shim, tmp_path):
-    from easylab import servicegen
+    from easylab.codegen import service as servicegen
     before = {e.name: e.address for e in servicegen.build_map(lower(tmp_path, MODEL)).entries}
     more = MODEL + "param z: int32 = 0 service rw\nvar y: bool service rw\n"
     after = {e.name: e.address for e in servicegen.build_map(lower(tmp_path, more, "m2.elab")).entries}
@@ -73,7 +73,7 @@ def test_clashes_are_build_errors_naming_both(shim, tmp_path, tool_env):
     # The checker reports the clash with the source line (the map builder
     # checks again, for what the checker cannot see).
     assert proc.stderr.startswith(f"{model}:3:20: error: holding register 11 of 'b' overlaps 'a' (10..11)\n")
-    from easylab import servicegen
+    from easylab.codegen import service as servicegen
     with pytest.raises(servicegen.ServiceMapError, match="runs past 65535"):
         servicegen.build_map(lower(tmp_path, "model x\nparam a: int32 = 0 service rw @ 65535\n", "x.elab"))
     many = "model y\n" + "".join(f"param p{k}: int16 = 0 service rw persist\n" for k in range(205))
@@ -82,8 +82,9 @@ def test_clashes_are_build_errors_naming_both(shim, tmp_path, tool_env):
 
 
 def test_map_files(shim, tmp_path):
-    from easylab import cgen, servicegen
-    from easylab.boards import load_board, templates_dir
+    from easylab.board.registry import load_board
+    from easylab.codegen import render as cgen, service as servicegen
+    from easylab.core.paths import templates_dir
     program = lower(tmp_path, MODEL + "modbus tcp port 1502\nmodbus rtu on uart1 baud 9600 parity odd unit 9\n")
     files = cgen.render(program, load_board("host"), templates_dir())
     assert files == cgen.render(program, load_board("host"), templates_dir())   # deterministic
@@ -111,9 +112,10 @@ def test_map_files(shim, tmp_path):
 
 
 def test_every_example_has_a_map(shim):
-    from easylab import cgen
-    from easylab.boards import load_board, templates_dir
-    from easylab.frontend import lower_file
+    from easylab.board.registry import load_board
+    from easylab.codegen import render as cgen
+    from easylab.core.paths import templates_dir
+    from easylab.pipeline import lower_file
     for path in sorted(EXAMPLES.glob("*.elab")):
         program, result = lower_file(str(path))
         assert program is not None, result.report()

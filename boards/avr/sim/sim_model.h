@@ -1,5 +1,5 @@
 /* EasyLab AVR board, simulator harness: what the generated sim_model.c of a
- * build tells the harness (generator/avrgen.py, sim_model_source).
+ * build tells the harness (the board's backend, simulator.py: sim_model_source).
  *
  * The el_model.h tables (el_items, el_charts, ...) describe the model as
  * in the firmware, but their addresses point at host-side mirrors: the

@@ -1,0 +1,345 @@
+"""The AVR board's generated files (docs/boards.md, "The AVR board"):
+el_avr_config.h (the LET tick's timer, UART rings, watchdog, the
+interfaces' UARTs), el_avr_devices.h and .c (one ``static const``
+description per device for its driver, the drivers' interrupt handlers)
+and hw_map.json (device data -> pins, ADC channels, UARTs)."""
+
+from __future__ import annotations
+
+import json
+import math
+import re
+from dataclasses import dataclass
+
+from easylab.board.resources import Resolved, parse_claim
+from easylab.board.simtables import item_symbol
+from easylab.core.errors import BuildError
+from easylab.ir.program import Program
+
+from .parts import Mcu
+
+CONFIG_VERSION = 1
+# The shortest LET tick the board takes: the tick interrupt and the
+# dispatcher's instant take some hundred cycles.
+MIN_TICK_US = 50
+
+# Timer2's clock selects (CS2 bits) by prescaler.
+_TIMER2_PRESCALERS = {1: 1, 8: 2, 32: 3, 64: 4, 128: 5, 256: 6, 1024: 7}
+_WDTO = {15: "WDTO_15MS", 30: "WDTO_30MS", 60: "WDTO_60MS", 120: "WDTO_120MS", 250: "WDTO_250MS",
+         500: "WDTO_500MS", 1000: "WDTO_1S", 2000: "WDTO_2S", 4000: "WDTO_4S", 8000: "WDTO_8S"}
+_PIN = re.compile(r"^P([A-L])([0-7])$")
+
+
+# ====================================================================== the tick
+
+
+@dataclass
+class TickTimer:
+    prescale: int
+    cs: int
+    ocr: int  # TOP: period ocr + 1 timer clocks
+    isrs: int  # interrupts per tick
+    exact: bool
+    drift_ppm: float
+
+    @property
+    def isr_cycles(self) -> int:
+        return self.prescale * (self.ocr + 1)
+
+
+def tick_timer(tick_us: int, clock_hz: int) -> TickTimer:
+    """Timer2 settings for a LET tick of ``tick_us``: an interrupt every
+    prescale * (ocr + 1) cycles, ``isrs`` of them per tick; exact (no drift
+    against the crystal) whenever some setting divides the tick with
+    interrupts no closer than 50 us, preferring the longest interrupt
+    period up to 1 ms, then the smallest prescaler."""
+    if (tick_us * clock_hz) % 1_000_000:
+        cycles = None
+    else:
+        cycles = tick_us * clock_hz // 1_000_000
+    ms = clock_hz // 1000
+    shortest = ms // 20  # interrupts at most every 50 us
+    best = None
+    if cycles:
+        for p, cs in _TIMER2_PRESCALERS.items():
+            for c in range(2, 257):
+                period = p * c
+                if cycles % period or cycles // period > 65535 or (period < shortest and period != cycles):
+                    continue
+                n = cycles // period
+                key = (period <= ms, period if period <= ms else -period, -c)
+                if best is None or key > best[0]:
+                    best = (key, TickTimer(p, cs, c - 1, n, True, 0.0))
+    if best is not None:
+        return best[1]
+    # No exact setting: the nearest product, with interrupts no more often
+    # than every 50 us; it drifts by its rounding error against the crystal.
+    want = tick_us * clock_hz / 1_000_000
+    near = None
+    for p, cs in _TIMER2_PRESCALERS.items():
+        for c in range(2, 257):
+            period = p * c
+            if period < shortest:
+                continue
+            n = max(1, min(65535, round(want / period)))
+            key = (abs(n * period - want), abs(period - ms))
+            if near is None or key < near[0]:
+                near = (key, TickTimer(p, cs, c - 1, n, False, (n * period - want) / want * 1e6))
+    return near[1]
+
+
+# ====================================================================== generated files
+
+
+@dataclass
+class DeviceView:
+    """One device's description for its driver (C) and the harness."""
+
+    id: int
+    path: str
+    driver: str
+    location: str
+    c_type: str
+    init: str
+    header: str
+    hw: dict  # for hw_map.json and the harness
+    state_type: str | None = None
+    irq_fn: str | None = None
+
+
+def _item_c(program: Program, item_id: int) -> tuple[str, str]:
+    return item_symbol(program, item_id), program.items[item_id].type.c_name
+
+
+def _pin_regs(pin: str) -> tuple[str, str, int]:
+    m = _PIN.match(pin)
+    return f"&PIN{m.group(1)}", f"_BV({m.group(2)})", int(m.group(2))
+
+
+def _pwm_init(mcu: Mcu, pin: str) -> tuple[str, dict]:
+    timer, ch = mcu.pwm[pin]
+    wide = timer in mcu.wide_timers
+    com = {"A": 7, "B": 5, "C": 3}[ch]
+    ocr = f"&OCR{timer}{ch}L" if wide else f"&OCR{timer}{ch}"
+    pin_reg, mask, _ = _pin_regs(pin)
+    init = (f"{{ &TCCR{timer}A, (volatile uint8_t *){ocr}, _BV({com}), {1 if wide else 0}u, {pin_reg}, {mask}, ")
+    return init, {"timer": timer, "channel": ch, "pin": pin}
+
+
+def device_views(program: Program, board) -> list[DeviceView]:
+    mcu = board.part
+    specs = board.drivers
+    views = []
+    for dev in program.devices:
+        spec = specs[dev.driver]
+        claims = [parse_claim(c) for c in dev.claims]
+        items = [_item_c(program, i)[0] for i in dev.items]
+        comment = f"{dev.path} ({dev.location})"
+        d = dev.driver
+        data_names = [program.items[i].name for i in dev.items]
+        if d == "analog_in":
+            ch = claims[0][1]
+            v = DeviceView(dev.id, dev.path, d, dev.location, "el_drv_analog_in_t", f"{{ {ch}u, &{items[0]} }}",
+                           spec["header"], {"adc": ch, "pin": mcu.adc[ch]})
+        elif d in ("digital_in", "digital_out"):
+            pin = claims[0][1]
+            reg, mask, _ = _pin_regs(pin)
+            v = DeviceView(dev.id, dev.path, d, dev.location, f"el_drv_{d}_t", f"{{ {reg}, {mask}, &{items[0]} }}",
+                           spec["header"], {"pin": pin})
+        elif d == "pwm_out":
+            pin = claims[0][1]
+            init, hw = _pwm_init(mcu, pin)
+            v = DeviceView(dev.id, dev.path, d, dev.location, "el_drv_pwm_out_t", init + f"&{items[0]} }}",
+                           spec["header"], {"pwm": hw})
+        elif d == "motor":
+            pin = claims[0][1]
+            dir_pin = claims[1][1]
+            init, hw = _pwm_init(mcu, pin)
+            reg, mask, _ = _pin_regs(dir_pin)
+            v = DeviceView(dev.id, dev.path, d, dev.location, "el_drv_motor_t",
+                           f"{{ {init}(int16_t *)0 }}, {reg}, {mask}, &{items[0]} }}", spec["header"],
+                           {"pwm": hw, "dir": dir_pin})
+        elif d == "encoder":
+            a, b = claims[0][1], claims[1][1]
+            ra, ma, _ = _pin_regs(a)
+            rb, mb, _ = _pin_regs(b)
+            v = DeviceView(dev.id, dev.path, d, dev.location, "el_drv_encoder_t",
+                           f"{{ {ra}, {ma}, {rb}, {mb}, &el_dev{dev.id}_state, el_dev{dev.id}_irq_on, &{items[0]} }}",
+                           spec["header"], {"pin_a": a, "pin_b": b}, "el_drv_encoder_state_t",
+                           f"el_dev{dev.id}_irq_on")
+        elif d == "line_camera":
+            n = claims[0][1]
+            v = DeviceView(dev.id, dev.path, d, dev.location, "el_drv_line_camera_t",
+                           f"{{ {n}u, &el_dev{dev.id}_state, &{items[0]} }}", spec["header"],
+                           {"uart": n, "baud": int(spec.get("baud", 115200))}, "el_drv_line_camera_state_t")
+        else:  # a driver listed in board.toml without generator support
+            raise BuildError(f"{dev.location}: error: the avr backend cannot describe devices of driver '{d}' yet")
+        v.hw["data"] = data_names
+        v.hw["driver"] = d
+        v.hw["path"] = dev.path
+        views.append(v)
+    return views
+
+
+def _ring_sizes(mcu: Mcu, use: str) -> tuple[int, int]:
+    """(RX, TX) ring bytes of a UART by what it carries (at most 256 each)."""
+    if use == "debug":  # a whole encoded frame (163 bytes) must fit in TX
+        return (64, 168) if mcu.small else (192, 255)
+    if use == "modbus-rtu":  # a whole ADU (256 bytes) arrives while a task may run
+        return (128, 64) if mcu.small else (255, 128)
+    return (32, 4)  # line camera: frames of 4 bytes, listen only
+
+
+def config_header(program: Program, board, res: Resolved, release: bool) -> str:
+    mcu = board.part
+    clock = board.clock_hz
+    if program.tick_us < MIN_TICK_US:
+        raise BuildError(f"the model's tick of {program.tick_us} us (the gcd of its task periods, offsets and "
+                     f"deadlines) is too short for the avr board: at least {MIN_TICK_US} us")
+    t = tick_timer(program.tick_us, clock)
+    wd = board.watchdog_ms
+    if wd not in _WDTO:
+        raise BuildError(f"boards/avr/board.toml: watchdog_ms = {wd}: choose one of {', '.join(map(str, _WDTO))}")
+    lines = [
+        f"/* Generated by EasyLab for board \"avr\", MCU {mcu.name}, model \"{program.name}\". Do not edit. */",
+        "#ifndef EL_AVR_CONFIG_H", "#define EL_AVR_CONFIG_H", "",
+        f"#define EL_AVR_CONFIG_VERSION {CONFIG_VERSION}",
+        f"#define EL_AVR_MCU_NAME \"{mcu.name}\"",
+        f"#define EL_AVR_NV_SIZE {mcu.eeprom}u /* EEPROM bytes */", "",
+        f"/* LET tick {program.tick_us} us = {t.isrs} x Timer2 period of {t.ocr + 1} x clk/{t.prescale}"
+        + (" (exact) */" if t.exact else f" (not exact: drift {t.drift_ppm:+.1f} ppm) */"),
+        f"#define EL_AVR_TICK_PRESCALE {t.prescale}u",
+        f"#define EL_AVR_TICK_CS {t.cs}u",
+        f"#define EL_AVR_TICK_OCR {t.ocr}u",
+        f"#define EL_AVR_TICK_ISRS {t.isrs}u",
+        f"#define EL_AVR_CLOCK_KHZ {math.ceil(clock / t.prescale / 1000)}u /* fine-clock periods per ms (rounded up) */",
+        "", f"#define EL_AVR_WDTO {_WDTO[wd]} /* watchdog: {wd} ms */", ""]
+    for n in sorted(res.uarts):
+        u = res.uarts[n]
+        if u["use"] == "debug" and release:
+            lines.append(f"/* uart{n}: the debug interface, absent from release builds */")
+            continue
+        rx, tx = _ring_sizes(mcu, u["use"])
+        lines.append(f"#define EL_AVR_UART{n}_RX {rx}u /* uart{n}: {u['use']} */")
+        lines.append(f"#define EL_AVR_UART{n}_TX {tx}u")
+        if u["use"] == "debug":
+            lines.append(f"#define EL_AVR_DEBUG_UART {n}u")
+            lines.append(f"#define EL_AVR_DEBUG_BAUD {int(u.get('baud', 115200))}UL")
+        elif u["use"] == "modbus-rtu":
+            lines.append(f"#define EL_AVR_MODBUS_UART {n}u")
+            lines.append(f"#define EL_AVR_MODBUS_TX {tx}u")
+    if board.sim:
+        lines += ["", "#define EL_AVR_SIM 1 /* simulation build: instants reported through GPIOR0 */"]
+    lines += ["", "#endif /* EL_AVR_CONFIG_H */", ""]
+    return "\n".join(lines)
+
+
+def devices_header(program: Program, views: list[DeviceView]) -> str:
+    headers = sorted({v.header for v in views})
+    lines = [f"/* Generated by EasyLab for board \"avr\", model \"{program.name}\": the devices, each a constant",
+             " * description for its driver (boards/avr/drivers/). Do not edit. */",
+             "#ifndef EL_AVR_DEVICES_H", "#define EL_AVR_DEVICES_H", "",
+             "#include \"el_types.h\"", "#include <avr/io.h>"]
+    lines += [f"#include \"{h}\"" for h in headers]
+    lines.append("")
+    seen = set()
+    for v in views:
+        dev = program.devices[v.id]
+        for i in dev.items:
+            name, ctype = _item_c(program, i)
+            if name not in seen:
+                seen.add(name)
+                lines.append(f"extern {ctype} {name};")
+    lines.append("")
+    for v in views:
+        if v.state_type:
+            lines.append(f"extern {v.state_type} el_dev{v.id}_state;")
+        if v.irq_fn:
+            lines.append(f"void {v.irq_fn}(void);")
+        lines.append(f"static const {v.c_type} el_dev{v.id} = {v.init}; /* {v.path} ({v.location}) */")
+    lines += ["", "#endif /* EL_AVR_DEVICES_H */", ""]
+    return "\n".join(lines)
+
+
+def _pcint(mcu: Mcu, pin: str) -> tuple[int, int] | None:
+    for g, pins in enumerate(mcu.pcint_groups):
+        if pin in pins:
+            return g, pins.index(pin)
+    return None
+
+
+def devices_source(program: Program, board, views: list[DeviceView]) -> str:
+    mcu = board.part
+    lines = [f"/* Generated by EasyLab for board \"avr\", model \"{program.name}\": the drivers' state and",
+             " * interrupt handlers. Do not edit. */",
+             "#include \"el_types.h\"", "#include \"el_board.h\"", "#include <avr/interrupt.h>", ""]
+    pc_groups: dict[int, list[int]] = {}
+    ext: dict[int, list[int]] = {}
+    for v in views:
+        if v.state_type:
+            lines.append(f"{v.state_type} el_dev{v.id}_state; /* {v.path} */")
+        if v.driver == "encoder":
+            body = []
+            for pin in (v.hw["pin_a"], v.hw["pin_b"]):
+                if pin in mcu.ext_int:
+                    n = mcu.ext_int[pin]
+                    reg = "EICRA" if n < 4 else "EICRB"
+                    body.append(f"    {reg} = (uint8_t)(({reg} & (uint8_t)~(3u << {2 * (n % 4)})) | "
+                                f"(1u << {2 * (n % 4)})); /* INT{n}: any edge */")
+                    body.append(f"    EIFR = _BV({n});")
+                    body.append(f"    EIMSK |= _BV({n}); /* {pin} */")
+                    ext.setdefault(n, []).append(v.id)
+                else:
+                    g, bit = _pcint(mcu, pin)
+                    body.append(f"    PCMSK{g} |= _BV({bit}); /* {pin} */")
+                    body.append(f"    PCIFR = _BV(PCIF{g});")
+                    body.append(f"    PCICR |= _BV(PCIE{g});")
+                    pc_groups.setdefault(g, []).append(v.id)
+            lines.append(f"void {v.irq_fn}(void)")
+            lines.append("{")
+            lines += body
+            lines.append("}")
+    lines.append("")
+    for g in sorted(pc_groups):
+        ids = sorted(set(pc_groups[g]))
+        lines.append(f"ISR(PCINT{g}_vect)")
+        lines.append("{")
+        lines += [f"    el_drv_encoder_update(&el_dev{i});" for i in ids]
+        lines.append("}")
+    for n in sorted(ext):
+        ids = sorted(set(ext[n]))
+        lines.append(f"ISR(INT{n}_vect)")
+        lines.append("{")
+        lines += [f"    el_drv_encoder_update(&el_dev{i});" for i in ids]
+        lines.append("}")
+    if len(lines) and not any(v.state_type for v in views) and not pc_groups and not ext:
+        lines.append("typedef int el_avr_devices_empty_t; /* ISO C wants something here */")
+    lines.append("")
+    return "\n".join(lines)
+
+
+def hw_map(program: Program, board, res: Resolved, views: list[DeviceView]) -> dict:
+    mcu = board.part
+    clock = board.clock_hz
+    t = tick_timer(program.tick_us, clock)
+    return {
+        "format": "easylab-avr-hw-map", "version": 1,
+        "model": program.name, "program_id": f"0x{program.program_id:08x}", "mcu": mcu.name, "clock_hz": clock,
+        "tick_us": program.tick_us,
+        "tick_timer": {"timer": 2, "prescale": t.prescale, "ocr": t.ocr, "interrupts_per_tick": t.isrs,
+                       "exact": t.exact, "drift_ppm": round(t.drift_ppm, 3)},
+        "uarts": {str(n): {**u, "pins": mcu.uart[n]} for n, u in sorted(res.uarts.items())},
+        "devices": [v.hw for v in views],
+        "pins": {pin: c.text + " by " + c.owner for pin, c in sorted(res.physical.items())},
+    }
+
+
+def files(program: Program, board, res: Resolved, release: bool) -> dict[str, str]:
+    """The board's generated files: {file name: text}."""
+    views = device_views(program, board)
+    return {
+        "el_avr_config.h": config_header(program, board, res, release),
+        "el_avr_devices.h": devices_header(program, views),
+        "el_avr_devices.c": devices_source(program, board, views),
+        "hw_map.json": json.dumps(hw_map(program, board, res, views), indent=2) + "\n",
+    }

@@ -1,0 +1,87 @@
+"""Defaults of the board contract that most boards share; a board's
+backend subclasses :class:`BoardBase` and overrides what differs (a board
+may also implement the protocol of :mod:`.contract` from scratch)."""
+
+from __future__ import annotations
+
+import copy
+from pathlib import Path
+
+from ..core.errors import BuildError
+from ..ir.program import Device, Program
+from .cbuild import defined_symbols
+from .contract import BoardCannotRun, Compiled, CompileOptions, Simulator
+from .description import BoardDescription
+
+
+class BoardBase:
+    """A board with one target and no simulator, whose devices call the
+    board's drivers (``el_drv_<driver>_<handler>(&el_dev<id>)``)."""
+
+    #: A simulation build exists (``--sim``).
+    has_simulator = False
+
+    def __init__(self, description: BoardDescription):
+        self.description = description
+        self.name = description.folder.name
+        self.mcu: str | None = None
+        self.sim = False
+
+    # ---------------------------------------------------------------- configuration
+
+    def mcus(self) -> list[str]:
+        """The parts this board builds for (empty: a single target)."""
+        return sorted(self.description.table("mcu"))
+
+    def configure(self, mcu: str | None = None, sim: bool = False):
+        """A copy for one MCU and build kind (see the contract)."""
+        known = self.mcus()
+        if mcu is not None and not known:
+            raise BuildError(f"board '{self.name}' has no MCU choice (--mcu)")
+        chosen = (mcu or self.description.raw.get("default_mcu") or (known[0] if known else "")).lower() or None
+        if known and chosen not in known:
+            raise BuildError(f"board '{self.name}' has no MCU '{mcu}' (MCUs: {', '.join(known)})")
+        if sim and not self.has_simulator:
+            raise BuildError(f"board '{self.name}' has no simulator (--sim)")
+        board = copy.copy(self)
+        board.mcu, board.sim = chosen, bool(sim)
+        return board
+
+    @property
+    def nv_size(self) -> int | None:
+        value = self.description.raw.get("nv_size")
+        return int(value) if value is not None else None
+
+    # ---------------------------------------------------------------- code
+
+    def device_call(self, device: Device, handler: str) -> str:
+        return f"el_drv_{device.driver}_{handler}(&el_dev{device.id});"
+
+    def check(self, program: Program) -> object:
+        return None
+
+    def produce(self, program: Program, checked: object, release: bool) -> dict[str, str]:
+        return {}
+
+    def compile(self, program: Program, checked: object, out_dir: Path, generated: list[Path],
+                options: CompileOptions) -> Compiled:
+        raise BuildError(f"board '{self.name}' does not compile")
+
+    # ---------------------------------------------------------------- running, flashing
+
+    def build_simulator(self, program: Program, checked: object, out_dir: Path, compiled: Compiled) -> Simulator:
+        raise BoardCannotRun(f"board '{self.name}' has no simulator")
+
+    def simulator_command(self, out_dir: Path, program: Program) -> list[str]:
+        raise BoardCannotRun(f"board '{self.name}' has no simulator")
+
+    def flash_command(self, out_dir: Path, program: Program, port: str, programmer: str | None = None,
+                      baud: int | None = None) -> list[str]:
+        raise BuildError(f"board '{self.name}' is not flashed: its program runs where it is built")
+
+    def run_port_program(self, source: Path, work_dir: Path) -> str:
+        raise BoardCannotRun(f"board '{self.name}' cannot run programs on this machine")
+
+    def symbols(self, compiled: Compiled) -> set[str]:
+        chain = self.description.toolchain
+        return defined_symbols(chain.tool("nm", "nm"), compiled.executable, chain.debian_package)

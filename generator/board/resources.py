@@ -1,0 +1,230 @@
+"""Resource claims against a part's tables: the check that every board
+with pins runs (docs/boards.md, "MCUs and resources").
+
+A board describes each of its parts in board.toml: the pins a model may
+claim, the pins behind each UART, ADC channel and PWM output, the pins
+that can interrupt, and the pins the board keeps for itself. Each claim of
+the model (devices' ``claims``, interfaces' ``on uartN``) stands for
+physical pins; a resource the part lacks, a pin claimed twice through
+different resources, or a device whose driver the board lacks or drives
+differently is a problem, and all problems are reported together, each at
+its source line.
+"""
+
+from __future__ import annotations
+
+import re
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from ..core.errors import BuildError
+from ..ir.program import Device, Program
+
+_CLAIM = re.compile(r'^([A-Za-z_]+)\[(?:"([^"]*)"|(\d+))\]$')
+_PIN_NAME = re.compile(r"^(.*?)(\d+)$")
+
+
+@dataclass
+class Part:
+    """One MCU's resources, as a board's backend reads them from its
+    board.toml. Pin names are the part's own (PB5, RC2, ...)."""
+
+    name: str
+    pins: list[str]
+    uart: dict[int, list[str]]  # UART n -> its pins (RX, TX)
+    adc: dict[int, str]  # channel -> pin (or an analog-only pad's name)
+    pwm: dict[str, object]  # pin -> what drives it (the board's own data: timer and channel, CCP module)
+    interrupt_pins: set[str] = field(default_factory=set)  # pins that can interrupt (encoders)
+    unavailable: dict[str, str] = field(default_factory=dict)  # pin -> what the board uses it for
+    reserved_pwm: dict[str, str] = field(default_factory=dict)  # pin -> why its PWM is not offered
+    network: bool = False  # Modbus TCP needs one
+    pwm_source: str = "PWM output"  # what drives a PWM pin, in messages ("timer output", "CCP output")
+    no_interrupt: str = "which cannot interrupt"  # why a pin is no encoder pin, in messages
+
+
+@dataclass
+class Claim:
+    kind: str
+    index: object  # str (a pin's name) or int (a UART, an ADC channel)
+    text: str
+    owner: str  # "device 'led'" / "interface 'debug'"
+    location: str  # file:line or ""
+
+    def where(self) -> str:
+        return f"{self.location}: " if self.location else ""
+
+
+@dataclass
+class Resolved:
+    """What the claims of one build come to."""
+
+    problems: list[str] = field(default_factory=list)
+    uarts: dict[int, dict] = field(default_factory=dict)  # uart -> {"use": ..., "baud": ..., ...}
+    physical: dict[str, Claim] = field(default_factory=dict)  # pin -> its first claim
+
+
+def parse_claim(text: str) -> tuple[str, object] | None:
+    """``pin["PB5"]`` -> ("pin", "PB5"); ``uart[1]`` -> ("uart", 1)."""
+    m = _CLAIM.match(text.strip())
+    if m is None:
+        return None
+    return m.group(1), (m.group(2) if m.group(2) is not None else int(m.group(3)))
+
+
+def interface_location(program: Program, kind: str) -> str:
+    """file:line of an interface's declaration: the IR keeps none, so find
+    the line in the model file (a best effort; '' when not found)."""
+    word = {"debug": r"debug", "modbus-rtu": r"modbus\s+rtu", "modbus-tcp": r"modbus\s+tcp"}[kind]
+    try:
+        text = Path(program.source).read_text(encoding="utf-8")
+    except (OSError, UnicodeDecodeError):
+        return ""
+    for n, line in enumerate(text.splitlines(), 1):
+        if re.match(rf"\s*{word}\b", line):
+            return f"{program.source}:{n}"
+    return ""
+
+
+def pin_ranges(pins: list[str]) -> str:
+    """PB0..PB5, PC0..PC5, ...: pins grouped by their name before the number."""
+    groups: dict[str, list[int]] = {}
+    for p in pins:
+        m = _PIN_NAME.match(p)
+        if m:
+            groups.setdefault(m.group(1), []).append(int(m.group(2)))
+    return ", ".join(f"{port}{min(bits)}..{port}{max(bits)}" if len(bits) > 1 else f"{port}{bits[0]}"
+                     for port, bits in groups.items())
+
+
+def _physical_pins(board: str, part: Part, claim: Claim, problems: list[str]) -> list[str] | None:
+    """The pins behind a claim, or None (a problem was recorded)."""
+    kind, idx, name = claim.kind, claim.index, part.name
+    lead = f"{claim.where()}error: {claim.owner} claims {claim.text}, but"
+    if kind == "pin":
+        if not isinstance(idx, str) or idx not in part.pins:
+            why = f"the {name}'s {idx} is {part.unavailable[idx]}" if idx in part.unavailable \
+                else f"the {name} has no pin {idx}"
+            problems.append(f"{lead} {why}; pins: {pin_ranges(part.pins)}")
+            return None
+        return [idx]
+    if kind == "pwm":
+        offered = ", ".join(sorted(part.pwm))
+        if not isinstance(idx, str):
+            problems.append(f"{claim.where()}error: {claim.owner} claims {claim.text}: a PWM output is named by "
+                            f"its pin, as in pwm[\"{next(iter(part.pwm), 'P0')}\"]")
+            return None
+        if idx in part.reserved_pwm:
+            problems.append(f"{lead} {idx}'s {part.pwm_source} {part.reserved_pwm[idx]}; PWM pins of the {name}: "
+                            f"{offered}")
+            return None
+        if idx not in part.pwm:
+            what = f"has no {part.pwm_source}" if idx in part.pins else f"is not a pin of the {name}"
+            problems.append(f"{lead} {idx} {what}; PWM pins of the {name}: {offered or 'none'}")
+            return None
+        return [idx]
+    if kind == "adc":
+        if not isinstance(idx, int) or idx not in part.adc:
+            channels = f"channels 0..{max(part.adc)}" if part.adc else "no ADC"
+            problems.append(f"{lead} the {name} has no ADC channel {idx} ({channels})")
+            return None
+        return [part.adc[idx]]
+    if kind == "uart":
+        if not isinstance(idx, int) or idx not in part.uart:
+            have = ", ".join(f"uart{n}" for n in sorted(part.uart)) or "none"
+            problems.append(f"{lead} the {name} has no UART {idx} (it has {have}"
+                            f"{' only' if len(part.uart) == 1 else ''})")
+            return None
+        return list(part.uart[idx])
+    problems.append(f"{lead} the {board} board has no resource kind '{kind}' (kinds: pin, pwm, adc, uart)")
+    return None
+
+
+def resolve(program: Program, board: str, part: Part, drivers: dict[str, dict]) -> Resolved:
+    """Check every claim and device of the program against the part and
+    the board's drivers (board.toml ``[drivers.NAME]``: ``claims`` in order,
+    ``data`` in order, ``interrupt_pins``, ``baud`` of a driver that owns a
+    UART)."""
+    res = Resolved()
+    claims: list[Claim] = []
+    for dev in program.devices:
+        for text in dev.claims:
+            parsed = parse_claim(text)
+            if parsed is None:
+                res.problems.append(f"{dev.location}: error: device '{dev.path}' claims {text}, which the {board} "
+                                    f"board cannot read")
+                continue
+            claims.append(Claim(parsed[0], parsed[1], text, f"device '{dev.path}'", dev.location))
+    for iface in program.interfaces:
+        loc = interface_location(program, iface.kind)
+        if iface.kind == "modbus-tcp" and not part.network:
+            res.problems.append(f"{loc + ': ' if loc else ''}error: the Modbus TCP interface needs a network, and "
+                                f"the {board} board has none: use 'modbus rtu on uartN'")
+            continue
+        parsed = parse_claim(iface.resource) if iface.resource is not None else None
+        if parsed is not None:
+            claims.append(Claim(parsed[0], parsed[1], iface.resource, f"interface '{iface.kind.replace('-', ' ')}'",
+                                loc))
+    for claim in claims:
+        for pin in _physical_pins(board, part, claim, res.problems) or []:
+            first = res.physical.get(pin)
+            if first is None:
+                res.physical[pin] = claim
+            elif first.text != claim.text:
+                res.problems.append(
+                    f"{claim.where()}error: pin {pin} is claimed twice on the {part.name}: as {claim.text} by "
+                    f"{claim.owner} and as {first.text} by {first.owner}"
+                    + (f" ({first.location})" if first.location else "")
+                    + "; each pin has one owner: choose another pin, channel or UART")
+    for dev in program.devices:
+        _check_driver(program, board, part, drivers, dev, res.problems)
+    for iface in program.interfaces:
+        parsed = parse_claim(iface.resource) if iface.resource is not None else None
+        if iface.kind in ("debug", "modbus-rtu") and parsed and parsed[0] == "uart" and parsed[1] in part.uart:
+            res.uarts[parsed[1]] = {"use": iface.kind, **iface.settings}
+    for dev in program.devices:  # devices that own a UART (a camera module's link)
+        spec = drivers.get(dev.driver)
+        for text in dev.claims if spec is not None else ():
+            parsed = parse_claim(text)
+            if parsed and parsed[0] == "uart" and parsed[1] in part.uart:
+                res.uarts[parsed[1]] = {"use": dev.driver, "baud": int(spec.get("baud", 115200)), "device": dev.path}
+    return res
+
+
+def _check_driver(program: Program, board: str, part: Part, drivers: dict[str, dict], dev: Device,
+                  problems: list[str]) -> None:
+    spec = drivers.get(dev.driver)
+    if spec is None:
+        problems.append(
+            f"{dev.location}: error: device '{dev.path}' needs the driver '{dev.driver}', which the {board} board "
+            f"does not have (drivers: {', '.join(sorted(drivers))}); add boards/{board}/drivers/el_drv_{dev.driver}.h "
+            f"and its [drivers.{dev.driver}] entry in boards/{board}/board.toml (docs/boards.md, 'Adding a driver')")
+        return
+    parsed = [parse_claim(c) for c in dev.claims]
+    kinds = [p[0] if p else "?" for p in parsed]
+    if kinds != list(spec.get("claims", [])):
+        problems.append(f"{dev.location}: error: device '{dev.path}': the {board} driver '{dev.driver}' takes the "
+                        f"claims {', '.join(k + '[...]' for k in spec.get('claims', [])) or 'none'} in this order, "
+                        f"not {', '.join(dev.claims) or 'none'}")
+        return
+    data = [f"{'out' if program.items[i].kind == 'dev_out' else 'in'} {program.items[i].type.name}" for i in dev.items]
+    if data != list(spec.get("data", [])) or any(program.items[i].count != 1 for i in dev.items):
+        problems.append(f"{dev.location}: error: device '{dev.path}': the {board} driver '{dev.driver}' drives the "
+                        f"data {', '.join(spec.get('data', [])) or 'none'} (one value each), not "
+                        f"{', '.join(data) or 'none'}")
+        return
+    if spec.get("interrupt_pins"):
+        for kind, pin in parsed:
+            if kind == "pin" and pin in part.pins and pin not in part.interrupt_pins:
+                problems.append(f"{dev.location}: error: device '{dev.path}' ({dev.driver}) needs an interrupt on "
+                                f"{pin}, {part.no_interrupt} on the {part.name}; pins that can: "
+                                f"{pin_ranges(sorted(part.interrupt_pins)) or 'none'}")
+
+
+def check(program: Program, board: str, part: Part, drivers: dict[str, dict]) -> Resolved:
+    """:func:`resolve`, raising BuildError with every problem if any."""
+    res = resolve(program, board, part, drivers)
+    if res.problems:
+        count = len(res.problems)
+        raise BuildError(f"the model does not fit the {board} board with the {part.name} "
+                         f"({count} problem{'s' if count != 1 else ''}):\n" + "\n".join(res.problems))
+    return res

@@ -1,0 +1,103 @@
+"""The tables a simulator harness compiles in to trace a firmware: the
+model's items and charts as the host board's trace code sees them
+(runtime_c/el_model.h, over host-side mirrors), and where each lives in
+the simulated MCU's RAM. A harness reads the values straight from the
+MCU's memory at each instant and writes them with the host board's own
+trace code, so its trace files equal the host board's byte for byte.
+
+The address tables use the types of a harness's ``sim_model.h``::
+
+    typedef struct { uint16_t addr; uint16_t size; } sim_addr_t;
+"""
+
+from __future__ import annotations
+
+from ..codegen.c_syntax import C_KIND_ENUM, C_TYPE_ENUM, ident
+from ..core.errors import BuildError
+from ..ir.program import Program
+
+TYPE_BYTES = {"bool": 1, "int8": 1, "uint8": 1, "int16": 2, "uint16": 2, "int32": 4, "uint32": 4, "float32": 4,
+              "time": 4}
+
+
+def c_string(text: str) -> str:
+    return '"' + text.replace("\\", "\\\\").replace('"', '\\"') + '"'
+
+
+def item_symbol(program: Program, item_id: int) -> str:
+    """The C name generated code gives an item (codegen.c_model)."""
+    it = program.items[item_id]
+    return f"el_i{it.id}_{ident(it.name)}"
+
+
+def chart_symbol(chart_id: int) -> str:
+    return f"el_c{chart_id}_active"
+
+
+def trace_tables(program: Program) -> list[str]:
+    """el_model.h's tables (names, types, kinds, devices, charts) over
+    host-side mirrors ``m_i<id>`` and ``m_c<id>`` the harness fills."""
+    lines = [f"static {it.type.c_name} m_i{it.id}[{it.count}];" for it in program.items]
+    for c in program.charts:
+        n = max(1, len(c.steps))
+        lines.append(f"static uint8_t m_c{c.id}[{n}];")
+        lines.append(f"static const char *const m_c{c.id}_steps[{n}] = "
+                     f"{{ {', '.join(c_string(s.name) for s in c.steps) or c_string('')} }};")
+    lines += ["", f"const char el_model_name[] = {c_string(program.name)};",
+              f"const uint32_t el_program_id = 0x{program.program_id:08x}UL;",
+              f"const uint32_t el_tick_us = {program.tick_us}UL;",
+              f"const uint32_t el_hyperperiod_ticks = {program.hyperperiod}UL;",
+              f"const el_item_t el_items[{max(1, len(program.items))}] = {{"]
+    for it in program.items:
+        dev = it.device if it.device is not None else "EL_NO_DEVICE"
+        lines.append(f"    {{ {c_string(it.name)}, m_i{it.id}, {C_TYPE_ENUM[it.type.name]}, {C_KIND_ENUM[it.kind]}, "
+                     f"{dev}, {it.count}u }},")
+    if not program.items:
+        lines.append("    { \"\", 0, 0u, 0u, EL_NO_DEVICE, 0u },")
+    lines += ["};", f"const uint16_t el_item_count = {len(program.items)}u;",
+              f"const el_device_t el_devices[{max(1, len(program.devices))}] = {{"]
+    lines += [f"    {{ {c_string(d.path)}, {c_string(d.driver)} }}," for d in program.devices] \
+        or ["    { \"\", \"\" },"]
+    lines += ["};", f"const uint8_t el_device_count = {len(program.devices)}u;",
+              f"const el_chart_t el_charts[{max(1, len(program.charts))}] = {{"]
+    lines += [f"    {{ {c_string(c.name)}, {len(c.steps)}u, m_c{c.id}_steps, m_c{c.id} }}," for c in program.charts] \
+        or ["    { \"\", 0u, (const char *const *)0, (const uint8_t *)0 },"]
+    lines += ["};", f"const uint8_t el_chart_count = {len(program.charts)}u;", ""]
+    return lines
+
+
+def ram_tables(program: Program, symbols: dict[str, tuple[int, int]], tick_symbol: str, where: str) -> list[str]:
+    """``sim_item_addr``, ``sim_chart_addr`` and ``sim_tick_addr``: each
+    item's and chart's RAM address and size in the MCU, from the linked
+    program's ``symbols`` (name -> (data address, size)); ``where`` names
+    the program in the error when a symbol is missing."""
+    missing = []
+
+    def address(sym: str) -> int:
+        if sym not in symbols:
+            missing.append(sym)
+        return symbols.get(sym, (0xFFFF, 0))[0]
+
+    lines = [f"const sim_addr_t sim_item_addr[{max(1, len(program.items))}] = {{"]
+    for it in program.items:
+        sym = item_symbol(program, it.id)
+        lines.append(f"    {{ 0x{address(sym):04x}u, {TYPE_BYTES[it.type.name] * it.count}u }}, /* {sym} */")
+    if not program.items:
+        lines.append("    { 0xffffu, 0u },")
+    lines += ["};", f"const sim_addr_t sim_chart_addr[{max(1, len(program.charts))}] = {{"]
+    for c in program.charts:
+        sym = chart_symbol(c.id)
+        lines.append(f"    {{ 0x{address(sym):04x}u, {len(c.steps)}u }}, /* {sym} */")
+    if not program.charts:
+        lines.append("    { 0xffffu, 0u },")
+    lines.append("};")
+    lines.append(f"const uint16_t sim_tick_addr = 0x{address(tick_symbol):04x}u;")
+    if missing:
+        raise BuildError(f"{where}: symbols the simulator needs are missing: {', '.join(missing)}")
+    return lines
+
+
+def kept_symbols(program: Program) -> list[str]:
+    """Every item and chart symbol: a simulation build keeps them all, even
+    one no code reads, since the harness traces them from RAM."""
+    return [item_symbol(program, it.id) for it in program.items] + [chart_symbol(c.id) for c in program.charts]

@@ -1,0 +1,118 @@
+"""The model commands of ``easylab``: check, graph, analyze, build."""
+
+from __future__ import annotations
+
+import json
+import sys
+from pathlib import Path
+
+from ..analysis import sdf
+from .common import EXIT_MODEL_ERROR, EXIT_OK, CliError, check_model, default_out_dir, lower_model
+
+
+def cmd_check(args) -> int:
+    status = EXIT_OK
+    for path in args.files:
+        try:
+            result = check_model(path)
+        except CliError as err:  # one unreadable file: say so, check the others
+            print(f"easylab: error: {err}", file=sys.stderr)
+            status = EXIT_MODEL_ERROR
+            continue
+        if result.model is None:
+            print(result.report(), file=sys.stderr)
+            count = len(result.diagnostics.sorted())
+            print(f"{path}: {count} error{'s' if count != 1 else ''}", file=sys.stderr)
+            status = EXIT_MODEL_ERROR
+        elif not args.quiet:
+            m = result.model
+            print(f"{path}: ok (model '{m.name}': {len(m.devices)} devices, {len(m.dataflows)} dataflows, "
+                  f"{len(m.charts)} charts, {len(m.tasks)} tasks)")
+    return status
+
+
+def _checked_model(path: str):
+    result = check_model(path)
+    if result.model is None:
+        print(result.report(), file=sys.stderr)
+        raise SystemExit(EXIT_MODEL_ERROR)
+    return result.model
+
+
+def cmd_graph(args) -> int:
+    from ..frontend.graph import render_dot, write_graph
+
+    model = _checked_model(args.file)
+    dot = render_dot(model)
+    if args.output is None:
+        sys.stdout.write(dot)
+        return EXIT_OK
+    try:
+        write_graph(dot, Path(args.output))
+    except (OSError, RuntimeError) as err:
+        raise CliError(str(err)) from None
+    print(args.output)
+    return EXIT_OK
+
+
+def cmd_analyze(args) -> int:
+    try:
+        return _analyze(args)
+    except OSError as err:
+        raise CliError(f"{args.file}: {err.strerror or err}") from None
+
+
+def _analyze(args) -> int:
+    """``easylab analyze FILE [--dataflow NAME] [--schedule KIND] [--json]``."""
+    path = Path(args.file)
+    if path.suffix.lower() == ".xml":
+        try:
+            graph = sdf.load_sdf3(path)
+            result = sdf.analyze(graph, args.schedule or "sas")
+        except sdf.SdfError as err:
+            print(f"{path}: error: {err.message}", file=sys.stderr)
+            return 1
+        name = graph.name or path.stem
+        if args.json:
+            print(json.dumps({"dataflows": [result.to_json_dict(name)]}, indent=2))
+        else:
+            sys.stdout.write(result.render_text(name))
+        return 0
+    from ..pipeline import check_file
+
+    checked = check_file(path, schedule=args.schedule)
+    if checked.model is None:
+        print(checked.report(), file=sys.stderr)
+        return 1
+    flows = list(checked.model.dataflows.values())
+    if args.dataflow:
+        flows = [df for df in flows if df.name == args.dataflow]
+        if not flows:
+            names = ", ".join(checked.model.dataflows) or "none"
+            print(f"easylab: error: model '{checked.model.name}' has no dataflow '{args.dataflow}' "
+                  f"(its dataflows: {names})", file=sys.stderr)
+            return 1
+    if args.json:
+        print(json.dumps({"dataflows": [df.analysis.summary() for df in flows]}, indent=2))
+    else:
+        sys.stdout.write("\n".join(df.analysis.render_text() for df in flows))
+    return 0
+
+
+def cmd_build(args) -> int:
+    import shlex
+
+    from ..build import BuildError, build
+
+    program = lower_model(args.file, args.schedule)
+    out = Path(args.output) if args.output else default_out_dir(program, args.board)
+    try:
+        built = build(program, args.board, out, extra_cflags=shlex.split(args.cflags or ""), cc=args.cc,
+                      release=args.release, mcu=args.mcu, sim=args.sim, schedule=args.schedule,
+                      board_path=args.board_path)
+    except BuildError as err:
+        raise CliError(str(err)) from None
+    for note in built.notes:
+        print(note)
+    print(built.executable)
+    return EXIT_OK

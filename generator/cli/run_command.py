@@ -1,0 +1,225 @@
+"""``easylab run``: local execution of a model (docs/local.md).
+
+The options mirror the host board's command line (boards/host/README.md):
+``--fast``, ``--duration T``, ``--stimulus FILE.csv``, ``--trace
+FILE.csv|FILE.vcd``, with the same formats and the same trace, the
+interfaces ``--debug``, ``--modbus-tcp``, ``--modbus-rtu`` and ``--nvram``
+(served by the firmware's own servers: interfaces.py), plus ``--maps DIR``,
+``--watch`` (live replacement) and ``--pace X`` (virtual time at X times
+real time). Exit status: 0 the run ended (duration, SIGINT, SIGTERM); 1 a
+model or plug-in error, or an I/O error during the run; 2 a bad command
+line or input file, reported before anything runs (no trace is created).
+"""
+
+from __future__ import annotations
+
+import re
+import signal
+import sys
+import threading
+from fractions import Fraction
+
+from ..analysis.sdf.analysis import SCHEDULE_KINDS
+
+EXIT_OK, EXIT_ERROR, EXIT_USAGE = 0, 1, 2
+
+_UNITS = {"us": 1, "ms": 1000, "s": 1_000_000, "m": 60_000_000, "min": 60_000_000, "h": 3_600_000_000}
+_DURATION = re.compile(r"(\d+)(?:\.(\d+))? ?(.*)")
+
+
+def parse_duration(text: str) -> int:
+    """A duration with a unit ("10s", "1.5s", "500ms", "250us", "2m", "1h";
+    one space may separate number and unit), in exact microseconds, as the
+    host board reads ``--duration``. Raises ValueError with the reason."""
+    m = _DURATION.fullmatch(text)
+    if not m:
+        raise ValueError("not a duration (give a number and a unit: 10s, 1.5s, 500ms, 250us, 2m, 1h)")
+    whole, frac, unit = m.groups()
+    if not unit:
+        raise ValueError("a duration needs a unit: us, ms, s, m or h (e.g. 10s, 500ms)")
+    if unit not in _UNITS:
+        raise ValueError("unknown time unit (give us, ms, s, m or h: 10s, 1.5s, 500ms, 250us, 2m)")
+    value = (int(whole) + Fraction(f"0.{frac}" if frac else "0")) * _UNITS[unit]
+    if value.denominator != 1:
+        raise ValueError("duration finer than 1 us")
+    if value >= 2 ** 64:
+        raise ValueError("duration too long")
+    return int(value)
+
+
+def _positive_float(text: str) -> float:
+    import argparse
+
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
+    if not value > 0 or value == float("inf"):
+        raise argparse.ArgumentTypeError("the pace must be a positive number")
+    return value
+
+
+def add_parser(sub) -> None:
+    """Add the ``run`` subcommand to the ``easylab`` command line."""
+    p = sub.add_parser(
+        "run", help="run a model on this machine (interpreter and actor plug-ins)",
+        description="Interpret a model on this machine: the IR's dispatch table, charts and dataflows, with "
+                    "each actor's C code compiled into a cached plug-in. Devices are simulated as on the host "
+                    "board (stimulus CSV in, CSV or VCD trace out); the trace equals the host firmware's.")
+    p.add_argument("file", metavar="MODEL", help="model file (.elab)")
+    p.add_argument("--stimulus", metavar="FILE.csv", help="device `out` data, params and vars from a CSV file: "
+                                                          "time_us, then their names (the host board's format)")
+    p.add_argument("--trace", metavar="FILE", help="record every item and chart at each instant (.csv or .vcd)")
+    p.add_argument("--duration", metavar="T", help="stop before logical time T (10s, 1.5s, 500ms, 250us, 2m, 1h); "
+                                                   "default: endless")
+    timing = p.add_mutually_exclusive_group()
+    timing.add_argument("--fast", action="store_true", help="virtual time: instants follow each other at once")
+    timing.add_argument("--pace", metavar="X", type=_positive_float,
+                        help="logical time runs X times as fast as real time (default 1: real time)")
+    p.add_argument("--watch", action="store_true",
+                   help="replace the running model when its files change (state kept for what did not change)")
+    p.add_argument("--schedule", choices=SCHEDULE_KINDS,
+                   help="schedule kind of every dataflow (default: each dataflow's own, else sas)")
+    served = p.add_argument_group("debug and service interfaces (the firmware's servers, as on the host board)")
+    served.add_argument("--debug", metavar="pty:LINK|tcp:PORT[,halt]",
+                        help="serve the debug interface on a new pseudo-terminal (LINK: a symlink to it) or on "
+                             "127.0.0.1:PORT; ,halt halts before the first instant")
+    served.add_argument("--modbus-tcp", metavar="PORT", help="serve the model's `modbus tcp` interface on "
+                                                             "127.0.0.1:PORT (default: the model's port)")
+    served.add_argument("--modbus-rtu", metavar="pty:LINK", help="serve its `modbus rtu` interface on a new "
+                                                                 "pseudo-terminal")
+    served.add_argument("--nvram", metavar="FILE", help="keep `persist` params in FILE (default: in memory)")
+    served.add_argument("--maps", metavar="DIR", help="write debug_map.json and service_map.* into DIR (at start "
+                                                      "and at each replacement)")
+    p.set_defaults(func=cmd_run)
+
+
+def _say(text: str) -> None:
+    print(text, file=sys.stderr, flush=True)
+
+
+def cmd_run(args) -> int:
+    """Run a model until its duration, a signal, or forever."""
+    from ..pipeline import lower_file
+    from pathlib import Path
+
+    from ..interp.clock import Clock
+    from ..interp.engine import Engine, InterfaceError, InterfaceOptions
+    from ..interp.plugins import PluginCache, PluginError
+    from ..interp.stimulus import StimulusError
+    from ..interp.stimulus import load as load_stimulus
+    from ..interp.trace import TraceError, TraceWriter, columns_of
+    from ..interp.watch import ModelWatcher
+
+    duration = None
+    if args.duration is not None:
+        try:
+            duration = parse_duration(args.duration)
+        except ValueError as err:
+            _say(f"easylab run: --duration {args.duration}: {err}")
+            return EXIT_USAGE
+    try:
+        program, result = lower_file(args.file, schedule=args.schedule)
+    except FileNotFoundError:
+        _say(f"easylab: error: {args.file}: no such file")
+        return EXIT_ERROR
+    except (IsADirectoryError, UnicodeDecodeError):
+        _say(f"easylab: error: {args.file}: not a model file")
+        return EXIT_ERROR
+    if program is None:
+        _say(result.report())
+        return EXIT_ERROR
+    cache = PluginCache()
+    try:
+        cache.load_all(program.specs)
+    except PluginError as err:
+        _say(f"easylab: error: {err}")
+        return EXIT_ERROR
+    stimulus = trace = None
+    try:
+        if args.stimulus is not None:
+            stimulus = load_stimulus(args.stimulus, program)
+        if args.trace is not None:
+            trace = TraceWriter(args.trace, program, columns_of(program))
+    except OSError as err:
+        _say(f"easylab run: cannot read stimulus {args.stimulus}: {err.strerror or err}")
+        return EXIT_USAGE
+    except (StimulusError, TraceError) as err:
+        _say(str(err) if isinstance(err, StimulusError) else f"easylab run: {err}")
+        return EXIT_USAGE
+
+    def replaced(report) -> None:
+        notes = []
+        if report.untraced and trace:
+            notes.append(f"not traced: {', '.join(report.untraced)}")
+        if report.ignored_stimulus:
+            notes.append(f"stimulus columns ignored: {', '.join(report.ignored_stimulus)}")
+        _say(f"easylab run: at {report.time_us / 1e6:.6f} s the program id changed from "
+             f"0x{report.old_id:08x} to 0x{report.new_id:08x}" + (f" ({'; '.join(notes)})" if notes else ""))
+
+    interfaces = None
+    if args.debug or args.modbus_tcp or args.modbus_rtu or args.nvram or args.maps:
+        interfaces = InterfaceOptions(args.debug, args.modbus_tcp, args.modbus_rtu, args.nvram,
+                                      Path(args.maps) if args.maps else None, Path(args.file), args.schedule)
+    clock = Clock(None if args.fast else (args.pace or 1.0))
+    previous_handlers = _on_signals(clock)  # before the interfaces chain their own
+    try:
+        engine = Engine(program, cache, stimulus, trace, on_replace=replaced, interfaces=interfaces, say=_say)
+        engine.clock = clock
+        engine.boot()
+    except (PluginError, InterfaceError, OSError) as err:
+        if isinstance(err, PluginError):
+            _say(f"easylab: error: {err}")
+        elif isinstance(err, OSError):
+            _say(f"easylab run: --maps {args.maps}: {err.strerror or err}")
+        _restore(previous_handlers)
+        if trace is not None:  # nothing ran: no trace file, as the host board
+            trace.file.close()
+            Path(args.trace).unlink(missing_ok=True)
+        return EXIT_ERROR if isinstance(err, PluginError) else EXIT_USAGE
+    if interfaces is not None and interfaces.maps is None:
+        maps = engine.io.library.directory
+        _say(f"easylab run: maps of program 0x{program.program_id:08x}: {maps}/debug_map.json, "
+             f"{maps}/service_map.json")
+    watcher = ModelWatcher(args.file, engine, _say, args.schedule) if args.watch else None
+    status = EXIT_OK
+    try:
+        if watcher:
+            watcher.start()
+        engine.run(duration, clock)
+    except OSError as err:
+        _say(f"easylab run: error writing trace {args.trace}: {err.strerror or err}")
+        status = EXIT_ERROR
+    finally:
+        if watcher:
+            watcher.stop()
+        _restore(previous_handlers)
+        try:
+            engine.shutdown()
+        except TraceError as err:
+            _say(f"easylab run: {err}")
+            status = EXIT_ERROR
+    if engine.overruns:
+        _say("easylab run: overruns: " + " ".join(f"{name} {n}" for name, n in engine.overruns.items()))
+    return status
+
+
+def _restore(handlers: dict) -> None:
+    for sig, handler in handlers.items():
+        signal.signal(sig, handler)
+
+
+def _on_signals(clock) -> dict:
+    """SIGINT and SIGTERM end the run at the next instant (the trace is
+    complete); a second signal acts as before. Returns the handlers to
+    restore afterwards."""
+    if threading.current_thread() is not threading.main_thread():
+        return {}  # only the main thread may handle signals
+    previous = {sig: signal.getsignal(sig) for sig in (signal.SIGINT, signal.SIGTERM)}
+
+    def handler(signum, frame):
+        clock.stop()
+        signal.signal(signum, previous[signum])
+    for sig in previous:
+        signal.signal(sig, handler)
+    return previous

@@ -1,0 +1,103 @@
+"""C as the backend writes it: identifiers, literals, type limits and
+IR expressions (docs/ir.md, "expressions"). Shared by every generator of C
+(model.c, the interfaces' tables, boards' device tables)."""
+
+from __future__ import annotations
+
+import re
+
+from ..core import expr as I
+from ..core import types as T
+
+C_TYPE_ENUM = {"bool": "EL_T_BOOL", "int8": "EL_T_I8", "uint8": "EL_T_U8", "int16": "EL_T_I16",
+                "uint16": "EL_T_U16", "int32": "EL_T_I32", "uint32": "EL_T_U32", "float32": "EL_T_F32",
+                "time": "EL_T_TIME"}
+C_KIND_ENUM = {"param": "EL_K_PARAM", "var": "EL_K_VAR", "dev_out": "EL_K_DEV_OUT", "dev_in": "EL_K_DEV_IN"}
+_UNSIGNED = {"int8": "uint8_t", "int16": "uint16_t", "int32": "uint32_t", "uint8": "uint8_t",
+             "uint16": "uint16_t", "uint32": "uint32_t"}
+_DIV_SUFFIX = {"int8": "i8", "int16": "i16", "int32": "i32", "uint8": "u8", "uint16": "u16",
+               "uint32": "u32", "float32": "f32"}
+
+
+
+def ident(text: str) -> str:
+    """A C identifier fragment from a model path."""
+    return re.sub(r"[^A-Za-z0-9_]", "_", text)
+
+
+def c_literal(t: T.ValueType, value) -> str:
+    """A C constant of type ``t`` (run-time units: time in ms)."""
+    if t is T.BOOL:
+        return "true" if value else "false"
+    if t is T.FLOAT32:
+        text = repr(float(value))
+        if "e" not in text and "." not in text and "inf" not in text:
+            text += ".0"
+        return f"{text}f"
+    if t is T.STRING:
+        return '"' + str(value).replace("\\", "\\\\").replace('"', '\\"') + '"'
+    value = int(value)
+    if t is T.TIME:
+        return f"((el_time_t){value}u)"
+    if t.signed and t.bits == 32 and value == t.min:
+        return "((int32_t)(-2147483647L - 1L))"
+    suffix = ("L" if t.signed else "UL") if t.bits == 32 else ("" if t.signed else "u")
+    return f"(({t.c_name}){value}{suffix})"
+
+
+def type_limits(t: T.ValueType) -> tuple[str, str, str]:
+    """(T_WIDE, T_MIN, T_MAX) of a type parameter bound to ``t``."""
+    if t is T.FLOAT32:
+        return "float", "(-FLT_MAX)", "FLT_MAX"
+    if t is T.BOOL:
+        return "int64_t", "0", "1"
+    return "int64_t", c_literal(t, t.min), c_literal(t, t.max)
+
+
+# ====================================================================== expressions
+
+
+class ExprWriter:
+    """Writes IR expressions as C, given how to name a referenced item."""
+
+    def __init__(self, item_ref, step_time_ref=None, step_active_ref=None):
+        self.item_ref = item_ref
+        self.step_time_ref = step_time_ref
+        self.step_active_ref = step_active_ref
+
+    def write(self, e: I.IExpr) -> str:
+        if isinstance(e, I.Const):
+            return c_literal(e.type, e.value)
+        if isinstance(e, I.Ref):
+            if e.kind == "item":
+                return self.item_ref(e)
+            if e.kind == "step_time":
+                return self.step_time_ref(e)
+            return self.step_active_ref(e)
+        if isinstance(e, I.Convert):
+            return f"(({e.type.c_name}){self.write(e.arg)})"
+        if isinstance(e, I.Unary):
+            if e.op == "not":
+                return f"(!{self.write(e.arg)})"
+            if e.type is T.FLOAT32:
+                return f"(-{self.write(e.arg)})"
+            return f"EL_WRAP_NEG({e.type.c_name}, {_UNSIGNED[e.type.name]}, {self.write(e.arg)})"
+        assert isinstance(e, I.Binary)
+        a, b = self.write(e.left), self.write(e.right)
+        op, t = e.op, e.operand_type
+        if op == "and":
+            return f"({a} && {b})"
+        if op == "or":
+            return f"({a} || {b})"
+        if op in ("==", "!=", "<", "<=", ">", ">="):
+            if t.is_integer:  # through el_cmp_*: no warning for comparisons the types decide
+                return f"(el_cmp_{_DIV_SUFFIX.get(t.name, 'u32')}({a}, {b}) {op} 0)"
+            return f"({a} {op} {b})"
+        if t is T.TIME:
+            return f"el_time_{'add' if op == '+' else 'sub'}({a}, {b})"
+        if t is T.FLOAT32:
+            return f"el_div_f32({a}, {b})" if op == "/" else f"({a} {op} {b})"
+        if op in ("/", "%"):
+            return f"el_{'div' if op == '/' else 'mod'}_{_DIV_SUFFIX[t.name]}({a}, {b})"
+        macro = {"+": "EL_WRAP_ADD", "-": "EL_WRAP_SUB", "*": "EL_WRAP_MUL"}[op]
+        return f"{macro}({t.c_name}, {_UNSIGNED[t.name]}, {a}, {b})"

@@ -1,0 +1,237 @@
+"""The debug interface's outputs (docs/protocol.md): the debug map and the
+C tables of the debug server.
+
+Registered in ``render.PRODUCERS`` (files beside model.c) and
+``render.INTERFACE_HOOKS`` (starting and polling the server). A model has a
+debug interface when it declares one (``debug on uart0``); a release build
+never has one. For a debug build this writes:
+
+- ``el_debug_config.h``: ``EL_DEBUG_SERVER`` 1 or 0 (the runtime's
+  el_debug.h reads it; with 0 the server and every probe compile to
+  nothing);
+- with a debug interface, ``debug_tables.c`` (templates/debug_tables.c.j2:
+  items with addresses, types, flags and ranges; actor instances; charts'
+  continuation slots) and ``debug_map.json`` (what the host tools need to
+  name things: program id, items with id, type, flags, unit and location;
+  charts, steps, transitions, actors and tasks with their ids).
+
+Debug item ids: the IR's items keep their ids (params, vars, device data);
+the state variables of actor instances follow, instance by instance.
+"""
+
+from __future__ import annotations
+
+import functools
+import json
+import re
+from dataclasses import dataclass
+from pathlib import Path
+from types import SimpleNamespace
+
+from ..core import types as T
+from ..core.paths import runtime_dir
+from ..ir.program import Program
+from .c_syntax import ident
+
+MAP_FORMAT = "easylab-debug-map"
+MAP_VERSION = 1
+
+_TYPE_ENUM = {"bool": "EL_DBG_T_BOOL", "int8": "EL_DBG_T_I8", "uint8": "EL_DBG_T_U8", "int16": "EL_DBG_T_I16",
+              "uint16": "EL_DBG_T_U16", "int32": "EL_DBG_T_I32", "uint32": "EL_DBG_T_U32",
+              "float32": "EL_DBG_T_F32", "time": "EL_DBG_T_TIME"}
+_KIND_ENUM = {"param": "EL_DBG_K_PARAM", "var": "EL_DBG_K_VAR", "dev_out": "EL_DBG_K_DEV_OUT",
+              "dev_in": "EL_DBG_K_DEV_IN", "state": "EL_DBG_K_STATE"}
+# What the debugger may write (docs/protocol.md "What is writable"): the
+# application's inputs and state. A device `in` datum is the application's
+# output to an actuator, rewritten at every publication: read-only.
+WRITABLE_KINDS = ("param", "var", "dev_out", "state")
+
+
+def has_debug_interface(program: Program) -> bool:
+    return any(i.kind == "debug" for i in program.interfaces)
+
+
+@dataclass
+class DebugItem:
+    """One debug item: a model item or an actor instance's state variable."""
+
+    id: int
+    name: str
+    kind: str
+    type: T.ValueType
+    count: int
+    c_addr: str  # address expression in debug_tables.c
+    c_extern: str | None  # its declaration there (model items), or None
+    range: tuple | None
+    unit: str | None
+    location: str
+    actor: int | None = None
+    range_index: int | None = None
+
+    @property
+    def writable(self) -> bool:
+        return self.kind in WRITABLE_KINDS
+
+    @property
+    def flags(self) -> list[str]:
+        return ["read"] + (["write"] if self.writable else []) + (["range"] if self.range is not None else [])
+
+    @property
+    def c_flags(self) -> str:
+        names = {"read": "EL_DBG_F_READ", "write": "EL_DBG_F_WRITE", "range": "EL_DBG_F_RANGE"}
+        return " | ".join(names[f] for f in self.flags)
+
+    @property
+    def c_type(self) -> str:
+        return _TYPE_ENUM[self.type.name]
+
+    @property
+    def c_kind(self) -> str:
+        return _KIND_ENUM[self.kind]
+
+
+def _bound(t: T.ValueType, value) -> str:
+    """A C initialiser of el_dbg_bound_t for a range bound (run-time units)."""
+    if t is T.FLOAT32:
+        text = repr(float(value))
+        if "e" not in text and "." not in text and "inf" not in text:
+            text += ".0"
+        return f"{{ .f = {text}f }}"
+    if t.name in ("int8", "int16", "int32"):
+        v = int(value)
+        return "{ .i = (-2147483647L - 1L) }" if v == -2**31 else f"{{ .i = {v}L }}"
+    return f"{{ .u = {int(value)}UL }}"
+
+
+def debug_items(program: Program, view) -> list[DebugItem]:
+    """Every debug item with its debug id (model items, then actor states)."""
+
+    items: list[DebugItem] = []
+    for iv in view.items:
+        it = iv.item
+        if it.type.name not in _TYPE_ENUM:
+            continue
+        decl = f"extern {iv.c_type} {iv.c_name}{f'[{it.count}]' if it.count > 1 else ''};"
+        items.append(DebugItem(it.id, it.name, it.kind, it.type, it.count, f"(void *){iv.addr}", decl,
+                               it.range, it.unit, it.location))
+    next_id = len(program.items)
+    for inst in program.instances:
+        spec = program.specs[inst.spec]
+        df = program.dataflows[inst.dataflow]
+        c_inst = f"el_a{inst.id}_{ident(inst.name)}"
+        for name, t, size in spec.states:
+            if t.name not in _TYPE_ENUM:
+                continue
+            addr = f"(void *){c_inst}.{name}" if size else f"(void *)&{c_inst}.{name}"
+            items.append(DebugItem(next_id, f"{df.name}.{inst.name}.{name}", "state", t, size or 1, addr, None,
+                                   None, None, inst.location, actor=inst.id))
+            next_id += 1
+    ranged = 0
+    for d in items:
+        if d.range is not None:
+            d.range_index = ranged
+            ranged += 1
+    return items
+
+
+def debug_map(program: Program, items: list[DebugItem]) -> dict:
+    """The debug map (debug_map.json): names for the ids the protocol uses."""
+    tick = program.tick_us
+    return {
+        "format": MAP_FORMAT,
+        "version": MAP_VERSION,
+        "model": program.name,
+        "title": program.title,
+        "program_id": f"0x{program.program_id:08x}",
+        "tick_us": tick,
+        "interface": next(({"resource": i.resource, **i.settings} for i in program.interfaces
+                           if i.kind == "debug"), None),
+        "items": [{
+            "id": d.id, "name": d.name, "kind": d.kind, "type": d.type.name, "count": d.count,
+            "flags": d.flags, "unit": d.unit,
+            "range": list(d.range) if d.range is not None else None,
+            "location": d.location,
+            **({"actor": d.actor} if d.actor is not None else {}),
+        } for d in items],
+        "charts": [{
+            "id": c.id, "name": c.name, "task": c.task, "location": c.location, "slots": c.slots,
+            "steps": [{"id": s.id, "name": s.name, "slot": s.slot, "location": s.location} for s in c.steps],
+            "transitions": [{
+                "id": t.id,
+                "name": f"{'+'.join(c.steps[x].name for x in t.sources)} -> "
+                        f"{'+'.join(c.steps[x].name for x in t.targets)}",
+                "sources": t.sources, "targets": t.targets, "location": t.location,
+            } for t in c.transitions],
+        } for c in program.charts],
+        "actors": [{
+            "id": i.id, "name": f"{program.dataflows[i.dataflow].name}.{i.name}",
+            "type": program.specs[i.spec].type_name, "dataflow": i.dataflow,
+            "task": program.dataflows[i.dataflow].task, "location": i.location,
+            "states": [d.id for d in items if d.actor == i.id],
+        } for i in program.instances],
+        "tasks": [{
+            "id": t.id, "name": t.name, "period_us": t.period * tick, "offset_us": t.offset * tick,
+            "deadline_us": t.deadline * tick, "location": t.location,
+        } for t in program.tasks],
+    }
+
+
+def produce(program: Program, board, env, view, release: bool) -> dict[str, str]:
+    """A producer of render.PRODUCERS: nothing for a release build."""
+    if release:
+        return {}
+    enabled = has_debug_interface(program)
+    config = ("/* Generated by EasyLab: does this debug build have a debug interface (runtime_c/el_debug.h)? */\n"
+              "#ifndef EL_DEBUG_CONFIG_H\n#define EL_DEBUG_CONFIG_H\n"
+              f"#define EL_DEBUG_SERVER {1 if enabled else 0}\n#endif\n")
+    files = {"el_debug_config.h": config}
+    if not enabled:
+        return files
+    items = debug_items(program, view)
+    protocol_version = _protocol_version(runtime_dir() / "el_debug_protocol.h")
+    files["debug_tables.c"] = env.get_template("debug_tables.c.j2").render(
+        m=view, items=items, ranges=[(d, _bound(d.type, d.range[0]), _bound(d.type, d.range[1]))
+                                     for d in items if d.range is not None],
+        protocol_version=protocol_version)
+    files["debug_map.json"] = json.dumps(debug_map(program, items), indent=1) + "\n"
+    return files
+
+
+_DEFINE = re.compile(r"^\s*#\s*define\s+EL_DBG_(\w+)\s+\(?(0[xX][0-9A-Fa-f]+|\d+)[uUlL]*\)?\s*(?:/\*.*)?$")
+
+
+def protocol_header_path() -> Path:
+    """runtime_c/el_debug_protocol.h of this installation: the one source of
+    the debug protocol's numbers (the same folder the C build compiles
+    from)."""
+    return runtime_dir() / "el_debug_protocol.h"
+
+
+def parse_protocol_header(text: str) -> dict[str, int]:
+    """``{NAME: value}`` of every ``#define EL_DBG_NAME <integer>`` line."""
+    values: dict[str, int] = {}
+    for line in text.splitlines():
+        m = _DEFINE.match(line)
+        if m:
+            values[m.group(1)] = int(m.group(2), 0)
+    return values
+
+
+@functools.lru_cache(maxsize=None)
+def protocol_constants() -> SimpleNamespace:
+    """The protocol's constants by their C names without ``EL_DBG_``."""
+    return SimpleNamespace(**parse_protocol_header(protocol_header_path().read_text(encoding="utf-8")))
+
+
+def _protocol_version(header: Path) -> int:
+    version = parse_protocol_header(header.read_text(encoding="utf-8")).get("PROTOCOL_VERSION")
+    if version is None:
+        raise ValueError(f"{header}: no EL_DBG_PROTOCOL_VERSION")
+    return version
+
+
+def interface_hook(program: Program, release: bool) -> tuple[list[str], list[str]]:
+    """A hook of render.INTERFACE_HOOKS: start and serve the debug server."""
+    if release or not has_debug_interface(program):
+        return [], []
+    return ["el_debug_boot(); /* debug interface (docs/protocol.md) */"], ["el_debug_poll();"]

@@ -1,0 +1,87 @@
+"""All the C a build generates, in one call: model.c and what each
+interface adds beside it (its tables and maps) and inside it (its start
+and poll glue). Boards add their own files through the board contract.
+
+The interfaces are the producers below, in order: the debug interface
+(docs/protocol.md) and the service interface (docs/service.md).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Protocol
+
+import jinja2
+
+from ..core.paths import templates_dir
+from ..ir.program import Device, Program
+from . import debug, service
+from .c_model import CModel, build_view
+from .c_syntax import ident
+
+
+class Target(Protocol):
+    """What the C generators need of a board (a part of the board
+    contract): its name, how a device's handlers are called, and the size
+    of its non-volatile store."""
+
+    name: str
+
+    @property
+    def nv_size(self) -> int | None: ...
+
+    def device_call(self, device: Device, handler: str) -> str: ...
+
+
+# Further outputs beside model.c: each producer takes (program, target,
+# jinja environment, view, release) and returns {file name: text}; .c files
+# are compiled with the firmware.
+PRODUCERS = (debug.produce, service.produce)
+
+# The interfaces' glue in model.c: each hook takes (program, release) and
+# returns (boot statements, idle statements) for el_gen_interfaces_boot and
+# el_gen_interfaces_poll.
+INTERFACE_HOOKS = (debug.interface_hook, service.interface_hook)
+
+
+def environment(template_dir: Path | None = None) -> jinja2.Environment:
+    """The Jinja2 environment of the C templates."""
+    env = jinja2.Environment(loader=jinja2.FileSystemLoader(str(template_dir or templates_dir())),
+                             undefined=jinja2.StrictUndefined, trim_blocks=True, lstrip_blocks=True,
+                             keep_trailing_newline=True)
+    env.filters["c_ident"] = ident
+    return env
+
+
+def render(program: Program, board: Target, template_dir: Path | None = None,
+           release: bool = False) -> dict[str, str]:
+    """The generated files: {file name: text}. Deterministic: the same
+    program gives byte-identical files."""
+    view = _view_with_interfaces(program, board, release)
+    env = environment(template_dir)
+    files = {"model.c": env.get_template("model.c.j2").render(m=view, release=release)}
+    for produce in PRODUCERS:
+        files.update(produce(program, board, env, view, release))
+    return files
+
+
+def render_interfaces(program: Program, board: Target, template_dir: Path | None = None) -> dict[str, str]:
+    """The generated files of local execution's interfaces library (a debug
+    build): interp_interfaces.c, the model's storage and interface glue,
+    in place of model.c, and what the producers write beside it (debug and
+    service tables and maps)."""
+    view = _view_with_interfaces(program, board, False)
+    env = environment(template_dir)
+    files = {"interp_interfaces.c": env.get_template("interp_interfaces.c.j2").render(m=view)}
+    for produce in PRODUCERS:
+        files.update(produce(program, board, env, view, False))
+    return files
+
+
+def _view_with_interfaces(program: Program, board: Target, release: bool) -> CModel:
+    view = build_view(program, board)
+    for hook in INTERFACE_HOOKS:
+        boot, poll = hook(program, release)
+        view.interface_boot.extend(boot)
+        view.interface_poll.extend(poll)
+    return view

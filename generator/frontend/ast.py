@@ -1,0 +1,344 @@
+"""The abstract syntax tree of a model file: frozen dataclasses with spans.
+
+The tree says what was written, nothing more: names are unresolved strings
+and expressions are unevaluated. The checker (:mod:`easylab.checker`) turns
+it into the resolved model.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from fractions import Fraction
+
+from ..core.source import Span
+
+# ---------------------------------------------------------------- expressions
+
+
+@dataclass(frozen=True)
+class Expr:
+    span: Span
+
+
+@dataclass(frozen=True)
+class IntLit(Expr):
+    value: int
+
+
+@dataclass(frozen=True)
+class RealLit(Expr):
+    value: Fraction
+    text: str
+
+
+@dataclass(frozen=True)
+class DurationLit(Expr):
+    """A duration, exact in microseconds."""
+
+    microseconds: Fraction
+    text: str
+
+
+@dataclass(frozen=True)
+class BoolLit(Expr):
+    value: bool
+
+
+@dataclass(frozen=True)
+class StringLit(Expr):
+    value: str
+
+
+@dataclass(frozen=True)
+class Path(Expr):
+    """A (dotted) name: ``x``, ``robot.drive.m1.speed``, ``Extending.time``."""
+
+    parts: tuple[str, ...]
+    part_spans: tuple[Span, ...]
+
+    @property
+    def text(self) -> str:
+        return ".".join(self.parts)
+
+
+@dataclass(frozen=True)
+class Unary(Expr):
+    op: str  # "-" or "not"
+    operand: Expr
+
+
+@dataclass(frozen=True)
+class Binary(Expr):
+    op: str  # "or" "and" "==" "!=" "<" "<=" ">" ">=" "+" "-" "*" "/" "%"
+    left: Expr
+    right: Expr
+
+
+# ---------------------------------------------------------------- declarations
+
+
+@dataclass(frozen=True)
+class Node:
+    span: Span
+
+
+@dataclass(frozen=True)
+class Named(Node):
+    name: str
+    name_span: Span
+
+
+@dataclass(frozen=True)
+class TypeRef(Node):
+    name: str
+    size: Expr | None = None
+
+
+@dataclass(frozen=True)
+class RangeAttr(Node):
+    low: Expr
+    high: Expr
+
+
+@dataclass(frozen=True)
+class ServiceAttr(Node):
+    access: str  # "ro" | "rw"
+    address: int | None = None
+
+
+@dataclass(frozen=True)
+class ModelDecl(Named):
+    title: str | None
+
+
+@dataclass(frozen=True)
+class Import(Node):
+    target: str
+    is_library: bool  # `import std` (a library name) vs `import "file.elab"`
+
+
+@dataclass(frozen=True)
+class Const(Named):
+    type: TypeRef
+    value: Expr
+
+
+@dataclass(frozen=True)
+class Data(Named):
+    """A ``param`` or ``var`` declaration."""
+
+    kind: str  # "param" | "var"
+    type: TypeRef
+    default: Expr | None
+    range: RangeAttr | None
+    unit: str | None
+    service: ServiceAttr | None
+    persist: bool
+    attr_spans: tuple[tuple[str, Span], ...] = ()
+
+
+@dataclass(frozen=True)
+class Delay(Node):
+    """Initial tokens of an edge or channel: a count of zeros, or a list."""
+
+    count: Expr | None
+    values: tuple[Expr, ...] | None
+
+
+@dataclass(frozen=True)
+class Channel(Named):
+    type: TypeRef
+    delay: Delay | None
+
+
+@dataclass(frozen=True)
+class FormalParam(Named):
+    type: TypeRef
+    default: Expr | None
+    choices: tuple[Expr, ...] | None = None
+
+
+@dataclass(frozen=True)
+class Actual(Named):
+    value: Expr
+
+
+@dataclass(frozen=True)
+class Resource(Node):
+    kind: str
+    index: Expr | None
+
+
+@dataclass(frozen=True)
+class DataPort(Named):
+    direction: str  # "in" | "out"
+    type: TypeRef
+    rate: Expr | None
+
+
+@dataclass(frozen=True)
+class DataExport(Named):
+    direction: str
+    target: Path
+
+
+@dataclass(frozen=True)
+class Part(Named):
+    type_name: str
+    type_span: Span
+    args: tuple[Actual, ...]
+
+
+@dataclass(frozen=True)
+class DeviceType(Named):
+    params: tuple[FormalParam, ...]
+    claims: tuple[Resource, ...]
+    ports: tuple[DataPort, ...]
+    exports: tuple[DataExport, ...]
+    parts: tuple[Part, ...]
+    driver: str | None
+    driver_span: Span | None
+
+
+@dataclass(frozen=True)
+class DeviceInstance(Named):
+    type_name: str
+    type_span: Span
+    args: tuple[Actual, ...]
+
+
+@dataclass(frozen=True)
+class TypeParam(Named):
+    bound: str | None
+
+
+@dataclass(frozen=True)
+class ActorPort(Named):
+    direction: str
+    type: TypeRef
+    rate: Expr | None
+
+
+@dataclass(frozen=True)
+class StateVar(Named):
+    type: TypeRef
+
+
+@dataclass(frozen=True)
+class CodeBlock(Node):
+    kind: str  # "start" | "step" | "stop"
+    code: str
+    code_span: Span
+
+
+@dataclass(frozen=True)
+class ActorType(Named):
+    type_params: tuple[TypeParam, ...]
+    params: tuple[FormalParam, ...]
+    ports: tuple[ActorPort, ...]
+    states: tuple[StateVar, ...]
+    code: tuple[CodeBlock, ...]
+    impl: str | None
+    impl_span: Span | None
+
+
+@dataclass(frozen=True)
+class Instance(Named):
+    type_name: str
+    type_span: Span
+    type_args: tuple[TypeRef, ...]
+    args: tuple[Actual, ...]
+
+
+@dataclass(frozen=True)
+class Edge(Node):
+    src: Path
+    dst: Path
+    delay: Delay | None
+
+
+@dataclass(frozen=True)
+class Dataflow(Named):
+    schedule: str | None  # "sas" | "flat" | "min-buffer" | None
+    instances: tuple[Instance, ...]
+    edges: tuple[Edge, ...]
+
+
+@dataclass(frozen=True)
+class Assign(Node):
+    kind: str  # "entry" | "exit"
+    target: Path
+    value: Expr
+
+
+@dataclass(frozen=True)
+class Run(Named):
+    pass
+
+
+@dataclass(frozen=True)
+class Step(Named):
+    initial: bool
+    entry: tuple[Assign, ...]
+    exit: tuple[Assign, ...]
+    runs: tuple[Run, ...]
+
+
+@dataclass(frozen=True)
+class StepRef(Named):
+    pass
+
+
+@dataclass(frozen=True)
+class Transition(Node):
+    sources: tuple[StepRef, ...]
+    targets: tuple[StepRef, ...]
+    guard: Expr
+
+
+@dataclass(frozen=True)
+class Chart(Named):
+    steps: tuple[Step, ...]
+    transitions: tuple[Transition, ...]
+
+
+@dataclass(frozen=True)
+class TaskAttr(Node):
+    key: str  # "period" | "offset" | "deadline" | "wcet"
+    value: Expr
+
+
+@dataclass(frozen=True)
+class Task(Named):
+    attrs: tuple[TaskAttr, ...]
+    runs: tuple[Run, ...]
+
+
+@dataclass(frozen=True)
+class InterfaceAttr(Node):
+    key: str
+    value: int | str
+    value_span: Span
+
+
+@dataclass(frozen=True)
+class Interface(Node):
+    kind: str  # "debug" | "modbus"
+    mode: str | None  # modbus: "rtu" | "tcp"
+    resource: Resource | None
+    attrs: tuple[InterfaceAttr, ...]
+
+
+Declaration = (Const | Data | Channel | DeviceType | DeviceInstance | ActorType
+               | Dataflow | Chart | Task)
+
+
+@dataclass(frozen=True)
+class Module:
+    """One parsed file."""
+
+    file: str
+    header: ModelDecl | None
+    imports: tuple[Import, ...]
+    declarations: tuple[Named, ...]
+    interfaces: tuple[Interface, ...]

@@ -1,0 +1,217 @@
+"""The rules of device types and devices: elaboration of nested devices,
+their arguments, claims and data (docs/language.md)."""
+
+from __future__ import annotations
+
+import re
+
+from ...core.source import Span, closest, did_you_mean, note
+from ...core import types as T
+from .. import ast
+from ..expressions import ERROR, ExprTyper, Symbol
+from ..model import Claim, DeviceDatum, DevicePort, PrimitiveDevice
+from .base import MAX_RATE, show_value, in_library
+
+
+class DeviceRules:
+    # ================================================================ devices
+
+    def check_device_type(self, decl: ast.DeviceType) -> None:
+        names: dict[str, Span] = {}
+        for item in (*decl.params, *decl.ports, *decl.exports, *decl.parts):
+            if item.name in names:
+                self.error(item.name_span, f"'{item.name}' is declared twice in device type '{decl.name}'",
+                           notes=[note(names[item.name], "first declared here")])
+            names[item.name] = item.name_span
+        for p in decl.params:
+            self.resolve_type(p.type, allow_string=True)
+        if decl.driver is not None and decl.parts:
+            self.error(decl.driver_span, "a device type with a driver is primitive and cannot have parts",
+                       "move the driver into a device type of its own and make it a part")
+        if decl.driver is None and (decl.ports or decl.claims):
+            what = "data ports" if decl.ports else "claims"
+            self.error(decl.name_span, f"device type '{decl.name}' has {what} but no driver",
+                       "add driver \"name\", or re-export a part's data with out x = part.y")
+        if decl.driver is not None and not re.fullmatch(r"[a-z_][a-z0-9_]*", decl.driver):
+            self.error(decl.driver_span, f"driver name '{decl.driver}' must be a C identifier in lower case")
+        if not decl.parts and decl.exports:
+            self.error(decl.exports[0].span, "a re-export needs a part to take its data from")
+
+    def elaborate_device(self, decl: ast.DeviceInstance) -> None:
+        """Flatten a device instance into primitive devices and data paths."""
+        dtype = self.lookup(decl.type_name, decl.type_span, (ast.DeviceType,), "device type")
+        if dtype is None:
+            return
+        self.top_devices[decl.name] = decl
+        args = self.device_args(dtype, decl.args, decl.span, self.const_typer())
+        if args is not None:
+            self._elaborate(decl.name, dtype, args, decl.span, ())
+
+    def device_args(self, dtype: ast.DeviceType, actuals, span: Span, typer: ExprTyper):
+        values: dict[str, object] = {}
+        misspelt: set[str | None] = set()
+        formals = {p.name: p for p in dtype.params}
+        ok = True
+        for a in actuals:
+            formal = formals.get(a.name)
+            if formal is None:
+                self.error(a.name_span, f"device type '{dtype.name}' has no parameter '{a.name}'",
+                           did_you_mean(a.name, formals))
+                misspelt.add(closest(a.name, formals))  # not reported as missing as well
+                ok = False
+                continue
+            if a.name in values:
+                self.error(a.name_span, f"parameter '{a.name}' is given twice")
+                continue
+            t = self.resolve_type(formal.type, allow_string=True)
+            if t is None:
+                values[a.name] = None
+                ok = False
+                continue
+            v = typer.expect_const(a.value, t, f"device parameter '{a.name}'")
+            if v.type is None:
+                ok = False
+            choices = self.choice_values(formal, t) if v.type is not None else None
+            if choices is not None and v.const not in choices:
+                self.error(a.value.span, f"device parameter '{a.name}' must be one of "
+                                         f"{', '.join(show_value(c, t) for c in choices)}")
+                ok = False
+            values[a.name] = v.const
+        for name, formal in formals.items():
+            if name not in values:
+                if formal.default is not None:
+                    t = self.resolve_type(formal.type, allow_string=True)
+                    v = self.const_typer().expect_const(formal.default, t, f"the default of '{name}'") if t else ERROR
+                    values[name] = v.const
+                    ok = ok and v.type is not None
+                elif name not in misspelt:
+                    self.error(span, f"device type '{dtype.name}' needs parameter '{name}'")
+                    ok = False
+        return values if ok else None
+
+    def choice_values(self, formal: ast.FormalParam, t: T.ValueType) -> list | None:
+        """The constants a parameter declared ``in (...)`` may take, or None
+        (no choices, or a choice in error, reported)."""
+        if formal.choices is None:
+            return None
+        values = [self.const_typer().expect_const(c, t, "a choice") for c in formal.choices]
+        return None if any(v.type is None for v in values) else [v.const for v in values]
+
+    def _device_typer(self, dtype: ast.DeviceType, args: dict) -> ExprTyper:
+        def resolve(path: ast.Path):
+            if path.parts[0] in args and len(path.parts) == 1:
+                formal = next(p for p in dtype.params if p.name == path.parts[0])
+                t = T.ALL_TYPES.get(formal.type.name, T.INT32)
+                return Symbol("formal", t, args[path.parts[0]], None, path.parts[0])
+            return self.global_symbol(path, allow=("const",))
+        return self.typer(resolve, runtime=False)
+
+    def _elaborate(self, path: str, dtype: ast.DeviceType, args: dict, span: Span, outer: tuple) -> bool:
+        """``span`` is the instance or part in the model's own files that
+        stands for this device; ``outer`` the device types around it. False
+        when a part could not be elaborated (its error is reported)."""
+        typer = self._device_typer(dtype, args)
+        if dtype.driver is not None:
+            ports = {}
+            for p in dtype.ports:
+                t = self.resolve_type(p.type)
+                if t is None:
+                    continue
+                rate = self.eval_rate(p.rate, typer) if p.rate is not None else 1
+                ports[p.name] = DevicePort(p.name, p.direction, t, rate or 1)
+            claims = []
+            for r in dtype.claims:
+                claim = self.eval_claim(r, typer, path)
+                if claim is not None:
+                    claim.span = span  # the device's declaration, not the device type's claim
+                    claims.append(claim)
+                    self.claims.append(claim)
+            device = PrimitiveDevice(path, dtype, dtype.driver, args, ports, claims, span)
+            self.devices.append(device)
+            for port in ports.values():
+                self.device_data.setdefault(f"{path}.{port.name}", DeviceDatum(device, port, f"{path}.{port.name}"))
+            return len(ports) == len(dtype.ports)
+        complete = True  # every part elaborated: its data can be re-exported
+        for part in dtype.parts:
+            ptype = self.lookup(part.type_name, part.type_span, (ast.DeviceType,), "device type")
+            complete = complete and ptype is not None
+            if ptype is None:
+                continue
+            if ptype is dtype or ptype in outer:
+                cycle = [t.name for t in (*outer, dtype)][[*outer, dtype].index(ptype):] + [ptype.name]
+                self.error(part.type_span, f"device type '{ptype.name}' contains itself"
+                                           + (f" ({' -> '.join(cycle)})" if len(cycle) > 2 else ""))
+                complete = False
+                continue
+            part_args = self.device_args(ptype, part.args, part.span, typer)
+            complete = complete and part_args is not None
+            if part_args is not None:
+                part_span = span if in_library(part.span) else part.span
+                complete = self._elaborate(f"{path}.{part.name}", ptype, part_args, part_span,
+                                           (*outer, dtype)) and complete
+        for export in dtype.exports if complete else ():
+            target = self.device_data.get(f"{path}.{export.target.text}")
+            if target is None:
+                self.error(export.target.span, f"'{export.target.text}' is not a data port of a part of "
+                                               f"device type '{dtype.name}'")
+                complete = False
+                continue
+            if target.port.direction != export.direction:
+                self.error(export.span, f"'{export.name}' is declared '{export.direction}' but "
+                                        f"'{export.target.text}' is '{target.port.direction}'")
+                complete = False
+                continue
+            alias = f"{path}.{export.name}"
+            self.device_data[alias] = target
+            if target.name == f"{path}.{export.target.text}":
+                target.name = alias  # the shortest name the model gives it
+        return complete
+
+    def eval_claim(self, r: ast.Resource, typer: ExprTyper, owner: str) -> Claim | None:
+        if r.index is None:
+            m = re.fullmatch(r"([A-Za-z_]+?)(\d+)", r.kind)
+            if m is None:
+                self.error(r.span, f"resource '{r.kind}' needs an index, as in {r.kind}[0]")
+                return None
+            return Claim(m.group(1), int(m.group(2)), r.span, owner)
+        v = typer.expect_const(r.index, None, "a resource index")
+        if v.type is None:
+            return None
+        if not (v.type is T.STRING or (v.type.is_integer and v.type is not T.TIME and v.const >= 0)):
+            self.error(r.index.span, "a resource index is a non-negative integer or a pin name string")
+            return None
+        return Claim(r.kind, v.const, r.span, owner)
+
+    def eval_rate(self, e: ast.Expr, typer: ExprTyper) -> int | None:
+        v = typer.expect_const(e, None, "a rate")
+        if v.type is None:
+            return None
+        if not (v.type.is_integer and v.type is not T.TIME) or not 1 <= v.const <= MAX_RATE:
+            self.error(e.span, f"a rate is a whole number of tokens from 1 to {MAX_RATE}, not {v.const}")
+            return None
+        return v.const
+
+    def device_datum(self, path: ast.Path):
+        """The device datum a path names, or (message, hint)."""
+        datum = self.device_data.get(path.text)
+        if datum is not None:
+            return datum
+        head = path.parts[0]
+        if head not in self.top_devices:
+            return (f"unknown device '{head}'", None)
+        prefix = ""
+        for i, part in enumerate(path.parts):
+            prefix = f"{prefix}.{part}" if prefix else part
+            if i and not any(p.path == prefix or p.path.startswith(prefix + ".") for p in self.devices):
+                options = sorted({k[len(prefix) - len(part):].split(".")[0] for k in self.device_data
+                                  if k.startswith(prefix[:-len(part)])})
+                return (f"device '{prefix[:-len(part) - 1]}' has no part or datum '{part}'",
+                        did_you_mean(part, options))
+        options = sorted(k[len(path.text) + 1:] for k in self.device_data if k.startswith(path.text + "."))
+        single = {id(self.device_data[f"{path.text}.{o}"]) for o in options}
+        if len(single) == 1:  # a device with one datum stands for it (docs/language.md)
+            return self.device_data[f"{path.text}.{options[0]}"]
+        if options:
+            return (f"'{path.text}' is a device, not a datum", f"name one of its data: {', '.join(options[:6])}")
+        return (f"'{path.text}' does not name device data", None)
+

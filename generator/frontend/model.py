@@ -1,0 +1,271 @@
+"""The checked model: every name resolved, every constant evaluated.
+
+The checker builds it from the AST; the analyses (SDF, charts, tasks) and
+the lowering to the IR read it. Nodes keep a reference to their AST
+declaration for source positions only.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from fractions import Fraction
+
+from . import ast
+from ..core.types import ValueType
+
+
+@dataclass
+class ConstInfo:
+    decl: ast.Const
+    type: ValueType
+    value: object
+
+
+@dataclass
+class DataInfo:
+    """A ``param`` or ``var``."""
+
+    decl: ast.Data
+    type: ValueType
+    initial: object  # int, bool, Fraction (float32) or Fraction microseconds (time)
+    range: tuple[object, object] | None
+    writers: list["Writer"] = field(default_factory=list)
+
+    @property
+    def name(self) -> str:
+        return self.decl.name
+
+    @property
+    def kind(self) -> str:
+        return self.decl.kind
+
+
+@dataclass
+class Writer:
+    """Who writes a var or device input: a dataflow edge or a chart action."""
+
+    owner: object  # DataflowInfo or ChartInfo
+    span: object
+
+
+@dataclass
+class ChannelInfo:
+    decl: ast.Channel
+    type: ValueType
+    initial_tokens: tuple
+    producers: list["EdgeInfo"] = field(default_factory=list)
+    consumers: list["EdgeInfo"] = field(default_factory=list)
+
+    @property
+    def name(self) -> str:
+        return self.decl.name
+
+
+@dataclass
+class DevicePort:
+    name: str
+    direction: str
+    type: ValueType
+    rate: int
+
+
+@dataclass
+class Claim:
+    kind: str
+    index: object  # int or str
+    span: object
+    owner: str  # a device path or an interface name
+
+    @property
+    def key(self) -> tuple:
+        return (self.kind, self.index)
+
+    def __str__(self) -> str:
+        index = f'"{self.index}"' if isinstance(self.index, str) else str(self.index)
+        return f"{self.kind}[{index}]"
+
+
+@dataclass
+class PrimitiveDevice:
+    """A device with a driver, at a path such as ``robot.drive.m1``."""
+
+    path: str
+    type: ast.DeviceType
+    driver: str
+    args: dict[str, object]
+    ports: dict[str, DevicePort]
+    claims: list[Claim]
+    span: object  # where the instance or part is declared
+
+
+@dataclass
+class DeviceDatum:
+    """One port of a primitive device, as the application sees it."""
+
+    device: PrimitiveDevice
+    port: DevicePort
+    name: str  # the path the model uses for it first, e.g. "sensor.raw"
+    writers: list[Writer] = field(default_factory=list)
+
+    @property
+    def type(self) -> ValueType:
+        return self.port.type
+
+
+@dataclass
+class ActorInstanceInfo:
+    decl: ast.Instance
+    actor_type: ast.ActorType
+    type_bindings: dict[str, ValueType]
+    args: dict[str, "ArgValue"]
+    port_types: dict[str, ValueType]
+    port_rates: dict[str, int]
+    state_types: dict[str, tuple[ValueType, int | None]]  # (type, array size)
+    dataflow: "DataflowInfo | None" = None
+
+    @property
+    def name(self) -> str:
+        return self.decl.name
+
+
+@dataclass
+class ArgValue:
+    """An actor argument: a constant, or an expression over params (latched)."""
+
+    type: ValueType
+    const: object | None
+    expr: ast.Expr | None
+    params: tuple[str, ...] = ()
+    node: object = None  # the typed IR expression (easylab.irexpr) when not constant
+
+
+@dataclass
+class Endpoint:
+    """One end of a dataflow edge."""
+
+    kind: str  # actor | var | param | device | channel
+    target: object  # ActorInstanceInfo, DataInfo, DeviceDatum or ChannelInfo
+    port: str | None  # actor port name
+    type: ValueType
+    rate: int | None  # None for a channel: set by the graph
+    path: ast.Path
+
+    @property
+    def label(self) -> str:
+        return self.path.text
+
+
+@dataclass
+class EdgeInfo:
+    decl: ast.Edge
+    src: Endpoint
+    dst: Endpoint
+    initial_tokens: tuple
+
+    @property
+    def label(self) -> str:
+        return f"{self.src.label} -> {self.dst.label}"
+
+
+@dataclass
+class DataflowInfo:
+    decl: ast.Dataflow
+    instances: dict[str, ActorInstanceInfo]
+    edges: list[EdgeInfo]
+    task: "TaskInfo | None" = None
+    analysis: object = None  # the SDF analysis, filled in by easylab.analysis
+
+    @property
+    def name(self) -> str:
+        return self.decl.name
+
+
+@dataclass
+class StepInfo:
+    decl: ast.Step
+    index: int
+    branch: tuple  # the parallel branch: ((transition index, branch index), ...)
+    runs: list[DataflowInfo]
+    entry_actions: list["ActionInfo"] = field(default_factory=list)
+    exit_actions: list["ActionInfo"] = field(default_factory=list)
+
+    @property
+    def name(self) -> str:
+        return self.decl.name
+
+
+@dataclass
+class ActionInfo:
+    """``target = value`` of an entry or exit action; ``target`` is a DataInfo
+    or DeviceDatum, ``value`` a typed IR expression of the target's type."""
+
+    decl: ast.Assign
+    target: object
+    value: object
+
+
+@dataclass
+class TransitionInfo:
+    decl: ast.Transition
+    index: int
+    sources: list[StepInfo]
+    targets: list[StepInfo]
+    guard: object = None  # typed IR expression (bool)
+
+
+@dataclass
+class ChartInfo:
+    decl: ast.Chart
+    steps: dict[str, StepInfo]
+    transitions: list[TransitionInfo]
+    initial: StepInfo | None
+    task: "TaskInfo | None" = None
+
+    @property
+    def name(self) -> str:
+        return self.decl.name
+
+
+@dataclass
+class TaskInfo:
+    decl: ast.Task
+    period_us: Fraction
+    offset_us: Fraction
+    deadline_us: Fraction
+    wcet_us: Fraction | None
+    runs: list  # DataflowInfo | ChartInfo, in order
+
+    @property
+    def name(self) -> str:
+        return self.decl.name
+
+
+@dataclass
+class InterfaceInfo:
+    decl: ast.Interface
+    kind: str  # debug | modbus-rtu | modbus-tcp
+    claim: Claim | None
+    settings: dict[str, object]
+
+
+@dataclass
+class CheckedModel:
+    """A model that passed the checker."""
+
+    name: str
+    title: str | None
+    file: str
+    consts: dict[str, ConstInfo]
+    data: dict[str, DataInfo]
+    channels: dict[str, ChannelInfo]
+    device_types: dict[str, ast.DeviceType]
+    devices: list[PrimitiveDevice]
+    device_data: dict[str, DeviceDatum]  # every path that names a datum
+    top_devices: dict[str, ast.DeviceInstance]
+    actor_types: dict[str, ast.ActorType]
+    dataflows: dict[str, DataflowInfo]
+    charts: dict[str, ChartInfo]
+    tasks: dict[str, TaskInfo]
+    interfaces: list[InterfaceInfo]
+    claims: list[Claim]
+    actor_type_files: dict[str, str] = field(default_factory=dict)

@@ -1,0 +1,46 @@
+"""Parsing ``.elab`` text into the AST (docs/language.md): inline C blocks
+are blanked first (inline_c.py), the LALR parser builds the AST as it
+reduces (to_ast.py), and a syntax error becomes one diagnostic in the
+model's words (syntax_errors.py)."""
+
+from __future__ import annotations
+
+import functools
+import threading
+
+import lark
+from lark.exceptions import UnexpectedInput, VisitError
+
+from ..core.source import ModelError
+from . import ast
+from .grammar import grammar_text as _grammar_text
+from .inline_c import blank_inline_c
+from .syntax_errors import keyword_as_name, syntax_error
+from .to_ast import ToAst
+
+_PARSE_LOCK = threading.Lock()
+
+
+@functools.lru_cache(maxsize=1)
+def _ast_parser() -> tuple[lark.Lark, ToAst]:
+    """A parser that builds the AST while parsing. The transformer is told
+    the file and its inline C before each parse; parsing holds a lock."""
+    transformer = ToAst("<string>", {})
+    return lark.Lark(_grammar_text(), parser="lalr", lexer="contextual", keep_all_tokens=True,
+                     maybe_placeholders=False, transformer=transformer), transformer
+
+
+def parse_text(text: str, file: str = "<string>") -> ast.Module:
+    """Parse model text into an :class:`ast.Module`; raise :class:`ModelError`."""
+    blanked, blocks = blank_inline_c(text, file)
+    parser, transformer = _ast_parser()
+    with _PARSE_LOCK:
+        transformer.file, transformer.blocks, transformer.depths = file, blocks, {}
+        try:
+            return parser.parse(blanked, on_error=keyword_as_name)
+        except UnexpectedInput as err:
+            raise ModelError([syntax_error(err, file, blanked, parser)]) from None
+        except VisitError as err:
+            if isinstance(err.orig_exc, ModelError):
+                raise err.orig_exc from None
+            raise

@@ -1,0 +1,90 @@
+"""Building firmware as a user does (``python -m easylab build``), for every
+suite: one builder, and a session cache so that a build several suites
+need (an example on a board) is made once per test process."""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+import threading
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Callable
+
+ROOT = Path(__file__).resolve().parents[1]
+EXAMPLES = sorted((ROOT / "examples").glob("*.elab"))
+EXAMPLE_NAMES = [p.stem for p in EXAMPLES]
+
+
+def cli(*args, timeout: float = 300, cwd: Path | None = None, env: dict | None = None) -> subprocess.CompletedProcess:
+    """``python -m easylab ARGS`` (text), with this interpreter and the
+    inherited environment plus ``env``."""
+    return subprocess.run([sys.executable, "-m", "easylab", *map(str, args)], capture_output=True, text=True,
+                          cwd=cwd or ROOT, env={**os.environ, **(env or {})}, timeout=timeout,
+                          stdin=subprocess.DEVNULL)
+
+
+@dataclass
+class Built:
+    """A build: the CLI's result, the path on its last line, the simulator."""
+
+    proc: subprocess.CompletedProcess
+    executable: Path | None
+    simulator: Path | None
+
+    @property
+    def elf(self) -> Path | None:
+        return self.executable
+
+    @property
+    def lines(self) -> list[str]:
+        return self.proc.stdout.strip().splitlines()
+
+    @property
+    def size_line(self) -> str:
+        return next(line for line in self.lines if "flash" in line and "RAM" in line)
+
+
+def build(model: Path | str, board: str, out: Path, *args: str, ok: bool = True, env: dict | None = None) -> Built:
+    """``easylab build MODEL --board BOARD ARGS -o OUT``; ``ok``: must it succeed?"""
+    proc = cli("build", model, "--board", board, *args, "-o", out, env=env)
+    if not ok:
+        assert proc.returncode != 0, f"build of {model} for {board} {' '.join(args)} should fail:\n{proc.stdout}"
+        return Built(proc, None, None)
+    assert proc.returncode == 0, f"build of {model} for {board} {' '.join(args)} failed:\n{proc.stdout}{proc.stderr}"
+    executable = Path(proc.stdout.strip().splitlines()[-1])
+    assert executable.exists(), proc.stdout
+    sim = next((Path(line.split(": ", 1)[1]) for line in proc.stdout.splitlines()
+                if line.startswith("simulator: ")), None)
+    return Built(proc, executable, sim)
+
+
+def stimulus_of(name: str) -> Path | None:
+    """An example's own stimulus (examples/NAME.stimulus.csv), if it has one."""
+    path = ROOT / "examples" / f"{name}.stimulus.csv"
+    return path if path.is_file() else None
+
+
+class BuildCache:
+    """Builds made once per session, by key; safe to fill from threads."""
+
+    def __init__(self, root: Path):
+        self.root = root
+        self._lock = threading.Lock()
+        self._entries: dict[tuple, tuple[threading.Lock, list]] = {}
+
+    def get(self, key: tuple, make: Callable[[Path], object]):
+        """The result of ``make(out_dir)`` for ``key``, made on first use."""
+        with self._lock:
+            lock, slot = self._entries.setdefault(key, (threading.Lock(), []))
+        with lock:
+            if not slot:
+                out = self.root / "-".join(str(k).replace("/", "_") for k in key)
+                slot.append(make(out))
+            return slot[0]
+
+    def example(self, board: str, name: str, *args: str, env: dict | None = None) -> Built:
+        """An example built for a board with ARGS (``--mcu M``, ``--sim``, ...)."""
+        return self.get((board, name, *args),
+                        lambda out: build(ROOT / "examples" / f"{name}.elab", board, out, *args, env=env))
