@@ -67,7 +67,7 @@ def _client(port: int, stop_at: float, counts: list, k: int) -> None:
     counts[k] = n
 
 
-def _rate(port: int, clients: int) -> float:
+def _rate(port: int, clients: int, seconds: float) -> float:
     counts = [0] * clients
     start = time.monotonic()
     stop_at = start + seconds
@@ -117,7 +117,7 @@ def tcp_rates(work: Path, seconds: float = DURATION_S) -> dict:
                 if time.monotonic() > deadline or proc.poll() is not None:
                     raise RuntimeError("the firmware did not come up")
                 time.sleep(0.02)
-        return {"clients_1": _rate(port, 1), "clients_8": _rate(port, 8)}
+        return {"clients_1": _rate(port, 1, seconds), "clients_8": _rate(port, 8, seconds)}
     finally:
         proc.terminate()
         proc.wait(timeout=20)
