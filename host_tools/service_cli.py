@@ -326,6 +326,11 @@ def cmd_restore(args, smap: ServiceMap) -> int:
     return EXIT_DEVICE if refused else EXIT_OK
 
 
+def cmd_web(args, smap: ServiceMap) -> int:
+    from .web.server import run_panel  # aiohttp only for this command
+    return run_panel(args, smap)
+
+
 # ====================================================================== command line
 
 
@@ -372,7 +377,34 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("file", metavar="FILE")
     p = add("restore", "write the params of a backup file back", cmd_restore)
     p.add_argument("file", metavar="FILE")
+    p = add("web", "serve the service panel: a web page to monitor, plot and tune the device", cmd_web)
+    p.formatter_class = argparse.RawDescriptionHelpFormatter
+    p.epilog = WEB_EPILOG
+    p.add_argument("--listen", default="127.0.0.1:8080", metavar="ADDR:PORT",
+                   help="where the panel listens (default 127.0.0.1:8080; port 0 picks a free one)")
+    p.add_argument("--token", metavar="TOKEN", help="the token a browser must present (default: none on a "
+                   "loopback address, a new random one printed at start elsewhere)")
+    p.add_argument("--every", default="250ms", metavar="PERIOD", help="sampling period (default 250ms)")
     return parser
+
+
+WEB_EPILOG = """\
+The page lists every service item of the map (unit, range, live value),
+plots chosen items, writes rw params (range checked first), and backs up
+and restores the params as files in the format of `backup`. The device is
+sampled every PERIOD by this process alone; when it stops answering the
+panel says so and reconnects by itself.
+
+Safety: on a loopback address (the default) only this machine can open the
+panel, and only under a loopback name. On any other address a token is
+required (--token, or a random one printed at start with the address to
+open); without it nothing can be read or written. Writes must come from the
+panel's own page (same origin, JSON, its CSRF header); requests wait for
+the device in a queue of 4 and get "busy" beyond that.
+
+  easylab-service --map build/m/host/service_map.json --tcp 127.0.0.1:1502 web
+  easylab-service --map service_map.json --rtu /dev/ttyUSB0 web --listen 0.0.0.0:8080
+"""
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -397,4 +429,7 @@ def main(argv: list[str] | None = None) -> int:
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    # `python -m`: run the module under its package name, so that its errors are
+    # the classes the modules importing it (the web panel) raise.
+    from . import service_cli
+    sys.exit(service_cli.main())
