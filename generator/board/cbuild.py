@@ -14,7 +14,7 @@ from ..core.paths import runtime_dir
 from .description import BoardDescription
 
 # Which Debian package provides a compiler, for the message when it is missing.
-DEBIAN_PACKAGES = {"gcc": "gcc", "cc": "gcc", "clang": "clang", "avr-gcc": "gcc-avr", "sdcc": "sdcc"}
+DEBIAN_PACKAGES = {"gcc": "gcc", "cc": "gcc", "clang": "clang"}  # a board names its own compiler's
 
 
 def require_tool(tool: str, board: str, debian_package: str | None = None, what: str = "C compiler") -> None:
