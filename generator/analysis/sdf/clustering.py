@@ -84,18 +84,18 @@ def bisection(dag: LevelDag, order: Sequence[int], reorder: bool) -> tuple[list[
     splits: Splits = {}
     if size < 2:
         return final, splits
-    # Parts to cut: the part, its first position, and Kahn's order of it when
-    # known already.
-    pending: list[tuple[list[int], int, list[int] | None]] = [(list(order), 0, None)]
+    # Parts to cut: the part, its first position, and its candidate orders
+    # when known already.
+    pending: list[tuple[list[int], int, list[list[int]] | None]] = [(list(order), 0, None)]
     while pending:
-        part, lo, kahn = pending.pop()
+        part, lo, candidates = pending.pop()
         if len(part) == 1:
             final[lo] = part[0]
             continue
-        candidates = [part]
-        if reorder:
-            if kahn is None:
-                kahn = topological_order(part, dag.succ, dag.priority)
+        if not reorder:
+            candidates = [part]
+        elif candidates is None:
+            kahn = topological_order(part, dag.succ, dag.priority)
             candidates = [kahn]
             # A part whose order is a path of edges has no other order to try.
             if not all(b in dag.succ[a] for a, b in zip(kahn, kahn[1:])):
@@ -110,14 +110,15 @@ def bisection(dag: LevelDag, order: Sequence[int], reorder: bool) -> tuple[list[
                 best_key, best_sequence, best_cut = key, sequence, cut
         splits[(lo, lo + len(part) - 1)] = lo + best_cut
         left, right = best_sequence[:best_cut + 1], best_sequence[best_cut + 1:]
-        left_kahn = None
+        left_orders = None
         if reorder:
-            # The left part is a prefix of a topological order of the part:
-            # none of its nodes has a predecessor outside it, so Kahn's order
-            # of it is the part's, restricted to it.
-            left_kahn = left if best_sequence is kahn else list(filter(set(left).__contains__, kahn))
+            # The left part is a prefix of a topological order of the part: no
+            # edge enters it from the rest of the part, so its Kahn order and
+            # its depth-first order are the part's, restricted to it.
+            inside = set(left).__contains__
+            left_orders = [left if o is best_sequence else list(filter(inside, o)) for o in candidates]
         pending.append((right, lo + best_cut + 1, None))
-        pending.append((left, lo, left_kahn))
+        pending.append((left, lo, left_orders))
     return final, splits
 
 
@@ -252,9 +253,7 @@ def _other_path(succ: list[set[int]], pred: list[set[int]], u: int, v: int, limi
     bound = max(limit, len(seen))
     frontier = seen
     while frontier:
-        reached: set[int] = set()
-        for x in frontier:
-            reached |= succ[x]
+        reached = set().union(*map(succ.__getitem__, frontier))
         if v in reached:
             return True
         frontier = reached - seen
