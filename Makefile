@@ -58,8 +58,13 @@ $(VENV)/.installed: pyproject.toml setup.py
 	   { cat $(VENV)/install.log; echo "make: installing the virtual environment failed"; exit 1; }
 	@touch $@
 
+# Test processes (pytest-xdist): one per core by default; TEST_JOBS=0 runs
+# the suite in this process. A test module stays in one process (module
+# fixtures build once); firmware several modules need is built once per run.
+TEST_JOBS ?= auto
+
 test: setup
-	$(PY) -m pytest -q
+	$(PY) -m pytest -q -n $(TEST_JOBS) --dist loadfile
 
 demo: setup
 	$(PY) -m easylab.demo

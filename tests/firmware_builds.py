@@ -1,10 +1,13 @@
 """Building firmware as a user does (``python -m easylab build``), for every
 suite: one builder, and a session cache so that a build several suites
-need (an example on a board) is made once per test process."""
+need (an example on a board) is made once per test run, shared by the
+test processes of ``pytest -n`` through a folder and file locks."""
 
 from __future__ import annotations
 
+import fcntl
 import os
+import pickle
 import subprocess
 import sys
 import threading
@@ -67,10 +70,14 @@ def stimulus_of(name: str) -> Path | None:
 
 
 class BuildCache:
-    """Builds made once per session, by key; safe to fill from threads."""
+    """Builds made once per run, by key; safe to fill from threads and from
+    the parallel test processes sharing ``root``. A result that can be
+    pickled is shared through ``root``; one that cannot is made again, in
+    a folder of this process's own (``private``), by each process."""
 
-    def __init__(self, root: Path):
+    def __init__(self, root: Path, private: str = "own"):
         self.root = root
+        self.private = private
         self._lock = threading.Lock()
         self._entries: dict[tuple, tuple[threading.Lock, list]] = {}
 
@@ -80,9 +87,25 @@ class BuildCache:
             lock, slot = self._entries.setdefault(key, (threading.Lock(), []))
         with lock:
             if not slot:
-                out = self.root / "-".join(str(k).replace("/", "_") for k in key)
-                slot.append(make(out))
+                slot.append(self._shared("-".join(str(k).replace("/", "_") for k in key), make))
             return slot[0]
+
+    def _shared(self, name: str, make: Callable[[Path], object]):
+        self.root.mkdir(parents=True, exist_ok=True)
+        out, result_file = self.root / name, self.root / f"{name}.result"
+        private = self.root / f"{name}.private"
+        with open(self.root / f"{name}.lock", "a") as lock_file:
+            fcntl.flock(lock_file, fcntl.LOCK_EX)  # released when the file closes
+            if result_file.exists():
+                return pickle.loads(result_file.read_bytes())
+            if private.exists():  # another process's result, in use there
+                return make(self.root / self.private / name)
+            result = make(out)
+            try:
+                result_file.write_bytes(pickle.dumps(result))
+            except (pickle.PicklingError, TypeError, AttributeError):
+                private.touch()
+            return result
 
     def example(self, board: str, name: str, *args: str, env: dict | None = None) -> Built:
         """An example built for a board with ARGS (``--mcu M``, ``--sim``, ...)."""
