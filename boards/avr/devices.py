@@ -11,7 +11,8 @@ import math
 import re
 from dataclasses import dataclass
 
-from easylab.board.resources import Resolved, parse_claim
+from easylab.board import handlers
+from easylab.board.resources import Resolved, parse_claim, parse_select
 from easylab.board.simtables import item_symbol
 from easylab.core.errors import BuildError
 from easylab.ir.program import Program
@@ -126,11 +127,30 @@ def _pwm_init(mcu: Mcu, pin: str) -> tuple[str, dict]:
     return init, {"timer": timer, "channel": ch, "pin": pin}
 
 
+def _eeprom_log_slot(dev, values: int) -> int:
+    """Bytes per slot of an EEPROM log: the smallest power of two that
+    holds a record (a sequence number and the values) and divides the page."""
+    page, size = int(dev.params["page"][1]), int(dev.params["bytes"][1])
+    slot = 4
+    while slot < 2 + 2 * values:
+        slot *= 2
+    if slot > min(page, 64) or page % slot or size % page or size > 0x10000 or size & (size - 1):
+        raise BuildError(f"{dev.location}: error: device '{dev.path}': a record of {values} values takes a slot "
+                         f"of {slot} bytes, which must divide its page of {page} bytes (64 at the most) in a "
+                         f"memory of whole pages whose size is a power of two up to 65536 bytes ({size}): fewer "
+                         f"values, or another page or size")
+    return slot
+
+
 def device_views(program: Program, board) -> list[DeviceView]:
+    """The descriptions of the devices that run the board's drivers (those
+    whose types bring handler files for the board run those instead)."""
     mcu = board.part
     specs = board.drivers
     views = []
     for dev in program.devices:
+        if handlers.handler_file(dev, board.name) is not None:
+            continue
         spec = specs[dev.driver]
         claims = [parse_claim(c) for c in dev.claims]
         items = [_item_c(program, i)[0] for i in dev.items]
@@ -172,6 +192,20 @@ def device_views(program: Program, board) -> list[DeviceView]:
             v = DeviceView(dev.id, dev.path, d, dev.location, "el_drv_line_camera_t",
                            f"{{ {n}u, &el_dev{dev.id}_state, &{items[0]} }}", spec["header"],
                            {"uart": n, "baud": int(spec.get("baud", 115200))}, "el_drv_line_camera_state_t")
+        elif d == "i2c_temperature":
+            bus, addr = claims[0][1], parse_select(dev.claims[0])[1]
+            v = DeviceView(dev.id, dev.path, d, dev.location, "el_drv_i2c_temperature_t",
+                           f"{{ {bus}u, 0x{addr:02x}u, &{items[0]} }}", spec["header"], {"i2c": bus, "addr": addr})
+        elif d == "i2c_eeprom_log":
+            bus, addr = claims[0][1], parse_select(dev.claims[0])[1]
+            values = program.items[dev.items[0]].count
+            slot = _eeprom_log_slot(dev, values)
+            slots = int(dev.params["bytes"][1]) // slot
+            record = items[0] if values > 1 else f"&{items[0]}"
+            v = DeviceView(dev.id, dev.path, d, dev.location, "el_drv_i2c_eeprom_log_t",
+                           f"{{ {bus}u, 0x{addr:02x}u, {values}u, {slot}u, {slots}u, &el_dev{dev.id}_state, "
+                           f"{record} }}", spec["header"], {"i2c": bus, "addr": addr, "slot": slot},
+                           "el_drv_i2c_eeprom_log_state_t")
         else:  # a driver listed in board.toml without generator support
             raise BuildError(f"{dev.location}: error: the avr backend cannot describe devices of driver '{d}' yet")
         v.hw["data"] = data_names
@@ -228,10 +262,26 @@ def config_header(program: Program, board, res: Resolved, release: bool) -> str:
         elif u["use"] == "modbus-rtu":
             lines.append(f"#define EL_AVR_MODBUS_UART {n}u")
             lines.append(f"#define EL_AVR_MODBUS_TX {tx}u")
+    lines += _i2c_config(board, res)
     if board.sim:
         lines += ["", "#define EL_AVR_SIM 1 /* simulation build: instants reported through GPIOR0 */"]
     lines += ["", "#endif /* EL_AVR_CONFIG_H */", ""]
     return "\n".join(lines)
+
+
+def _i2c_config(board, res: Resolved) -> list[str]:
+    """The TWI's settings when a device is on the I2C bus (avr_twi.c)."""
+    if ("i2c", 0) not in res.buses:
+        return []
+    i2c = board.description.table("i2c")
+    sda, scl = board.part.i2c[0]
+    port = sda[1]
+    return ["", f"/* i2c[0] on the TWI: {', '.join(c.owner for c in res.buses[('i2c', 0)])} */",
+            "#define EL_AVR_I2C 1", f"#define EL_AVR_I2C_HZ {int(i2c.get('clock_hz', 400000))}UL",
+            f"#define EL_I2C_WAIT_US {int(i2c.get('wait_us', 2000))}UL /* the longest wait for a job */",
+            f"#define EL_I2C_BUSY_US {int(i2c.get('busy_us', 10000))}UL /* a busy chip is tried again this long */",
+            f"#define EL_AVR_I2C_PORT PORT{port} /* SDA {sda}, SCL {scl}: internal pull-ups */",
+            f"#define EL_AVR_I2C_PULLUPS (_BV({sda[2]}) | _BV({scl[2]}))"]
 
 
 def devices_header(program: Program, views: list[DeviceView]) -> str:
@@ -249,7 +299,8 @@ def devices_header(program: Program, views: list[DeviceView]) -> str:
             name, ctype = _item_c(program, i)
             if name not in seen:
                 seen.add(name)
-                lines.append(f"extern {ctype} {name};")
+                count = program.items[i].count
+                lines.append(f"extern {ctype} {name}{f'[{count}]' if count > 1 else ''};")
     lines.append("")
     for v in views:
         if v.state_type:

@@ -580,3 +580,17 @@ void el_sim_read(uint8_t device)
         store(col);
     }
 }
+
+void el_sim_sample(uint8_t device)
+{
+    uint16_t i;
+
+    if (device >= el_device_count)
+        return;
+    for (i = 0; i < el_item_count; i++) {
+        const el_item_t *it = &el_items[i];
+        if (it->kind == EL_K_DEV_OUT && it->device == device)
+            memset(it->addr, 0, el_host_type_size(it->type) * it->count); /* 0, false, 0.0f */
+    }
+    el_sim_read(device);
+}

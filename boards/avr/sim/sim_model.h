@@ -27,7 +27,8 @@ enum {
     SIM_HW_PIN_OUT,  /* a: port letter, b: bit (the firmware drives it) */
     SIM_HW_CAMERA,   /* a: UART; c: baud; line camera frames (drivers/el_drv_line_camera.h) */
     SIM_HW_ENCODER,  /* a, b: port letter << 8 | bit of pins A and B; quadrature edges */
-    SIM_HW_PWM       /* the firmware drives a PWM output */
+    SIM_HW_PWM,      /* the firmware drives a PWM output */
+    SIM_HW_I2C_TEMP  /* a: bus, b: address; the temperature of the sensor there, 1/16 degC (sim_i2c.h) */
 };
 
 typedef struct {
@@ -53,6 +54,21 @@ typedef struct {
     const char *name;  /* "PB5" */
     const char *what;  /* the device */
 } sim_pin_t;
+
+/* A chip on an I2C bus (sim_i2c.h): one per address a device claims
+ * where a chip of a kind the harness models answers. */
+enum { SIM_CHIP_TEMPERATURE = 1, SIM_CHIP_EEPROM = 2 };
+
+typedef struct {
+    uint8_t bus;
+    uint8_t address;
+    uint8_t kind;    /* SIM_CHIP_... */
+    uint32_t bytes;  /* EEPROM: its memory (a power of two) */
+    uint16_t page;   /* EEPROM: its page */
+} sim_chip_t;
+
+extern const sim_chip_t sim_chips[];
+extern const uint16_t sim_chip_count;
 
 extern const sim_addr_t sim_item_addr[];
 extern const sim_addr_t sim_chart_addr[];

@@ -57,6 +57,7 @@ class CheckerBase:
         self.device_types: dict[str, ast.DeviceType] = {}
         self.actor_types: dict[str, ast.ActorType] = {}
         self.actor_type_files: dict[str, str] = {}
+        self.device_type_files: dict[str, str] = {}
         self.devices: list[PrimitiveDevice] = []
         self.device_data: dict[str, DeviceDatum] = {}
         self.top_devices: dict[str, ast.DeviceInstance] = {}
@@ -134,6 +135,7 @@ class CheckerBase:
                 self.globals[decl.name] = decl
                 if isinstance(decl, ast.DeviceType):
                     self.device_types[decl.name] = decl
+                    self.device_type_files[decl.name] = module.file
                 elif isinstance(decl, ast.ActorType):
                     self.actor_types[decl.name] = decl
                     self.actor_type_files[decl.name] = module.file
