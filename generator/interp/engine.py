@@ -21,6 +21,7 @@ from typing import Callable
 
 from ..ir.program import Instant, Program
 from .clock import Clock
+from .devices import ModelDevices
 from .interfaces import LOAD_REFUSED, LOAD_REPLACED, Interfaces, Library
 from .plugins import PluginCache, PluginError
 from .replacement import CarriedPublication, Replacement, carry, transfer
@@ -105,7 +106,7 @@ class Engine:
             if self.interfaces.debug is not None and not io.has_debug:
                 raise PluginError(f"model '{program.name}' has no debug interface, which this run serves "
                                   "(declare one: `debug on uart0`)")
-        return ProgramState(program, plugins, self.cache.batch_runner, io)
+        return ProgramState(program, plugins, self.cache.batch_runner, io, ModelDevices(program, self.cache))
 
     @property
     def io(self) -> Interfaces | None:
@@ -271,10 +272,14 @@ class Engine:
             state = self.state
         released = instant.release
         if released:
-            if self.stimulus is not None:
-                for device, readers in state.readers:
-                    if not readers.isdisjoint(released):
-                        self.stimulus.read_device(device, t, state.published)
+            for device, readers in state.readers:
+                if readers.isdisjoint(released):
+                    continue
+                if state.model_devices is not None and \
+                        state.model_devices.read(device, state.published, self.stimulus, t):
+                    continue  # its host handlers from the model's folder
+                if self.stimulus is not None:
+                    self.stimulus.read_device(device, t, state.published)
             for task_id in released:
                 task_state = state.tasks[task_id]
                 state.release(task_state)
@@ -365,6 +370,7 @@ class Engine:
                 report.carried_tasks.append(task_state.task.name)
         self.carried.sort(key=lambda c: c.due_us)
         transfer(old, new, report)
+        new.model_devices.take_over(old.model_devices, old.published, new.published)
         self.state = new
         self._position(t)
         if self.stimulus is not None:

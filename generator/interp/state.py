@@ -11,6 +11,7 @@ from ..ir.program import Instant, Program, Task
 from . import values as V
 from .charts import ChartRunner
 from .dataflow import ActorState, DataflowRunner
+from .devices import ModelDevices
 from .interfaces import PROBE, Interfaces
 from .plugins import Plugin
 
@@ -61,10 +62,11 @@ class ProgramState:
     plugins.BATCH_SOURCE), as the firmware holds it at boot."""
 
     def __init__(self, program: Program, plugins: list[Plugin], run_batch: Callable[[int, int], None],
-                 io: Interfaces | None = None):
+                 io: Interfaces | None = None, model_devices: ModelDevices | None = None):
         self.program = program
         self.plugins = plugins
         self.io = io
+        self.model_devices = model_devices  # devices running host handlers from the model's folder
         self.published: list[list] = [[V.literal(i.type, i.initial)] * i.count for i in program.items]
         self.tasks = [TaskState(t, program) for t in program.tasks]
         self.channels = [deque(V.literal(c.type, v) for v in c.initial) for c in program.channels]
@@ -140,7 +142,8 @@ class ProgramState:
 
     def publish(self, task_state: TaskState) -> None:
         """The task's outputs, channel tokens and chart activity become
-        visible (device ``write()`` does nothing on a simulated board)."""
+        visible, then ``write()`` of the devices it drives (which does
+        nothing on a simulated device)."""
         task = task_state.task
         for item in task.writes:
             self.published[item] = list(task_state.local[item])
@@ -148,13 +151,23 @@ class ProgramState:
             self.channels[ch].extend(task_state.staging[ch][:self.program.channels[ch].tokens_in])
         for chart in self.charts_of_task[task.id]:
             self.charts[chart].publish()
+        if self.model_devices is not None:
+            for dev in self.program.devices:
+                if dev.written_by == task.id:
+                    self.model_devices.write(dev.id, self.published)
 
     def boot(self) -> None:
+        """Devices' open() and start() (model.c's order), then the actors'
+        start code."""
+        if self.model_devices is not None:
+            self.model_devices.boot(self.published)
         for actor in self.actors:
             actor.start()
 
     def shutdown(self) -> None:
         for actor in self.actors:
             actor.stop()
+        if self.model_devices is not None:
+            self.model_devices.shutdown(self.published)
 
 
