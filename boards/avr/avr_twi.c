@@ -8,7 +8,11 @@
  * acknowledge its address goes back to the end of the queue when it asks
  * for it (EL_I2C_RETRY_BUSY: an EEPROM in its write cycle), for at most
  * EL_I2C_BUSY_US; so a page written to an EEPROM never delays a sensor's
- * read by more than the transfer on the bus at that moment.
+ * read by more than the transfer on the bus at that moment. When it is the
+ * only job it waits parked, the bus idle, and is tried again at the next
+ * interrupt of the tick's timer (el_avr_twi_poll: at least every
+ * millisecond) or as soon as another job comes: polling a busy chip never
+ * keeps the CPU in the TWI's interrupt.
  *
  * The bus runs at EL_AVR_I2C_HZ (el_avr_config.h, from board.toml) with the
  * pins' internal pull-ups on (external 4.7 kOhm pull-ups belong on a real
@@ -42,7 +46,9 @@ static el_i2c_job_t *volatile tail;
 static volatile uint8_t tx_at;      /* bytes of the head job sent */
 static volatile uint8_t rx_at;      /* bytes of the head job received */
 static volatile bool reading;       /* the head job is in its read part */
+static volatile bool parked;        /* the head job waits for its busy chip, the bus idle */
 static volatile uint16_t failures;
+static uint32_t busy_bound;         /* EL_I2C_BUSY_US in fine-clock periods */
 
 static void twi_on(void)
 {
@@ -50,11 +56,13 @@ static void twi_on(void)
     TWSR = 0u;                             /* prescaler 1 */
     TWBR = (uint8_t)EL_AVR_TWBR;
     TWCR = _BV(TWEN);
+    busy_bound = el_avr_clock_from_us(EL_I2C_BUSY_US);
 }
 
 /* Put the head job on the bus (STOP first when one is due). */
 static void start_head(bool after_stop)
 {
+    parked = false;
     tx_at = 0u;
     rx_at = 0u;
     reading = head->tx_len == 0u;
@@ -86,18 +94,27 @@ static void finish(el_bus_status_t status, bool stop)
 static void not_acknowledged(void)
 {
     el_i2c_job_t *job = head;
-    if ((job->flags & EL_I2C_RETRY_BUSY) != 0u &&
-        el_avr_clock() - job->since < el_avr_clock_from_us(EL_I2C_BUSY_US)) {
+    if ((job->flags & EL_I2C_RETRY_BUSY) != 0u && el_avr_clock() - job->since < busy_bound) {
         if (job->next != 0) { /* to the end of the queue: the others first */
             head = job->next;
             job->next = 0;
             tail->next = job;
             tail = job;
+            start_head(true);
+        } else { /* alone: STOP, and try again at the next poll */
+            TWCR = TWCR_STOP;
+            parked = true;
         }
-        start_head(true); /* STOP, then try again (acknowledge polling) */
         return;
     }
     finish(EL_BUS_NACK, true);
+}
+
+void el_avr_twi_poll(void)
+{
+    if (parked) {
+        start_head(false);
+    }
 }
 
 ISR(TWI_vect)
@@ -181,6 +198,10 @@ bool el_i2c_submit(el_i2c_job_t *job)
         head = job;
         tail = job;
         start_head(false);
+    } else if (parked) { /* the bus is idle: this job first, the busy chip's after it */
+        job->next = head;
+        head = job;
+        start_head(false);
     } else {
         tail->next = job;
         tail = job;
@@ -197,6 +218,7 @@ static void abandon(el_i2c_job_t *job)
         return;
     }
     if (head == job) {
+        parked = false;
         TWCR = 0u; /* stop the TWI mid-transfer: the lines are released */
         twi_on();
         finish(EL_BUS_TIMEOUT, false);

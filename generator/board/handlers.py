@@ -150,7 +150,7 @@ def device_block(program: Program, device: Device, code: HandlerCode, binding: B
     lines.append("typedef struct {")
     lines += [f"    {f}" for f in fields or ["uint8_t el_unused; /* C99 wants a member */"]]
     lines.append(f"}} {state_type};")
-    if firmware:
+    if firmware and device.states:
         lines.append(f"static {state_type} {binding.state}; /* zero at boot */")
     defines = [("EL_DEVICE", f"{device.id}u"), ("EL_DEVICE_PATH", c_literal(T.STRING, device.path))]
     defines += [(name, c_literal(t, v)) for name, (t, v) in device.params.items()]
