@@ -8,7 +8,7 @@
  * nothing else in the runtime calls them, so boards without buses need
  * nothing.
  *
- * Transfers never block the CPU: the board runs a bus's jobs one after the
+ * I2C transfers never block the CPU: the board runs a bus's jobs one after the
  * other from its interrupts, in the order they were submitted. A job is
  * the caller's (static, in a driver's state, or on the stack while its
  * caller waits): no heap. Whoever waits for a job waits at most the bus's
@@ -73,5 +73,33 @@ el_bus_status_t el_i2c_transfer(uint8_t bus, uint8_t address, const uint8_t *tx,
 
 /* Jobs that failed on a bus (NACK, timeout, bus error), saturating. */
 uint16_t el_i2c_errors(uint8_t bus);
+
+/* ---- SPI (master) ----
+ *
+ * A device on an SPI bus (`claims spi[0] cs "PB2"`) is selected by its own
+ * pin: the board describes it (struct el_pin, in the board's el_board.h),
+ * and a device's handlers get theirs as EL_CS. SPI clocks bytes in
+ * microseconds (2 us at 4 MHz), so a transfer is done in place, its
+ * duration bounded by its length: len * 8 / EL_SPI_HZ seconds (plus a few
+ * cycles a byte). */
+
+typedef struct el_pin el_pin_t;
+
+/* SPI modes: clock polarity and phase. */
+#define EL_SPI_MODE0 0u /* clock idle low, sample on the rising edge */
+#define EL_SPI_MODE1 1u /* clock idle low, sample on the falling edge */
+#define EL_SPI_MODE2 2u /* clock idle high, sample on the falling edge */
+#define EL_SPI_MODE3 3u /* clock idle high, sample on the rising edge */
+
+/* Make the bus ready and the chip select an output, high (not selected):
+ * a device's open() calls it before the device's first transfer. */
+el_bus_status_t el_spi_open(uint8_t bus, const el_pin_t *cs);
+
+/* One transfer, most significant bit first: the chip select low, `len`
+ * bytes out from `tx` (0xFF each when tx is NULL) while as many come in
+ * to `rx` (dropped when NULL), the chip select high. EL_BUS_ERROR for a bus
+ * the board lacks or no chip select. */
+el_bus_status_t el_spi_transfer(uint8_t bus, const el_pin_t *cs, uint8_t mode, const uint8_t *tx, uint8_t *rx,
+                                uint16_t len);
 
 #endif /* EL_BUS_H */

@@ -80,7 +80,11 @@ class AvrBoard(BoardBase):
         """The device tables and configuration, and the handlers a model
         brings for the board (they may use the I2C bus: el_bus.h)."""
         return {**devices.files(program, self, checked, release),
-                **handlers.source(program, self.name, includes=("el_bus.h",))}
+                **handlers.source(program, self.name, includes=("el_bus.h",), chip_select=self.chip_select)}
+
+    def chip_select(self, pin: str) -> str:
+        """A chip select for handler files (EL_CS): struct el_pin of el_board.h."""
+        return devices.chip_select(pin)
 
     def compile(self, program: Program, checked: object, out_dir: Path, generated: list[Path],
                 options: CompileOptions) -> Compiled:

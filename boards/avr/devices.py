@@ -117,6 +117,12 @@ def _pin_regs(pin: str) -> tuple[str, str, int]:
     return f"&PIN{m.group(1)}", f"_BV({m.group(2)})", int(m.group(2))
 
 
+def chip_select(pin: str) -> str:
+    """A pin as the buses take a chip select: ``struct el_pin`` (el_board.h)."""
+    reg, mask, _ = _pin_regs(pin)
+    return f"{{ {reg}, {mask} }}"
+
+
 def _pwm_init(mcu: Mcu, pin: str) -> tuple[str, dict]:
     timer, ch = mcu.pwm[pin]
     wide = timer in mcu.wide_timers
@@ -196,16 +202,17 @@ def device_views(program: Program, board) -> list[DeviceView]:
             bus, addr = claims[0][1], parse_select(dev.claims[0])[1]
             v = DeviceView(dev.id, dev.path, d, dev.location, "el_drv_i2c_temperature_t",
                            f"{{ {bus}u, 0x{addr:02x}u, &{items[0]} }}", spec["header"], {"i2c": bus, "addr": addr})
-        elif d == "i2c_eeprom_log":
-            bus, addr = claims[0][1], parse_select(dev.claims[0])[1]
+        elif d in ("i2c_eeprom_log", "spi_eeprom_log"):
+            bus, (how, where) = claims[0][1], parse_select(dev.claims[0])
             values = program.items[dev.items[0]].count
             slot = _eeprom_log_slot(dev, values)
             slots = int(dev.params["bytes"][1]) // slot
             record = items[0] if values > 1 else f"&{items[0]}"
-            v = DeviceView(dev.id, dev.path, d, dev.location, "el_drv_i2c_eeprom_log_t",
-                           f"{{ {bus}u, 0x{addr:02x}u, {values}u, {slot}u, {slots}u, &el_dev{dev.id}_state, "
-                           f"{record} }}", spec["header"], {"i2c": bus, "addr": addr, "slot": slot},
-                           "el_drv_i2c_eeprom_log_state_t")
+            place = f"0x{where:02x}u" if how == "addr" else chip_select(where)
+            v = DeviceView(dev.id, dev.path, d, dev.location, f"el_drv_{d}_t",
+                           f"{{ {bus}u, {place}, {values}u, {slot}u, {slots}u, &el_dev{dev.id}_state, "
+                           f"{record} }}", spec["header"], {d[:3]: bus, how: where, "slot": slot},
+                           f"el_drv_{d}_state_t")
         else:  # a driver listed in board.toml without generator support
             raise BuildError(f"{dev.location}: error: the avr backend cannot describe devices of driver '{d}' yet")
         v.hw["data"] = data_names
@@ -262,7 +269,7 @@ def config_header(program: Program, board, res: Resolved, release: bool) -> str:
         elif u["use"] == "modbus-rtu":
             lines.append(f"#define EL_AVR_MODBUS_UART {n}u")
             lines.append(f"#define EL_AVR_MODBUS_TX {tx}u")
-    lines += _i2c_config(board, res)
+    lines += _i2c_config(board, res) + _spi_config(board, res)
     if board.sim:
         lines += ["", "#define EL_AVR_SIM 1 /* simulation build: instants reported through GPIOR0 */"]
     lines += ["", "#endif /* EL_AVR_CONFIG_H */", ""]
@@ -282,6 +289,28 @@ def _i2c_config(board, res: Resolved) -> list[str]:
             f"#define EL_I2C_BUSY_US {int(i2c.get('busy_us', 10000))}UL /* a busy chip is tried again this long */",
             f"#define EL_AVR_I2C_PORT PORT{port} /* SDA {sda}, SCL {scl}: internal pull-ups */",
             f"#define EL_AVR_I2C_PULLUPS (_BV({sda[2]}) | _BV({scl[2]}))"]
+
+
+_SPI_DIVIDERS = {2: (0, 1), 4: (0, 0), 8: (1, 1), 16: (1, 0), 32: (2, 1), 64: (2, 0), 128: (3, 0)}  # SPR, SPI2X
+
+
+def _spi_config(board, res: Resolved) -> list[str]:
+    """The SPI's settings when a device is on the SPI bus (avr_spi.c): the
+    fastest clock F_CPU / 2^k at most the board's."""
+    if ("spi", 0) not in res.buses:
+        return []
+    hz = int(board.description.table("spi").get("clock_hz", 4000000))
+    divider = next((k for k in sorted(_SPI_DIVIDERS) if board.clock_hz // k <= hz), 128)
+    spr, x2 = _SPI_DIVIDERS[divider]
+    sck, mosi, _miso, ss = board.part.spi[0]
+    port = sck[1]
+    return ["", f"/* spi[0], master: {', '.join(c.owner for c in res.buses[('spi', 0)])} */",
+            "#define EL_AVR_SPI 1", f"#define EL_AVR_SPI_HZ {board.clock_hz // divider}UL /* F_CPU / {divider} */",
+            f"#define EL_AVR_SPI_SPR {spr}u", f"#define EL_AVR_SPI_2X {x2}u",
+            f"#define EL_AVR_SPI_DDR DDR{port} /* SCK {sck}, MOSI {mosi}, SS {ss}: outputs */",
+            f"#define EL_AVR_SPI_PORT PORT{port}",
+            f"#define EL_AVR_SPI_OUTPUTS (_BV({sck[2]}) | _BV({mosi[2]}) | _BV({ss[2]}))",
+            f"#define EL_AVR_SPI_SS _BV({ss[2]})"]
 
 
 def devices_header(program: Program, views: list[DeviceView]) -> str:

@@ -8,6 +8,7 @@ from __future__ import annotations
 import subprocess
 from pathlib import Path
 
+from easylab.board import handlers
 from easylab.board.cbuild import require_tool, run, write_files
 from easylab.board.registry import load_board
 from easylab.board.resources import parse_claim, parse_select
@@ -47,7 +48,7 @@ def ram_symbols(nm: str, elf: Path) -> dict[str, tuple[int, int]]:
 
 
 # The chips the harness models on an I2C bus, by the addresses their kind
-# takes (sim/sim_i2c.h): LM75 / TMP102-class sensors and 24LC256-class EEPROMs.
+# takes (sim/sim_chips.h): LM75 / TMP102-class sensors and 24LC256-class EEPROMs.
 TEMPERATURE_ADDRESSES = range(0x48, 0x50)
 EEPROM_ADDRESSES = range(0x50, 0x58)
 _SENSOR_TYPES = ("int8", "uint8", "int16", "uint16", "int32", "uint32")
@@ -64,17 +65,29 @@ def _i2c_places(program: Program) -> list[tuple[object, int, int]]:
     return places
 
 
-def _chip_rows(program: Program) -> list[str]:
-    """sim_chips: a chip model at every claimed address of a kind the
-    harness models; an EEPROM log's size and page come from its device."""
+def _memory(dev) -> tuple[int, int]:
+    """An EEPROM's size and page: its log device's, or a 24LC256's."""
+    return int(dev.params.get("bytes", (None, 32768))[1]), int(dev.params.get("page", (None, 64))[1])
+
+
+def _chip_rows(program: Program, board) -> list[str]:
+    """sim_chips: a chip model at every claimed I2C address of a kind the
+    harness models, and behind the chip select of every std SPI EEPROM log
+    the board drives; an EEPROM log's size and page come from its device."""
     rows = []
     for dev, bus, addr in _i2c_places(program):
         if addr in TEMPERATURE_ADDRESSES:
-            rows.append(f"    {{ {bus}u, 0x{addr:02x}u, SIM_CHIP_TEMPERATURE, 0UL, 0u }}, /* {dev.path} */")
+            rows.append(f"    {{ {bus}u, 0x{addr:02x}u, SIM_CHIP_TEMPERATURE, 0UL, 0u, 0 }}, /* {dev.path} */")
         elif addr in EEPROM_ADDRESSES:
-            size = int(dev.params.get("bytes", (None, 32768))[1])
-            page = int(dev.params.get("page", (None, 64))[1])
-            rows.append(f"    {{ {bus}u, 0x{addr:02x}u, SIM_CHIP_EEPROM, {size}UL, {page}u }}, /* {dev.path} */")
+            size, page = _memory(dev)
+            rows.append(f"    {{ {bus}u, 0x{addr:02x}u, SIM_CHIP_EEPROM, {size}UL, {page}u, 0 }}, /* {dev.path} */")
+    for dev in program.devices:
+        if dev.driver != "spi_eeprom_log" or handlers.handler_file(dev, board.name) is not None:
+            continue
+        bus, (_how, pin) = parse_claim(dev.claims[0])[1], parse_select(dev.claims[0])
+        size, page = _memory(dev)
+        rows.append(f"    {{ {bus}u, {pin[2]}u, SIM_CHIP_SPI_EEPROM, {size}UL, {page}u, '{pin[1]}' }}, "
+                    f"/* {dev.path}: cs {pin} */")
     return rows
 
 
@@ -163,9 +176,9 @@ def sim_model_source(program: Program, board, elf: Path) -> str:
     lines.append(f"const sim_hw_t sim_hw[{max(1, len(hw))}] = {{")
     lines += hw or ["    { 0xffffu, SIM_HW_NONE, 0u, 0u, 0UL },"]
     lines += ["};", f"const uint16_t sim_hw_count = {len(hw)}u;"]
-    chips = _chip_rows(program)
+    chips = _chip_rows(program, board)
     lines.append(f"const sim_chip_t sim_chips[{max(1, len(chips))}] = {{")
-    lines += chips or ["    { 0u, 0u, 0u, 0UL, 0u },"]
+    lines += chips or ["    { 0u, 0u, 0u, 0UL, 0u, 0 },"]
     lines += ["};", f"const uint16_t sim_chip_count = {len(chips)}u;"]
     pins = _pin_rows(mcu, views)
     lines.append(f"const sim_pin_t sim_pins[{max(1, len(pins))}] = {{")
@@ -245,6 +258,6 @@ def port_program_tables(board, elf: Path) -> str:
         "const uint16_t sim_hw_count = 0u;",
         "const sim_pin_t sim_pins[1] = { { 0, 0u, SIM_PIN_LEVEL, 0u, 0u, 0u, \"\", \"\" } };",
         "const uint16_t sim_pin_count = 0u;",
-        "const sim_chip_t sim_chips[1] = { { 0u, 0u, 0u, 0UL, 0u } };",
+        "const sim_chip_t sim_chips[1] = { { 0u, 0u, 0u, 0UL, 0u, 0 } };",
         "const uint16_t sim_chip_count = 0u;",
         *harness_constants(board, elf), ""])

@@ -28,6 +28,7 @@ from ..codegen.impl_files import DEVICE_BLOCKS, split_impl
 from ..core import types as T
 from ..core.errors import BuildError
 from ..ir.program import Device, Item, Program
+from .resources import parse_select
 from .simtables import item_symbol
 
 HANDLERS = DEVICE_BLOCKS  # open, start, read, write, stop, close
@@ -128,14 +129,16 @@ def firmware_binding(program: Program, device: Device) -> Binding:
 
 
 def device_block(program: Program, device: Device, code: HandlerCode, binding: Binding,
-                 firmware: bool = True) -> list[str]:
+                 firmware: bool = True, chip_select: Callable[[str], str] | None = None) -> list[str]:
     """The C of one device's handlers: its state type, the names its code
     sees (macros, undefined at the end) and its six functions ``void
     el_mdev<id>_<handler>(void)`` (a block the file lacks is an empty
     function). For ``firmware`` the functions are global (model.c calls
     them), the items extern and the state a static variable; otherwise
     (a plug-in) the functions are static and ``binding`` reaches the data
-    and the state through pointers."""
+    and the state through pointers. ``chip_select`` gives the board's C
+    initializer of a pin (struct el_pin) for a device on an SPI bus: its
+    handlers get their chip select as ``EL_CS``."""
     state_type = f"el_mdev{device.id}_state_t"
     storage = "" if firmware else "static "
     lines = [f"/* device {device.path}: {device.type_name}("
@@ -153,6 +156,10 @@ def device_block(program: Program, device: Device, code: HandlerCode, binding: B
     if firmware and device.states:
         lines.append(f"static {state_type} {binding.state}; /* zero at boot */")
     defines = [("EL_DEVICE", f"{device.id}u"), ("EL_DEVICE_PATH", c_literal(T.STRING, device.path))]
+    cs = next((where for how, where in filter(None, map(parse_select, device.claims)) if how == "cs"), None)
+    if cs is not None and chip_select is not None:
+        lines.append(f"static const el_pin_t el_mdev{device.id}_cs = {chip_select(str(cs))}; /* cs {cs} */")
+        defines.append(("EL_CS", f"(&el_mdev{device.id}_cs)"))
     defines += [(name, c_literal(t, v)) for name, (t, v) in device.params.items()]
     for item in items:
         array = item.port in device.array_ports or item.count > 1
@@ -187,11 +194,13 @@ def prelude_block(code: HandlerCode) -> list[str]:
     return [f"/* ---- file-scope code of {code.file} ---- */", code.prelude.strip("\n"), "/* ---- end ---- */"]
 
 
-def source(program: Program, board: str, includes: tuple[str, ...] = ()) -> dict[str, str]:
+def source(program: Program, board: str, includes: tuple[str, ...] = (),
+           chip_select: Callable[[str], str] | None = None) -> dict[str, str]:
     """{``el_handlers.c``: its text} for the devices with a handler file for
     ``board``, or {} when there are none. ``includes`` are the board's
     headers the files may use beyond the runtime's and el_board.h (its bus
-    interface)."""
+    interface); ``chip_select`` the board's C for a chip select (see
+    :func:`device_block`)."""
     devices = [d for d in program.devices if handler_file(d, board) is not None]
     if not devices:
         return {}
@@ -206,5 +215,5 @@ def source(program: Program, board: str, includes: tuple[str, ...] = ()) -> dict
         if code.file not in done:  # one copy of a file's own code, whatever uses it
             done.add(code.file)
             lines += prelude_block(code) + [""]
-        lines += device_block(program, dev, code, firmware_binding(program, dev)) + [""]
+        lines += device_block(program, dev, code, firmware_binding(program, dev), chip_select=chip_select) + [""]
     return {SOURCE_FILE: "\n".join(lines) + "\n"}

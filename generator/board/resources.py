@@ -191,6 +191,10 @@ def _bus_pins(part: Part, claim: Claim, lead: str, problems: list[str]) -> list[
             problems.append(f"{lead} its chip select {where} is not a pin of the {name}; pins: "
                             f"{pin_ranges(part.pins)}")
             return None
+        if where in lines[:3]:
+            problems.append(f"{lead} {where} is the bus's {('SCK', 'MOSI', 'MISO')[lines.index(where)]}: a chip "
+                            f"select is a pin of its own{f' (or the bus SS, {lines[3]})' if len(lines) > 3 else ''}")
+            return None
         if where not in lines:
             lines.append(where)
     return lines

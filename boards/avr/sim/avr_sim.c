@@ -16,7 +16,7 @@
  * params and vars are written into the MCU's RAM, device `out` data are put
  * on the hardware the build maps them to (an ADC channel's voltage, an input
  * pin's level, line camera frames on a UART, quadrature edges on encoder
- * pins, the temperature of a sensor on the I2C bus: sim_i2c.c), and the
+ * pins, the temperature of a sensor on the I2C bus: sim_chips.c), and the
  * firmware's own drivers read them. While UART frames or
  * encoder edges are still on their way it keeps GPIOR1 nonzero, and the
  * firmware waits. At the instant marker it copies every item and chart
@@ -37,7 +37,7 @@
  * line or input file.
  */
 #include "sim_model.h"
-#include "sim_i2c.h"
+#include "sim_chips.h"
 #include "host_internal.h"
 
 #include "sim_avr.h"
@@ -448,7 +448,7 @@ static bool drive_hardware(uint16_t k)
         case EL_T_I32: { int32_t x; memcpy(&x, it->addr, 4); v = x; break; }
         default: { uint32_t x; memcpy(&x, it->addr, 4); v = x > 0x7FFFFFFFu ? 0x7FFFFFFF : (int32_t)x; break; }
         }
-        return sim_i2c_temperature((uint8_t)h->a, (uint8_t)h->b, v, it->name);
+        return sim_chips_temperature((uint8_t)h->a, (uint8_t)h->b, v, it->name);
     }
     case SIM_HW_ENCODER: {
         int32_t v;
@@ -1018,7 +1018,7 @@ int main(int argc, char **argv)
     if (hw_state == NULL)
         return EXIT_RUN;
     if ((opt.stimulus != NULL && !el_host_stimulus_load(opt.stimulus)) || !nvram_load() ||
-        !sim_i2c_init(avr, opt.chips))
+        !sim_chips_init(avr, opt.chips))
         return EXIT_USAGE;
     if ((opt.trace != NULL && !el_host_trace_open(opt.trace)) || !pins_open())
         return EXIT_USAGE;
@@ -1105,7 +1105,7 @@ int main(int argc, char **argv)
         exit_status = EXIT_RUN;
     if (pins_out != NULL && fclose(pins_out) != 0)
         exit_status = EXIT_RUN;
-    if (!nvram_save() || !sim_i2c_save())
+    if (!nvram_save() || !sim_chips_save())
         exit_status = EXIT_RUN;
     if (opt.report) {
         fprintf(stderr, "%s: cycles %llu (asleep %llu), instants %llu, time %llu us\n", el_host_prog,

@@ -28,7 +28,7 @@ enum {
     SIM_HW_CAMERA,   /* a: UART; c: baud; line camera frames (drivers/el_drv_line_camera.h) */
     SIM_HW_ENCODER,  /* a, b: port letter << 8 | bit of pins A and B; quadrature edges */
     SIM_HW_PWM,      /* the firmware drives a PWM output */
-    SIM_HW_I2C_TEMP  /* a: bus, b: address; the temperature of the sensor there, 1/16 degC (sim_i2c.h) */
+    SIM_HW_I2C_TEMP  /* a: bus, b: address; the temperature of the sensor there, 1/16 degC (sim_chips.h) */
 };
 
 typedef struct {
@@ -55,16 +55,18 @@ typedef struct {
     const char *what;  /* the device */
 } sim_pin_t;
 
-/* A chip on an I2C bus (sim_i2c.h): one per address a device claims
- * where a chip of a kind the harness models answers. */
-enum { SIM_CHIP_TEMPERATURE = 1, SIM_CHIP_EEPROM = 2 };
+/* A chip on a bus (sim_chips.h): one per address a device claims on an
+ * I2C bus where a chip of a kind the harness models answers, one per chip
+ * select of a device whose chip it models on an SPI bus. */
+enum { SIM_CHIP_TEMPERATURE = 1, SIM_CHIP_EEPROM = 2, SIM_CHIP_SPI_EEPROM = 3 };
 
 typedef struct {
     uint8_t bus;
-    uint8_t address;
+    uint8_t address; /* I2C: its address; SPI: its chip select's bit */
     uint8_t kind;    /* SIM_CHIP_... */
     uint32_t bytes;  /* EEPROM: its memory (a power of two) */
     uint16_t page;   /* EEPROM: its page */
+    char port;       /* SPI: its chip select's port ('B') */
 } sim_chip_t;
 
 extern const sim_chip_t sim_chips[];

@@ -1,4 +1,5 @@
-/* EasyLab AVR board, simulator harness: the chips on the I2C bus (sim_i2c.h).
+/* EasyLab AVR board, simulator harness: the chips on the I2C and SPI buses
+ * (sim_chips.h).
  *
  * simavr 1.6's TWI talks to the chips through IRQ messages: at each
  * address byte the master raises a START message carrying the address and
@@ -6,11 +7,17 @@
  * message per byte it wants, and STOP at the end. A chip acknowledges an
  * address or a written byte by answering with an ACK message at once (no
  * answer is a NACK) and gives a read byte by answering with a READ message.
+ * Its SPI raises each byte the master sends (100 us after SPDR is written,
+ * whatever the clock); the selected chip answers at once with the byte it
+ * shifts out meanwhile. A chip select is the pin's level as the port drives
+ * it.
  */
-#include "sim_i2c.h"
+#include "sim_chips.h"
 #include "sim_model.h"
 #include "host_internal.h"
 
+#include "avr_ioport.h"
+#include "avr_spi.h"
 #include "avr_twi.h"
 #include "sim_irq.h"
 #include "sim_time.h"
@@ -45,7 +52,21 @@ typedef struct {
     bool *dirty;
     uint32_t page_base;
     avr_cycle_count_t busy_until;
+    /* SPI EEPROM */
+    bool selected;
+    uint8_t command;
+    uint8_t next_out;    /* what it shifts out during the next byte */
+    bool write_enabled;  /* WEL */
 } chip_t;
+
+/* The 25LC256's instructions and status bits. */
+#define SPI_READ 0x03u
+#define SPI_WRITE 0x02u
+#define SPI_WRDI 0x04u
+#define SPI_RDSR 0x05u
+#define SPI_WREN 0x06u
+#define SPI_WIP 0x01u
+#define SPI_WEL 0x02u
 
 static avr_t *mcu;
 static avr_irq_t *twi_in; /* the TWI's input: our answers */
@@ -97,12 +118,14 @@ static uint8_t temp_read(chip_t *c)
 
 /* ---- the EEPROM ---- */
 
-static void eeprom_write(chip_t *c, uint8_t b)
+/* Byte k of a write: the address (most significant byte first), then data
+ * into the page buffer. */
+static void eeprom_write(chip_t *c, uint32_t k, uint8_t b)
 {
     uint32_t size = c->spec->bytes, page = c->spec->page;
-    if (c->index == 0u) {
+    if (k == 0u) {
         c->at = (uint32_t)b << 8;
-    } else if (c->index == 1u) {
+    } else if (k == 1u) {
         c->at = (c->at | b) & (size - 1u);
         c->page_base = c->at - c->at % page;
         memset(c->dirty, 0, page * sizeof *c->dirty);
@@ -121,16 +144,86 @@ static uint8_t eeprom_read(chip_t *c)
     return b;
 }
 
-/* STOP after data bytes: the page is written, the chip busy for a while. */
-static void eeprom_commit(chip_t *c)
+/* STOP (I2C) or the chip select's rise (SPI) after data bytes: the page is
+ * written, the chip busy for a while. */
+static void eeprom_commit(chip_t *c, uint32_t address_bytes)
 {
     uint32_t k;
-    if (c->index <= 2u)
+    if (c->index <= address_bytes)
         return;
     for (k = 0; k < c->spec->page; k++)
         if (c->dirty[k])
             c->mem[c->page_base + k] = c->page[k];
     c->busy_until = mcu->cycle + avr_usec_to_cycles(mcu, EEPROM_WRITE_US);
+}
+
+/* ---- the SPI EEPROM ---- */
+
+static uint8_t spi_status(const chip_t *c)
+{
+    return (uint8_t)((mcu->cycle < c->busy_until ? SPI_WIP : 0u) | (c->write_enabled ? SPI_WEL : 0u));
+}
+
+static void spi_select(struct avr_irq_t *irq, uint32_t value, void *param)
+{
+    chip_t *c = (chip_t *)param;
+    (void)irq;
+    if (value == 0u) { /* selected: an instruction comes */
+        c->selected = true;
+        c->index = 0u;
+        c->command = 0u;
+        c->next_out = 0xFFu;
+        return;
+    }
+    if (!c->selected)
+        return;
+    c->selected = false;
+    if (c->command == SPI_WRITE && c->write_enabled) { /* the write cycle starts */
+        eeprom_commit(c, 3u);
+        if (c->index > 3u)
+            c->write_enabled = false;
+    } else if (c->command == SPI_WREN && c->index > 0u) {
+        c->write_enabled = true;
+    } else if (c->command == SPI_WRDI && c->index > 0u) {
+        c->write_enabled = false;
+    }
+}
+
+/* One byte in from the master; returns the byte shifted out meanwhile. */
+static uint8_t spi_exchange(chip_t *c, uint8_t in)
+{
+    uint8_t out = c->next_out;
+    bool busy = mcu->cycle < c->busy_until;
+    c->next_out = 0xFFu;
+    if (c->index == 0u) {
+        c->command = busy && in != SPI_RDSR ? 0u : in; /* in its write cycle it only answers RDSR */
+    } else if (c->command == SPI_READ || c->command == SPI_WRITE) {
+        if (c->index <= 2u || c->command == SPI_WRITE) { /* the address, then a WRITE's data */
+            if (c->index <= 2u || c->write_enabled)
+                eeprom_write(c, c->index - 1u, in);
+            if (c->index == 2u && c->command == SPI_READ)
+                c->next_out = c->mem[c->at];
+        } else { /* READ: the next byte */
+            c->at = (c->at + 1u) & (c->spec->bytes - 1u);
+            c->next_out = c->mem[c->at];
+        }
+    }
+    if (c->command == SPI_RDSR)
+        c->next_out = spi_status(c);
+    c->index++;
+    return out;
+}
+
+static void on_spi(struct avr_irq_t *irq, uint32_t value, void *param)
+{
+    uint16_t i;
+    uint8_t out = 0xFFu; /* nothing selected: the line stays high */
+    (void)irq;
+    (void)param;
+    for (i = 0; i < sim_chip_count; i++)
+        if (chips[i].spec->kind == SIM_CHIP_SPI_EEPROM && chips[i].selected)
+            out = spi_exchange(&chips[i], (uint8_t)value);
+    avr_raise_irq(avr_io_getirq(mcu, AVR_IOCTL_SPI_GETIRQ(0), SPI_IRQ_INPUT), out);
 }
 
 /* ---- the bus ---- */
@@ -145,15 +238,17 @@ static void on_bus(struct avr_irq_t *irq, uint32_t value, void *param)
     for (i = 0; i < sim_chip_count; i++) {
         chip_t *c = &chips[i];
         bool eeprom = c->spec->kind == SIM_CHIP_EEPROM;
+        if (c->spec->kind == SIM_CHIP_SPI_EEPROM)
+            continue;
         if (m.u.twi.msg & TWI_COND_STOP) {
             if (c->state == WRITING && eeprom)
-                eeprom_commit(c);
+                eeprom_commit(c, 2u);
             c->state = IDLE;
         }
         if (m.u.twi.msg & TWI_COND_START) {
             bool us = (m.u.twi.addr >> 1) == c->spec->address;
             if (c->state == WRITING && eeprom && !us)
-                eeprom_commit(c);
+                eeprom_commit(c, 2u);
             c->state = IDLE;
             if (!us || (eeprom && mcu->cycle < c->busy_until))
                 continue; /* not addressed, or in its write cycle: no acknowledge */
@@ -165,7 +260,7 @@ static void on_bus(struct avr_irq_t *irq, uint32_t value, void *param)
         }
         if (c->state == WRITING && (m.u.twi.msg & TWI_COND_WRITE)) {
             if (eeprom)
-                eeprom_write(c, m.u.twi.data);
+                eeprom_write(c, c->index, m.u.twi.data);
             else
                 temp_write(c, m.u.twi.data);
             c->index++;
@@ -178,10 +273,14 @@ static void on_bus(struct avr_irq_t *irq, uint32_t value, void *param)
 
 static void image_path(const chip_t *c, char *out, size_t n)
 {
-    snprintf(out, n, "%s/i2c%u-0x%02x.bin", chip_dir, (unsigned)c->spec->bus, (unsigned)c->spec->address);
+    if (c->spec->kind == SIM_CHIP_SPI_EEPROM)
+        snprintf(out, n, "%s/spi%u-P%c%u.bin", chip_dir, (unsigned)c->spec->bus, c->spec->port,
+                 (unsigned)c->spec->address);
+    else
+        snprintf(out, n, "%s/i2c%u-0x%02x.bin", chip_dir, (unsigned)c->spec->bus, (unsigned)c->spec->address);
 }
 
-bool sim_i2c_init(avr_t *avr, const char *dir)
+bool sim_chips_init(avr_t *avr, const char *dir)
 {
     uint16_t i;
     mcu = avr;
@@ -193,9 +292,13 @@ bool sim_i2c_init(avr_t *avr, const char *dir)
         return false;
     twi_in = avr_io_getirq(avr, AVR_IOCTL_TWI_GETIRQ(0), TWI_IRQ_INPUT);
     avr_irq_register_notify(avr_io_getirq(avr, AVR_IOCTL_TWI_GETIRQ(0), TWI_IRQ_OUTPUT), on_bus, NULL);
+    avr_irq_register_notify(avr_io_getirq(avr, AVR_IOCTL_SPI_GETIRQ(0), SPI_IRQ_OUTPUT), on_spi, NULL);
     for (i = 0; i < sim_chip_count; i++) {
         chip_t *c = &chips[i];
         c->spec = &sim_chips[i];
+        if (c->spec->kind == SIM_CHIP_SPI_EEPROM)
+            avr_irq_register_notify(avr_io_getirq(avr, AVR_IOCTL_IOPORT_GETIRQ(c->spec->port), c->spec->address),
+                                    spi_select, c);
         if (c->spec->kind == SIM_CHIP_TEMPERATURE) {
             c->reg[1] = 0x60A0u; /* the TMP102's power-on configuration */
             c->reg[2] = 0x4B00u; /* 75 degC */
@@ -232,7 +335,7 @@ bool sim_i2c_init(avr_t *avr, const char *dir)
     return true;
 }
 
-bool sim_i2c_temperature(uint8_t bus, uint8_t address, int32_t sixteenths, const char *what)
+bool sim_chips_temperature(uint8_t bus, uint8_t address, int32_t sixteenths, const char *what)
 {
     uint16_t i;
     for (i = 0; i < sim_chip_count; i++) {
@@ -250,7 +353,7 @@ bool sim_i2c_temperature(uint8_t bus, uint8_t address, int32_t sixteenths, const
     return true;
 }
 
-bool sim_i2c_save(void)
+bool sim_chips_save(void)
 {
     uint16_t i;
     bool ok = true;
@@ -260,7 +363,7 @@ bool sim_i2c_save(void)
         chip_t *c = &chips[i];
         char path[4096];
         FILE *f;
-        if (c->spec->kind != SIM_CHIP_EEPROM)
+        if (c->spec->kind == SIM_CHIP_TEMPERATURE)
             continue;
         image_path(c, path, sizeof path);
         f = fopen(path, "wb");
