@@ -24,6 +24,7 @@ points at the i-th datum of the device (port order) in its C type.
 from __future__ import annotations
 
 import ctypes
+import dataclasses
 from dataclasses import dataclass
 
 from ..board import handlers as H
@@ -37,7 +38,11 @@ _HANDLER = {name: index for index, name in enumerate(H.HANDLERS)}
 
 
 def plugin_source(program: Program, device: Device) -> str:
-    """The C source of the plug-in of one device's host handlers."""
+    """The C source of the plug-in of one device's host handlers. Its
+    location keeps only the file: the source, hence its digest and its
+    identity across live replacements, depends on what the code is, not on
+    the line the device is declared at."""
+    device = dataclasses.replace(device, location=device.location.rsplit(":", 1)[0])
     code = H.read_handlers(H.handler_file(device, BOARD))
     items = [program.items[i] for i in device.items]
     slot = {item.id: k for k, item in enumerate(items)}

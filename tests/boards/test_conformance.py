@@ -7,7 +7,8 @@ EASYLAB_BOARD_PATH); a new board gets them by existing.
 - every example that fits the board gives the host board's trace, value
   by value and instant by instant (boards with a simulator);
 - resource claims the board cannot honour are refused, each naming the
-  claim, its owner and its line;
+  claim, its owner and its line; so is a device whose type brings handler
+  files for other boards only (unless the board simulates devices);
 - a build reports its size against the part;
 - a release build has none of the debug interface's code.
 """
@@ -145,6 +146,25 @@ def test_claims_the_board_cannot_honour_are_refused_at_their_line(board, case, t
     assert re.search(message, err), err
     assert re.search(rf"{re.escape(str(model))}:\d+: error: ", err), err
     assert err.startswith(f"easylab: error: the model does not fit the {board} board"), err
+
+
+@pytest.mark.parametrize("board", BOARDS)
+def test_a_device_with_handlers_for_other_boards_only_is_refused_saying_what_to_write(board, tmp_path):
+    """A device type bringing handler files for other boards (and no
+    driver of the board's): refused at its line; a board that simulates
+    devices (the host) simulates it instead."""
+    (tmp_path / "probe_elsewhere.c").write_text("EL_READ { level = true; }\n")
+    model = _model(tmp_path, 'device type Probe() {\n    out level: bool\n'
+                             '    driver "no_such_probe" impl no_such_board "probe_elsewhere.c"\n}\n'
+                             'device p: Probe()\nvar v: bool\ndataflow D { p.level -> v }\n'
+                             'task t period 10 ms { run D }\n')
+    if conformance(board).get("simulates_devices"):
+        build(model, board, tmp_path / "out", env=ENV)
+        return
+    err = build(model, board, tmp_path / "out", *conformance_mcu(board), ok=False, env=ENV).proc.stderr
+    assert re.search(rf"{re.escape(str(model))}:8: error: device 'p' \(Probe, driver 'no_such_probe'\) has no "
+                     rf"handlers for the {board} board: its type brings them for no_such_board only; .* "
+                     rf"impl {board} \"FILE\.c\"", err), err
 
 
 @pytest.mark.parametrize("board", BOARDS)

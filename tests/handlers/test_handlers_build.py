@@ -166,3 +166,20 @@ def test_an_eeprom_log_whose_record_does_not_fit_a_page_is_refused(tmp_path):
     err = build(write_model(tmp_path, text), "avr", tmp_path / "out", ok=False).proc.stderr
     assert "error: device 'log': a record of 40 values takes a slot of 128 bytes, which must divide its page of " \
            "64 bytes" in err, err
+
+
+@pytest.mark.parametrize("cs, problem", [
+    ("PB5", "device 'log' claims spi[0] cs \"PB5\", but PB5 is the bus's SCK: a chip select is a pin of its own "
+            "(or the bus SS, PB2)"),
+    ("PX1", "device 'log' claims spi[0] cs \"PX1\", but its chip select PX1 is not a pin of the atmega328p"),
+])
+def test_the_avr_board_checks_chip_selects(tmp_path, cs, problem):
+    text = dedent(f"""\
+        model m
+        import std
+        device log: SpiEepromLog(cs = "{cs}", values = 1)
+        dataflow D {{ c = Const<int16>(value = 1)  c.y -> log.record }}
+        task t period 10 ms {{ run D }}
+        """)
+    err = build(write_model(tmp_path, text), "avr", tmp_path / "out", ok=False).proc.stderr
+    assert problem in err, err

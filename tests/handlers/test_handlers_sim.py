@@ -186,3 +186,57 @@ def test_the_simulator_refuses_a_temperature_the_sensor_cannot_measure(build_cac
     proc = run(avr.simulator, "--fast", "--duration", "10ms", "--chips", tmp_path / "chips", ok=False)
     assert proc.returncode == 2
     assert "not the memory of a 32768-byte EEPROM" in proc.stderr
+
+
+SPI = dedent("""\
+    model spi
+    import std
+    // A device of the model's on the SPI bus: the status register of a
+    // 25LC-class chip behind its chip select (RDSR), through EL_CS.
+    device type SpiStatus(cs: string) {
+        claims spi[0] cs cs
+        out status: uint8
+        driver "spi_status" impl avr "spi_status.c"
+    }
+    device log: SpiEepromLog(cs = "PB1", values = 2)
+    device nothing: SpiStatus(cs = "PD7")
+    device room: I2cTemperature()
+    var s: uint8
+    dataflow D {
+        u = Upsample<int16>(factor = 2)
+        room.temperature -> u.x
+        u.y -> log.record
+        nothing.status -> s
+    }
+    task t period 10 ms { run D }
+    """)
+SPI_STATUS_C = dedent("""\
+    EL_OPEN {
+        (void)el_spi_open(0u, EL_CS);
+    }
+    EL_READ {
+        uint8_t io[2] = {0x05u, 0xFFu};
+        (void)el_spi_transfer(0u, EL_CS, EL_SPI_MODE0, io, io, 2u);
+        status = io[1];
+    }
+    """)
+
+
+def test_the_spi_bus_carries_an_eeprom_log_and_a_devices_own_handlers(tmp_path):
+    """The log's records reach the SPI EEPROM model behind PB1; the model's
+    own device reads 0xFF from a chip select nothing answers (the host
+    simulates it with the same value from the stimulus)."""
+    path = write_model(tmp_path, SPI, {"spi_status.c": SPI_STATUS_C})
+    avr = build(path, "avr", tmp_path / "avr", "--sim")
+    host = build(path, "host", tmp_path / "host")
+    stim = tmp_path / "s.csv"
+    stim.write_text("time_us,room.temperature,nothing.status\n0,100,255\n25000,-200,\n")
+    args = ["--fast", "--duration", "50ms", "--stimulus", stim]
+    run(avr.simulator, *args, "--trace", tmp_path / "avr.csv", "--chips", tmp_path)
+    run(host.executable, *args, "--trace", tmp_path / "host.csv")
+    assert (tmp_path / "avr.csv").read_bytes() == (tmp_path / "host.csv").read_bytes()
+    _, rows = trace_rows(tmp_path / "host.csv")
+    assert rows[-1]["s"] == "255"
+    stored = eeprom_log((tmp_path / "spi0-PB1.bin").read_bytes(), values=2, slot=8)
+    # Records at the deadlines 10 .. 50 ms (the last one goes out at the instant the run ends).
+    assert stored == [(0, [100, 100]), (1, [100, 100]), (2, [100, 100]), (3, [-200, -200]), (4, [-200, -200])]

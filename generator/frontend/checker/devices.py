@@ -70,7 +70,7 @@ class DeviceRules:
 
     def handler_path(self, decl: ast.DeviceType, impl: ast.DriverImpl) -> FsPath:
         """Where a handler file is: relative to the file declaring the type."""
-        return module_dir(FsPath(self.device_type_files.get(decl.name, "."))) / impl.file
+        return module_dir(FsPath(self.declaration_files[id(decl)])) / impl.file
 
     def elaborate_device(self, decl: ast.DeviceInstance) -> None:
         """Flatten a device instance into primitive devices and data paths."""
