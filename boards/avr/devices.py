@@ -210,8 +210,8 @@ def device_views(program: Program, board) -> list[DeviceView]:
             record = items[0] if values > 1 else f"&{items[0]}"
             place = f"0x{where:02x}u" if how == "addr" else chip_select(where)
             v = DeviceView(dev.id, dev.path, d, dev.location, f"el_drv_{d}_t",
-                           f"{{ {bus}u, {place}, {values}u, {slot}u, {slots}u, &el_dev{dev.id}_state, "
-                           f"{record} }}", spec["header"], {d[:3]: bus, how: where, "slot": slot},
+                           f"{{ {bus}u, {place}, {{ {values}u, {slot}u, {slots}u, {record} }}, "
+                           f"&el_dev{dev.id}_state }}", spec["header"], {d[:3]: bus, how: where, "slot": slot},
                            f"el_drv_{d}_state_t")
         else:  # a driver listed in board.toml without generator support
             raise BuildError(f"{dev.location}: error: the avr backend cannot describe devices of driver '{d}' yet")

@@ -10,29 +10,12 @@ import subprocess
 import sys
 from pathlib import Path
 
-from firmware_builds import ROOT, Built, build, cli  # noqa: F401
+from firmware_builds import ROOT, Built, build, cli, run_program, write_model  # noqa: F401
+
+run = run_program
 
 LOGGER = ROOT / "examples" / "pt100_logger" / "pt100_logger.elab"
 LOGGER_STIMULUS = LOGGER.with_name("pt100_logger.stimulus.csv")
-
-
-def write_model(folder: Path, text: str, files: dict[str, str] | None = None, name: str = "model.elab") -> Path:
-    """A model file and the files beside it (handler files), in ``folder``."""
-    for rel, content in (files or {}).items():
-        target = folder / rel
-        target.parent.mkdir(parents=True, exist_ok=True)
-        target.write_text(content, encoding="utf-8")
-    path = folder / name
-    path.write_text(text, encoding="utf-8")
-    return path
-
-
-def run(exe: Path, *args, timeout: float = 120, ok: bool = True) -> subprocess.CompletedProcess:
-    proc = subprocess.run([str(exe), *map(str, args)], capture_output=True, text=True, timeout=timeout,
-                          stdin=subprocess.DEVNULL)
-    if ok:
-        assert proc.returncode == 0, f"{exe.name} {' '.join(map(str, args))}: status {proc.returncode}\n{proc.stderr}"
-    return proc
 
 
 def interpret(model: Path, *args, cache: Path, ok: bool = True) -> subprocess.CompletedProcess:

@@ -25,6 +25,14 @@ typedef struct {
     uint16_t dropped; /* records that could not be written (saturating) */
 } el_eeprom_log_t;
 
+/* A log's layout in its memory, and its device's record. */
+typedef struct {
+    uint8_t values;        /* int16 per record */
+    uint8_t slot;          /* bytes per slot */
+    uint16_t slots;        /* slots in the memory */
+    const int16_t *record; /* the device's `in int16 rate values` */
+} el_eeprom_log_layout_t;
+
 /* The sequence number in slot k of a device's memory (EMPTY when it cannot
  * be read). */
 typedef uint16_t (*el_eeprom_log_seq_t)(const void *device, uint16_t k);
@@ -63,20 +71,26 @@ static inline void el_eeprom_log_find(el_eeprom_log_t *log, uint16_t slots, el_e
     log->seq = el_eeprom_log_after(seq_at(device, (uint16_t)(lo - 1u)));
 }
 
-/* The next record into `buf` (sequence number, then the values); returns
- * its bytes. */
-static inline uint8_t el_eeprom_log_record(const el_eeprom_log_t *log, uint8_t *buf, const int16_t *values,
-                                           uint8_t n)
+/* The memory address of the next record's slot. */
+static inline uint32_t el_eeprom_log_address(const el_eeprom_log_t *log, const el_eeprom_log_layout_t *layout)
+{
+    return (uint32_t)log->next * layout->slot;
+}
+
+/* The next record into `buf` (sequence number, then the device's values);
+ * returns its bytes. */
+static inline uint8_t el_eeprom_log_record(const el_eeprom_log_t *log, const el_eeprom_log_layout_t *layout,
+                                           uint8_t *buf)
 {
     uint8_t i;
     buf[0] = (uint8_t)log->seq;
     buf[1] = (uint8_t)(log->seq >> 8);
-    for (i = 0u; i < n; i++) {
-        uint16_t v = (uint16_t)values[i];
+    for (i = 0u; i < layout->values; i++) {
+        uint16_t v = (uint16_t)layout->record[i];
         buf[2u + 2u * i] = (uint8_t)v;
         buf[3u + 2u * i] = (uint8_t)(v >> 8);
     }
-    return (uint8_t)(2u + 2u * n);
+    return (uint8_t)(2u + 2u * layout->values);
 }
 
 /* The record went to the memory: the next slot, the next number. */

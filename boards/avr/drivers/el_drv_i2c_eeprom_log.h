@@ -23,17 +23,14 @@ typedef struct {
 typedef struct {
     uint8_t bus;
     uint8_t address;
-    uint8_t values;      /* int16 per record */
-    uint8_t slot;        /* bytes per slot */
-    uint16_t slots;      /* slots in the memory */
+    el_eeprom_log_layout_t layout;
     el_drv_i2c_eeprom_log_state_t *state;
-    const int16_t *record; /* `in int16 rate values` */
 } el_drv_i2c_eeprom_log_t;
 
 static inline uint16_t el_drv_i2c_eeprom_log_seq(const void *device, uint16_t k)
 {
     const el_drv_i2c_eeprom_log_t *d = (const el_drv_i2c_eeprom_log_t *)device;
-    uint32_t at = (uint32_t)k * d->slot;
+    uint32_t at = (uint32_t)k * d->layout.slot;
     uint8_t addr[2];
     uint8_t seq[2];
     addr[0] = (uint8_t)(at >> 8);
@@ -46,7 +43,7 @@ static inline uint16_t el_drv_i2c_eeprom_log_seq(const void *device, uint16_t k)
 
 static inline void el_drv_i2c_eeprom_log_open(const el_drv_i2c_eeprom_log_t *d)
 {
-    el_eeprom_log_find(&d->state->log, d->slots, el_drv_i2c_eeprom_log_seq, d);
+    el_eeprom_log_find(&d->state->log, d->layout.slots, el_drv_i2c_eeprom_log_seq, d);
 }
 
 static inline void el_drv_i2c_eeprom_log_start(const el_drv_i2c_eeprom_log_t *d)
@@ -62,7 +59,7 @@ static inline void el_drv_i2c_eeprom_log_read(const el_drv_i2c_eeprom_log_t *d)
 static inline void el_drv_i2c_eeprom_log_write(const el_drv_i2c_eeprom_log_t *d)
 {
     el_drv_i2c_eeprom_log_state_t *s = d->state;
-    uint32_t at = (uint32_t)s->log.next * d->slot;
+    uint32_t at = el_eeprom_log_address(&s->log, &d->layout);
     if (s->job.status == EL_BUS_PENDING) {
         el_eeprom_log_drop(&s->log);
         return;
@@ -73,11 +70,11 @@ static inline void el_drv_i2c_eeprom_log_write(const el_drv_i2c_eeprom_log_t *d)
     s->job.address = d->address;
     s->job.flags = EL_I2C_RETRY_BUSY;
     s->job.tx = s->buf;
-    s->job.tx_len = (uint8_t)(2u + el_eeprom_log_record(&s->log, s->buf + 2, d->record, d->values));
+    s->job.tx_len = (uint8_t)(2u + el_eeprom_log_record(&s->log, &d->layout, s->buf + 2));
     s->job.rx = 0;
     s->job.rx_len = 0u;
     if (el_i2c_submit(&s->job)) {
-        el_eeprom_log_advance(&s->log, d->slots);
+        el_eeprom_log_advance(&s->log, d->layout.slots);
     } else {
         el_eeprom_log_drop(&s->log);
     }

@@ -26,17 +26,14 @@ typedef struct {
 typedef struct {
     uint8_t bus;
     el_pin_t cs;
-    uint8_t values;      /* int16 per record */
-    uint8_t slot;        /* bytes per slot */
-    uint16_t slots;      /* slots in the memory */
+    el_eeprom_log_layout_t layout;
     el_drv_spi_eeprom_log_state_t *state;
-    const int16_t *record; /* `in int16 rate values` */
 } el_drv_spi_eeprom_log_t;
 
 static inline uint16_t el_drv_spi_eeprom_log_seq(const void *device, uint16_t k)
 {
     const el_drv_spi_eeprom_log_t *d = (const el_drv_spi_eeprom_log_t *)device;
-    uint32_t at = (uint32_t)k * d->slot;
+    uint32_t at = (uint32_t)k * d->layout.slot;
     uint8_t io[5];
     io[0] = EL_DRV_SPI_EEPROM_READ;
     io[1] = (uint8_t)(at >> 8);
@@ -52,7 +49,7 @@ static inline uint16_t el_drv_spi_eeprom_log_seq(const void *device, uint16_t k)
 static inline void el_drv_spi_eeprom_log_open(const el_drv_spi_eeprom_log_t *d)
 {
     (void)el_spi_open(d->bus, &d->cs);
-    el_eeprom_log_find(&d->state->log, d->slots, el_drv_spi_eeprom_log_seq, d);
+    el_eeprom_log_find(&d->state->log, d->layout.slots, el_drv_spi_eeprom_log_seq, d);
 }
 
 static inline void el_drv_spi_eeprom_log_start(const el_drv_spi_eeprom_log_t *d)
@@ -68,7 +65,7 @@ static inline void el_drv_spi_eeprom_log_read(const el_drv_spi_eeprom_log_t *d)
 static inline void el_drv_spi_eeprom_log_write(const el_drv_spi_eeprom_log_t *d)
 {
     el_drv_spi_eeprom_log_state_t *s = d->state;
-    uint32_t at = (uint32_t)s->log.next * d->slot;
+    uint32_t at = el_eeprom_log_address(&s->log, &d->layout);
     uint8_t buf[3u + EL_EEPROM_LOG_MAX];
     uint8_t status[2] = {EL_DRV_SPI_EEPROM_RDSR, 0xFFu};
     static const uint8_t wren = EL_DRV_SPI_EEPROM_WREN;
@@ -82,8 +79,8 @@ static inline void el_drv_spi_eeprom_log_write(const el_drv_spi_eeprom_log_t *d)
     buf[2] = (uint8_t)at;
     (void)el_spi_transfer(d->bus, &d->cs, EL_SPI_MODE0, &wren, (uint8_t *)0, 1u);
     (void)el_spi_transfer(d->bus, &d->cs, EL_SPI_MODE0, buf, (uint8_t *)0,
-                          (uint16_t)(3u + el_eeprom_log_record(&s->log, buf + 3, d->record, d->values)));
-    el_eeprom_log_advance(&s->log, d->slots);
+                          (uint16_t)(3u + el_eeprom_log_record(&s->log, &d->layout, buf + 3)));
+    el_eeprom_log_advance(&s->log, d->layout.slots);
 }
 
 static inline void el_drv_spi_eeprom_log_stop(const el_drv_spi_eeprom_log_t *d)
