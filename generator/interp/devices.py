@@ -28,6 +28,7 @@ import dataclasses
 from dataclasses import dataclass
 
 from ..board import handlers as H
+from ..core.errors import BuildError
 from ..ir.program import Device, Program
 from . import values as V
 from .plugins import RUNTIME_HEADERS, PluginCache, PluginError
@@ -90,7 +91,7 @@ def load_plugin(cache: PluginCache, program: Program, device: Device) -> DeviceP
     what = f"device '{device.path}' ({device.type_name}, {device.location})"
     try:
         source = plugin_source(program, device)
-    except Exception as err:  # an unreadable or malformed handler file: a BuildError naming it
+    except BuildError as err:  # an unreadable or malformed handler file
         raise PluginError(f"{what}: {err}") from None
     digest = cache.digest(source)
 

@@ -88,13 +88,19 @@ BUSY = dedent("""\
     """)
 
 
-def test_a_sensor_is_read_at_every_instant_while_the_eeprom_is_busy_writing(build_cache, tmp_path):
+@pytest.fixture(scope="module")
+def busy(tmp_path_factory):
+    """BUSY built for the AVR (--sim) and the host."""
+    folder = tmp_path_factory.mktemp("busy")
+    path = write_model(folder, BUSY)
+    return build(path, "avr", folder / "avr", "--sim"), build(path, "host", folder / "host")
+
+
+def test_a_sensor_is_read_at_every_instant_while_the_eeprom_is_busy_writing(busy, tmp_path):
     """A record every millisecond: the EEPROM's 5 ms write cycle refuses the
     next ones (polled again behind the sensor's reads, later ones dropped),
     and every sensor read still gets through at its instant."""
-    path = write_model(tmp_path, BUSY)
-    avr = build(path, "avr", tmp_path / "avr", "--sim")
-    host = build(path, "host", tmp_path / "host")
+    avr, host = busy
     stim = tmp_path / "s.csv"
     stim.write_text("time_us,room.temperature\n" + "".join(f"{t * 1000},{t * 3 - 200}\n" for t in range(0, 60, 3)))
     args = ["--fast", "--duration", "60ms", "--stimulus", stim]
@@ -172,9 +178,8 @@ def test_a_transfer_longer_than_the_bound_is_abandoned_and_the_bus_goes_on(tmp_p
     assert last["there.value"] == str(100 << 4)
 
 
-def test_the_simulator_refuses_a_temperature_the_sensor_cannot_measure(build_cache, tmp_path):
-    path = write_model(tmp_path, BUSY)
-    avr = build(path, "avr", tmp_path / "avr", "--sim")
+def test_the_simulator_refuses_a_temperature_the_sensor_cannot_measure(busy, tmp_path):
+    avr, _host = busy
     stim = tmp_path / "s.csv"
     stim.write_text("time_us,room.temperature\n0,100\n3000,2401\n")
     proc = run(avr.simulator, "--fast", "--duration", "10ms", "--stimulus", stim, ok=False)
