@@ -122,24 +122,23 @@ class ModelDevice:
         self.items = [program.items[i] for i in device.items]
         self.cells = [(V.ctype(it.type) * it.count)() for it in self.items]
         self.pointers = (ctypes.c_void_p * max(1, len(self.cells)))(*(ctypes.addressof(c) for c in self.cells))
-        self.store = [V.store(it.type) for it in self.items]
         self.outs = [k for k, it in enumerate(self.items) if it.kind == "dev_out"]
 
-    def call(self, handler: str, published: list[list]) -> None:
-        """One handler, on the published data: in, then back out."""
+    def call(self, handler: str, published: list[ctypes.Array]) -> None:
+        """One handler, on the published data (C arrays of the data's
+        types): in, then its out data back."""
         for cell, it in zip(self.cells, self.items):
-            cell[:] = published[it.id]
+            ctypes.memmove(cell, published[it.id], ctypes.sizeof(cell))
         self.plugin.call(_HANDLER[handler], ctypes.addressof(self.state), self.pointers)
         for k in self.outs:
-            it = self.items[k]
-            published[it.id] = [self.store[k](v) for v in self.cells[k]]
+            ctypes.memmove(published[self.items[k].id], self.cells[k], ctypes.sizeof(self.cells[k]))
 
-    def sample(self, published: list[list], stimulus, time_us: int) -> None:
+    def sample(self, published: list[ctypes.Array], stimulus, time_us: int) -> None:
         """``el_sim_sample``: every out datum takes the stimulus value due
         now, or its initial value."""
         for k in self.outs:
             it = self.items[k]
-            published[it.id] = [V.literal(it.type, it.initial)] * it.count
+            published[it.id][:] = [V.literal(it.type, it.initial)] * it.count
         if stimulus is not None:
             stimulus.read_device(self.device.id, time_us, published)
 
@@ -154,7 +153,7 @@ class ModelDevices:
                 self.devices[dev.id] = ModelDevice(program, dev, load_plugin(cache, program, dev))
         self.running: set[int] = set()  # opened and started
 
-    def boot(self, published: list[list], only: set[int] | None = None) -> None:
+    def boot(self, published: list[ctypes.Array], only: set[int] | None = None) -> None:
         """open() of every device, then start(), as model.c does."""
         chosen = [d for i, d in self.devices.items() if only is None or i in only]
         for dev in chosen:
@@ -163,7 +162,7 @@ class ModelDevices:
             dev.call("start", published)
             self.running.add(dev.device.id)
 
-    def shutdown(self, published: list[list], only: set[int] | None = None) -> None:
+    def shutdown(self, published: list[ctypes.Array], only: set[int] | None = None) -> None:
         """stop() of every device, then close()."""
         chosen = [d for i, d in self.devices.items() if i in self.running and (only is None or i in only)]
         for dev in chosen:
@@ -172,7 +171,7 @@ class ModelDevices:
             dev.call("close", published)
             self.running.discard(dev.device.id)
 
-    def read(self, device: int, published: list[list], stimulus, time_us: int) -> bool:
+    def read(self, device: int, published: list[ctypes.Array], stimulus, time_us: int) -> bool:
         """The device's read() if it runs host handlers (True), else False
         (a simulated device: the caller applies the stimulus)."""
         dev = self.devices.get(device)
@@ -182,12 +181,12 @@ class ModelDevices:
         dev.call("read", published)
         return True
 
-    def write(self, device: int, published: list[list]) -> None:
+    def write(self, device: int, published: list[ctypes.Array]) -> None:
         dev = self.devices.get(device)
         if dev is not None:
             dev.call("write", published)
 
-    def take_over(self, old: "ModelDevices", old_published: list[list], published: list[list]) -> list[str]:
+    def take_over(self, old: "ModelDevices", old_published: list[ctypes.Array], published: list[ctypes.Array]) -> list[str]:
         """At a live replacement: a device with the same path and plug-in
         keeps its state and goes on without open(); the old program's other
         devices stop and close (on the old program's data), the new

@@ -245,12 +245,15 @@ class Panel:
                 return _error(400, str(err))
 
             def write_and_read_back(link):
+                # Runs between samples: the samples after this one show the write.
+                before = self.session.last_seq()
                 write_value(link, it, value)
-                return read_values(link, [it])[it.name]
-            now = await self._on_device(write_and_read_back)
+                return read_values(link, [it])[it.name], before
+            now, before = await self._on_device(write_and_read_back)
         except _Refusal as refusal:
             return refusal.response
-        return web.json_response({"name": it.name, "value": json_value(now), "text": it.format(now)})
+        return web.json_response({"name": it.name, "value": json_value(now), "text": it.format(now),
+                                  "seq": before})
 
     async def api_backup(self, request: web.Request) -> web.Response:
         try:

@@ -107,6 +107,11 @@ class DeviceSession:
                     "where": self.address.where, "connects": self.connects, "stats": self.stats.as_dict(),
                     "waiting": self._jobs.qsize(), "period": self.period}
 
+    def last_seq(self) -> int:
+        """The newest sample's number: a write done now shows from the next."""
+        with self._lock:
+            return self._seq
+
     def samples_after(self, seq: int) -> list[Sample]:
         """The samples in the history newer than `seq`."""
         with self._lock:

@@ -28,6 +28,15 @@ def free_port() -> int:
         return s.getsockname()[1]
 
 
+def declares_modbus_tcp(exe: Path) -> bool:
+    """Whether the model behind a firmware (or a model file, for local
+    execution) declares `modbus tcp`."""
+    if exe.suffix == ".elab":
+        return any(line.lstrip().startswith("modbus tcp") for line in exe.read_text().splitlines())
+    smap = exe.parent / "service_map.json"
+    return smap.is_file() and "tcp" in json.loads(smap.read_text()).get("interfaces", {})
+
+
 class Firmware:
     """A host firmware process serving Modbus (and optionally the HMI)."""
 
@@ -41,6 +50,10 @@ class Firmware:
         args = [str(exe), "--duration", "600s"]
         if tcp:
             args += ["--modbus-tcp", str(self.port)]
+        elif declares_modbus_tcp(exe):
+            # not used, but not the model's fixed port either: two runs at
+            # once (other tests, other test processes) must not collide
+            args += ["--modbus-tcp", str(free_port())]
         if rtu:
             args += ["--modbus-rtu", f"pty:{self.rtu}"]
         if hmi:

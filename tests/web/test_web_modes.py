@@ -32,7 +32,14 @@ def exercise(p, browser) -> None:
     wait_for(lambda: p.api("GET", f"/api/samples?after={first}").json()["samples"], what="new samples")
     assert isinstance(p.latest()["temperature"], int) and p.latest()["cal_gain"] == 1000
     r = p.api("POST", "/api/write", {"name": "cal_offset", "value": "-12"})
-    assert r.status == 200 and r.json() == {"name": "cal_offset", "value": -12, "text": "-12"}
+    body = r.json()
+    seq = body.pop("seq")
+    assert r.status == 200 and body == {"name": "cal_offset", "value": -12, "text": "-12"}
+    # The write came after the samples it names: every later one shows it.
+    assert seq >= first + 1
+    later = wait_for(lambda: p.api("GET", f"/api/samples?after={seq}").json()["samples"], what="samples after the write")
+    column = [it["name"] for it in p._map()["items"]].index("cal_offset")
+    assert all(s["v"][column] == -12 for s in later)
     wait_for(lambda: p.latest()["cal_offset"] == -12, what="the samples to show the write")
     r = p.api("POST", "/api/write", {"name": "cal_gain", "value": "2001"})
     assert r.status == 422 and r.json()["words"] == "illegal data value" and r.json()["exception"] == 3

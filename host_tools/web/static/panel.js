@@ -178,6 +178,7 @@
       return false;
     }
     entry.value.textContent = format(entry.it, r.data.value);
+    entry.writtenAfter = r.data.seq;  // samples up to this one were read before the write
     showMsg(entry.msg, true, `set: ${entry.it.name} = ${format(entry.it, r.data.value)}${entry.it.unit ? " " + entry.it.unit : ""}`);
     return true;
   }
@@ -270,7 +271,11 @@
     }
     const latest = samples[samples.length - 1];
     if (latest) {
-      for (const entry of panel.rows.values()) entry.value.textContent = format(entry.it, latest.v[entry.index]);
+      for (const entry of panel.rows.values()) {
+        // A sample taken before the item's last write would show the old value again.
+        if (entry.writtenAfter !== undefined && latest.seq <= entry.writtenAfter) continue;
+        entry.value.textContent = format(entry.it, latest.v[entry.index]);
+      }
       panel.lastTime = latest.t;
     }
     if (samples.length) redrawPlots();
