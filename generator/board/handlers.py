@@ -28,7 +28,7 @@ from ..codegen.impl_files import DEVICE_BLOCKS, split_impl
 from ..core import types as T
 from ..core.errors import BuildError
 from ..ir.program import Device, Item, Program
-from .resources import parse_select
+from .claims import parse_select
 from .simtables import item_symbol
 
 HANDLERS = DEVICE_BLOCKS  # open, start, read, write, stop, close

@@ -23,8 +23,8 @@ from pathlib import Path
 from ..core.errors import BuildError
 from ..ir.program import Device, Program
 from . import handlers
+from .claims import parse_claim, parse_select
 
-_CLAIM = re.compile(r'^([A-Za-z_][A-Za-z0-9_]*)\[(?:"([^"]*)"|(\d+))\](?: (addr|cs) (?:"([^"]*)"|(0x[0-9a-fA-F]+|\d+)))?$')
 # The 7-bit addresses I2C leaves to devices (0x00..0x07 and 0x78..0x7F are reserved).
 I2C_ADDRESSES = range(0x08, 0x78)
 _PIN_NAME = re.compile(r"^(.*?)(\d+)$")
@@ -76,24 +76,6 @@ class Resolved:
     uarts: dict[int, dict] = field(default_factory=dict)  # uart -> {"use": ..., "baud": ..., ...}
     physical: dict[str, Claim] = field(default_factory=dict)  # pin -> its first claim
     buses: dict[tuple[str, int], list[Claim]] = field(default_factory=dict)  # ("i2c", 0) -> the devices on it
-
-
-def parse_claim(text: str) -> tuple[str, object] | None:
-    """``pin["PB5"]`` -> ("pin", "PB5"); ``uart[1]`` -> ("uart", 1);
-    ``i2c[0] addr 0x48`` -> ("i2c", 0) (its place: :func:`parse_select`)."""
-    m = _CLAIM.match(text.strip())
-    if m is None:
-        return None
-    return m.group(1), (m.group(2) if m.group(2) is not None else int(m.group(3)))
-
-
-def parse_select(text: str) -> tuple[str, object] | None:
-    """A claim's place on a bus: ``i2c[0] addr 0x48`` -> ("addr", 0x48),
-    ``spi[0] cs "PB2"`` -> ("cs", "PB2"); None for a claim without one."""
-    m = _CLAIM.match(text.strip())
-    if m is None or m.group(4) is None:
-        return None
-    return m.group(4), (m.group(5) if m.group(5) is not None else int(m.group(6), 0))
 
 
 def interface_location(program: Program, kind: str) -> str:
