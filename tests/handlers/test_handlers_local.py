@@ -67,6 +67,25 @@ def test_host_handlers_run_locally_as_in_the_host_firmware(tmp_path):
     assert lines[1].startswith("0,0,0,101,15,")  # the first read: count 1 + 100 (opened once), 5 * 3
 
 
+def test_without_a_trace_the_instants_of_a_device_with_handlers_still_run_them(tmp_path):
+    """Without a trace the runner takes stretches of instants alone; the
+    instants that read or write a device with host handlers stay Python's."""
+    path = write_model(tmp_path, MODEL, {"counter_host.c": HANDLERS})
+    program, result = lower_file(path)
+    assert program is not None, result.report()
+    finals = []
+    for writer in (TraceWriter(str(tmp_path / "t.csv"), program, columns_of(program)), None):
+        stim = tmp_path / "s.csv"
+        stim.write_text("time_us,c.scaled\n0,5\n30000,-4\n")
+        engine = Engine(program, PluginCache(tmp_path / "cache"), load_stimulus(str(stim), program), writer)
+        engine.run(60000)
+        finals.append([list(a) for a in engine.state.published])
+        engine.shutdown()
+    assert finals[0] == finals[1]
+    count = next(i.id for i in program.items if i.name == "n")
+    assert finals[1][count] == [105]  # five reads published (0..40 ms) + 100 (opened once)
+
+
 def test_a_replacement_keeps_an_unchanged_devices_state_and_restarts_a_changed_one(tmp_path):
     path = write_model(tmp_path, MODEL, {"counter_host.c": HANDLERS})
     program, _ = lower_file(path)
