@@ -57,11 +57,11 @@ const char *const el_task_names[1] = {""};
 
 /* ---- what the dispatcher provides ---- */
 
-static uint64_t now_tick;
+static el_tick_t now_tick;
 static uint32_t idle_calls;
 
-uint64_t el_now_tick(void);
-uint64_t el_now_tick(void)
+el_tick_t el_now_tick(void);
+el_tick_t el_now_tick(void)
 {
     return now_tick;
 }
