@@ -64,7 +64,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--cflags", metavar="FLAGS", help="extra compiler flags, e.g. \"-fsanitize=address,undefined\"")
     p.add_argument("--sim", action="store_true", help="a simulation build and the board's simulator (avr: "
                                                       "instants reported to the simavr harness, built beside the "
-                                                      "ELF)")
+                                                      "ELF; f16: the 16-bit proxy in s51)")
+    p.add_argument("--check", action="store_true", help="the board's further checks of the C (f16: the proxies "
+                                                        "gcc -std=c89 -pedantic and clang-tidy for a 16-bit int)")
     p.set_defaults(func=model_commands.cmd_build)
 
     board_commands.add_parsers(sub)
