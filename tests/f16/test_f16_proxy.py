@@ -20,7 +20,7 @@ from pathlib import Path
 
 import pytest
 
-from firmware_builds import build
+from firmware_builds import EXAMPLE_NAMES, build
 
 HERE = Path(__file__).resolve().parent
 PRODUCT = HERE / "models" / "product16.elab"
@@ -81,3 +81,23 @@ def test_the_runner_takes_the_host_boards_options_and_says_what_is_wrong(build_c
     # Without --duration a run only ends at --timeout: an error, said plainly.
     proc = subprocess.run([*run, "--timeout", "1"], capture_output=True, text=True, timeout=60)
     assert proc.returncode == 1 and "did not end within 1 s of wall-clock time" in proc.stderr
+
+
+@pytest.mark.parametrize("name", EXAMPLE_NAMES)
+def test_every_examples_generated_c_passes_the_c89_checks(build_cache, name, tmp_path):
+    """The examples do not fit the part (AVR pins), so their generated C is
+    checked from their 16-bit proxy builds (which the conformance suite makes
+    too): gcc -std=c89 -pedantic, clang for MSP430, clang-tidy."""
+    from easylab.board.registry import board_module, load_board
+    from easylab.core.paths import runtime_dir
+
+    built = build_cache.example("f16", name, "--mcu", "mb90f543", "--sim")
+    out = built.executable.parent
+    proxy, board = board_module("f16", "proxy"), load_board("f16")
+    sources = sorted(p for p in out.glob("*.c") if p.name not in ("f16p_run_model.c", "el_f16p_tables.c"))
+    flags = ["-DEL_BOARD_STDINT", "-DEL_DEBUG=1", "-DEL_F16_PROXY", f"-I{out}", f"-I{runtime_dir()}",
+             *(f"-I{d}" for d in board.description.include_paths)]
+    proxy.gcc_check(board, sources, flags, tmp_path / "gcc", out)
+    proxy.clang_objects(board, sources, flags, tmp_path / "clang", out)
+    proxy.tidy_check(board, sources, flags)
+    assert {p.name for p in sources} >= {"model.c", "debug_tables.c"}
