@@ -22,10 +22,11 @@
  *     y = (int16_t)EL_W_SAT_I32(w, -32768, 32767);
  *
  * _I takes a value that fits int32_t, _U one that fits uint32_t, _W another
- * el_wide_t, _F a float (SET only: truncated toward zero, saturating at the
- * wide range, NaN gives 0). EL_W_SAT_I32/U32 clamp into [lo, hi] and give
- * the int32_t/uint32_t; EL_W_CMP compares two wide values, EL_W_SIGN one with
- * zero (-1, 0, 1).
+ * el_wide_t, _F a float (SET only: truncated toward zero; beyond the wide
+ * range C leaves the conversion undefined, the software form saturates and
+ * gives 0 for NaN). EL_W_SAT_I32/U32 clamp into [lo, hi] and give the
+ * int32_t/uint32_t; EL_W_NARROW_I32/U32 give a value that fits them;
+ * EL_W_CMP compares two wide values, EL_W_SIGN one with zero (-1, 0, 1).
  */
 #ifndef EL_WIDE_H
 #define EL_WIDE_H
@@ -76,6 +77,8 @@ typedef int64_t el_wide_t;
 #define EL_W_DIV_W(w, x) ((w) /= (x))
 #define EL_W_SAT_I32(w, lo, hi) ((int32_t)el_clamp_i64((int64_t)(w), (int64_t)(lo), (int64_t)(hi)))
 #define EL_W_SAT_U32(w, lo, hi) ((uint32_t)el_clamp_i64((int64_t)(w), (int64_t)(lo), (int64_t)(hi)))
+#define EL_W_NARROW_I32(w) ((int32_t)(w))
+#define EL_W_NARROW_U32(w) ((uint32_t)(w))
 #define EL_W_CMP(a, b) ((a) < (b) ? -1 : ((a) > (b) ? 1 : 0))
 #define EL_W_SIGN(w) ((w) < 0 ? -1 : ((w) > 0 ? 1 : 0))
 
@@ -101,6 +104,8 @@ typedef el_w64_t el_wide_t;
 #define EL_W_DIV_W(w, x) el_w64_op(&(w), EL_W64_DIV, &(x))
 #define EL_W_SAT_I32(w, lo, hi) el_w64_sat_i32(&(w), (int32_t)(lo), (int32_t)(hi))
 #define EL_W_SAT_U32(w, lo, hi) el_w64_sat_u32(&(w), (uint32_t)(lo), (uint32_t)(hi))
+#define EL_W_NARROW_I32(w) el_w64_sat_i32(&(w), INT32_MIN, INT32_MAX)
+#define EL_W_NARROW_U32(w) el_w64_sat_u32(&(w), 0UL, UINT32_MAX)
 #define EL_W_CMP(a, b) el_w64_cmp(&(a), &(b))
 #define EL_W_SIGN(w) el_w64_sign(&(w))
 

@@ -76,7 +76,8 @@ def type_param_macros(name: str, t: T.ValueType, bindings: dict[str, T.ValueType
         macros = [(f"{name}_WIDE", "el_wide_t"), (f"{name}_W(w, v)", f"EL_W_SET_{k}(w, v)")]
         macros += [(f"{name}_W{op}(w, v)", f"EL_W_{op}_{k}(w, v)") for op in ("ADD", "SUB", "MUL", "DIV")]
         macros += [(f"{name}_W{op}_I(w, v)", f"EL_W_{op}_I(w, v)") for op in ("ADD", "SUB", "MUL", "DIV")]
-        macros += [(f"{name}_SAT(w)", sat), (f"{name}_NARROW(w)", sat),
+        narrow = f"(({c})EL_W_NARROW_{'U32' if k == 'U' else 'I32'}(w))"
+        macros += [(f"{name}_SAT(w)", sat), (f"{name}_NARROW(w)", narrow),
                    (f"{name}_LIMIT(v, lo, hi)", f"(({c}){clamp}(({wide})(v), ({wide})(lo), ({wide})(hi)))")]
     for other, u in bindings.items():
         if other == name:
