@@ -9,11 +9,13 @@ BOARD   ?= host
 MODEL   ?= examples/pt100_sensor.elab
 
 # Debian packages the project uses: cross compilers and simulators for the
-# boards, Modbus peers, fuzzing and sanitizer runtimes, Graphviz, tmux.
+# boards, Modbus peers, fuzzing and sanitizer runtimes, Graphviz, tmux, and
+# Chromium with its driver for the service panel's browser tests.
 DEB_PACKAGES := gcc make pkg-config graphviz tmux socat \
 	gcc-avr avr-libc binutils-avr simavr libsimavr-dev libelf-dev avrdude \
 	sdcc sdcc-libraries sdcc-ucsim gputils gpsim \
-	mbpoll libmodbus-dev clang libclang-rt-14-dev clang-tidy valgrind gtkwave
+	mbpoll libmodbus-dev clang libclang-rt-14-dev clang-tidy valgrind gtkwave \
+	chromium chromium-driver
 
 .PHONY: setup deps venv test demo bench clean help flash sim
 
