@@ -19,6 +19,7 @@ from __future__ import annotations
 import re
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Callable
 
 from ..core.errors import BuildError
 from ..ir.program import Device, Program
@@ -48,6 +49,7 @@ class Part:
     no_interrupt: str = "which cannot interrupt"  # why a pin is no encoder pin, in messages
     i2c: dict[int, list[str]] = field(default_factory=dict)  # I2C bus n -> its pins (SDA, SCL)
     spi: dict[int, list[str]] = field(default_factory=dict)  # SPI bus n -> its pins (SCK, MOSI, MISO, SS)
+    pin_name: str = r"^(.*?)(\d+)$"  # a pin's port and bit, for pin ranges in messages ("P43": r"^(P.)(\d)$")
 
     @property
     def kinds(self) -> list[str]:
@@ -92,11 +94,12 @@ def interface_location(program: Program, kind: str) -> str:
     return ""
 
 
-def pin_ranges(pins: list[str]) -> str:
-    """PB0..PB5, PC0..PC5, ...: pins grouped by their name before the number."""
+def pin_ranges(pins: list[str], pattern: str = _PIN_NAME.pattern) -> str:
+    """PB0..PB5, PC0..PC5, ...: pins grouped by their port (``pattern``'s
+    first group) and numbered by their bit (its second)."""
     groups: dict[str, list[int]] = {}
     for p in pins:
-        m = _PIN_NAME.match(p)
+        m = re.match(pattern, p)
         if m:
             groups.setdefault(m.group(1), []).append(int(m.group(2)))
     return ", ".join(f"{port}{min(bits)}..{port}{max(bits)}" if len(bits) > 1 else f"{port}{bits[0]}"
@@ -111,7 +114,7 @@ def _physical_pins(board: str, part: Part, claim: Claim, problems: list[str]) ->
         if not isinstance(idx, str) or idx not in part.pins:
             why = f"the {name}'s {idx} is {part.unavailable[idx]}" if idx in part.unavailable \
                 else f"the {name} has no pin {idx}"
-            problems.append(f"{lead} {why}; pins: {pin_ranges(part.pins)}")
+            problems.append(f"{lead} {why}; pins: {pin_ranges(part.pins, part.pin_name)}")
             return None
         return [idx]
     if kind == "pwm":
@@ -286,12 +289,16 @@ def _check_driver(program: Program, board: str, part: Part, drivers: dict[str, d
             if kind == "pin" and pin in part.pins and pin not in part.interrupt_pins:
                 problems.append(f"{dev.location}: error: device '{dev.path}' ({dev.driver}) needs an interrupt on "
                                 f"{pin}, {part.no_interrupt} on the {part.name}; pins that can: "
-                                f"{pin_ranges(sorted(part.interrupt_pins)) or 'none'}")
+                                f"{pin_ranges(sorted(part.interrupt_pins), part.pin_name) or 'none'}")
 
 
-def check(program: Program, board: str, part: Part, drivers: dict[str, dict]) -> Resolved:
-    """:func:`resolve`, raising BuildError with every problem if any."""
+def check(program: Program, board: str, part: Part, drivers: dict[str, dict],
+          more: Callable[[Program, Resolved], list[str]] | None = None) -> Resolved:
+    """:func:`resolve`, raising BuildError with every problem if any; ``more``
+    adds a board's own problems (file:line: error: ...) to the same report."""
     res = resolve(program, board, part, drivers)
+    if more is not None:
+        res.problems += more(program, res)
     if res.problems:
         count = len(res.problems)
         raise BuildError(f"the model does not fit the {board} board with the {part.name} "

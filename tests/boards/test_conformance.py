@@ -22,7 +22,7 @@ from pathlib import Path
 import pytest
 
 from boards_testlib import (BOARD_PATH, CONTRACT, ENV, USER_BOARD, USER_BOARD_PATH, board_names, conformance,
-                            conformance_mcu)
+                            conformance_mcu, conformance_model)
 from firmware_builds import EXAMPLE_NAMES, ROOT, build, cli, stimulus_of
 
 BOARDS = board_names()
@@ -184,11 +184,11 @@ def test_one_pin_through_two_resources_is_refused_naming_both(board, tmp_path):
 
 # ---------------------------------------------------------------- sizes, release builds
 
-def _api_build(board: str, name: str, out: Path, release: bool):
+def _api_build(board: str, model: Path, out: Path, release: bool):
     from easylab.build import build as do_build
     from easylab.pipeline import lower_file
 
-    program, result = lower_file(ROOT / "examples" / f"{name}.elab")
+    program, result = lower_file(model)
     assert program is not None, result.report()
     mcu = conformance(board).get("mcu")
     return do_build(program, board, out, release=release, mcu=mcu, board_path=BOARD_PATH)
@@ -196,12 +196,12 @@ def _api_build(board: str, name: str, out: Path, release: bool):
 
 @pytest.mark.parametrize("board", BOARDS)
 def test_a_build_reports_its_size(board, tmp_path):
-    built = _api_build(board, "blink", tmp_path / "b", release=False)
+    built = _api_build(board, conformance_model(board), tmp_path / "b", release=False)
     size = built.compiled.size
     assert size is not None and size.flash > 0 and size.ram > 0 and size.lines
     if size.flash_max is not None:
         assert size.flash <= size.flash_max and size.ram <= size.ram_max
-    proc = cli("build", ROOT / "examples/blink.elab", "--board", board, *conformance_mcu(board), "-o",
+    proc = cli("build", conformance_model(board), "--board", board, *conformance_mcu(board), "-o",
                tmp_path / "cli", env=ENV)
     assert proc.returncode == 0, proc.stderr
     assert size.lines[0] in proc.stdout.splitlines()
@@ -209,8 +209,8 @@ def test_a_build_reports_its_size(board, tmp_path):
 
 @pytest.mark.parametrize("board", BOARDS)
 def test_a_release_build_has_no_debug_code(board, tmp_path):
-    debug = _api_build(board, "blink", tmp_path / "debug", release=False)
-    release = _api_build(board, "blink", tmp_path / "release", release=True)
+    debug = _api_build(board, conformance_model(board), tmp_path / "debug", release=False)
+    release = _api_build(board, conformance_model(board), tmp_path / "release", release=True)
     debug_symbols = {s for s in debug.board.symbols(debug.compiled) if s.startswith("el_debug_")}
     release_symbols = {s for s in release.board.symbols(release.compiled) if s.startswith("el_debug_")}
     assert "el_debug_poll" in debug_symbols
