@@ -47,14 +47,16 @@ def generate(program: Program, board: Board, out_dir: Path, release: bool = Fals
 
 def build(program: Program, board_name: str, out_dir: Path, extra_cflags: list[str] | None = None,
           cc: str | None = None, release: bool = False, mcu: str | None = None, sim: bool = False,
-          schedule: str | None = None, board_path: list[str] | tuple[str, ...] = ()) -> BuildResult:
+          schedule: str | None = None, board_path: list[str] | tuple[str, ...] = (),
+          check: bool = False) -> BuildResult:
     """Generate and compile ``program`` for a board (found on the board
     path: ``board_path``, EASYLAB_BOARD_PATH, the installation). A release
-    build has no debug interface; ``sim`` adds the board's simulator."""
+    build has no debug interface; ``sim`` adds the board's simulator;
+    ``check`` runs the board's further checks of the C."""
     board = load_board(board_name, board_path).configure(mcu, sim)
     checked = board.check(program)
     generated = generate(program, board, out_dir, release, checked)
-    options = CompileOptions(release, tuple(extra_cflags or ()), cc, schedule)
+    options = CompileOptions(release, tuple(extra_cflags or ()), cc, schedule, check)
     compiled = board.compile(program, checked, out_dir, generated, options)
     result = BuildResult(out_dir, board, compiled, generated, list(compiled.size.lines if compiled.size else []))
     result.notes += compiled.notes

@@ -66,8 +66,8 @@ def lower_file(path: str | Path, schedule: str | None = None, text: str | None =
 
 
 def model_files(path: Path, program: Program | None) -> list[Path]:
-    """The files a model depends on: itself, its imports, and the impl files
-    of its actors."""
+    """The files a model depends on: itself, its imports, the impl files of
+    its actors and the handler files of its devices."""
     files = [path]
     loaded = load(path, SourceCache(), Diagnostics())
     if loaded is not None:
@@ -76,4 +76,5 @@ def model_files(path: Path, program: Program | None) -> list[Path]:
             files.append(library_path(name[1:-1]) if name.startswith("<") and name.endswith(">") else Path(name))
     if program is not None:
         files += [Path(s.impl) for s in program.specs if s.impl]
+        files += [Path(f) for d in program.devices for f in d.handlers.values()]
     return list(dict.fromkeys(files))

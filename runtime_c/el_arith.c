@@ -1,7 +1,9 @@
 /* EasyLab runtime: the arithmetic of model expressions that C leaves
  * undefined or implementation-defined (docs/ir.md, "expressions"):
  * division by zero gives 0 (x % 0 gives x), the most negative value
- * divided by -1 wraps, time saturates. */
+ * divided by -1 wraps, time saturates. A C89 build also gets el_types.h's
+ * helpers (el_cmp_*, el_clamp_*) defined here, once. */
+#define EL_DEFINE_HELPERS 1
 #include "el_types.h"
 
 #define EL_DIV_SIGNED(name, T, MIN)                        \

@@ -4,9 +4,9 @@
 #include "el_port.h"
 #include "el_debug.h" /* the debugger's hooks: empty macros without a debug server */
 
-static uint64_t el_now;
+static el_tick_t el_now;
 
-uint64_t el_now_tick(void)
+el_tick_t el_now_tick(void)
 {
     return el_now;
 }
@@ -18,7 +18,7 @@ void el_idle(void)
 
 void el_run(int argc, char **argv)
 {
-    uint64_t base = 0u;
+    el_tick_t base = 0u;
     uint32_t pending = 0u; /* released, not yet published */
     uint16_t i;
     uint8_t task;

@@ -44,7 +44,7 @@ void el_run(int argc, char **argv);
 void el_idle(void);
 
 /* The absolute logical tick of the instant being processed. */
-uint64_t el_now_tick(void);
+el_tick_t el_now_tick(void);
 
 /* Copy n elements (any type) from src to dst. */
 #define EL_COPY(dst, src, n) \

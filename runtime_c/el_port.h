@@ -43,12 +43,12 @@ void el_port_irq_restore(el_irq_state_t state);
  * then are published and before devices are read and inputs latched: where
  * writes from outside (debug and service interfaces, the host board's
  * stimulus for params and vars) take effect. */
-void el_port_inputs(uint64_t tick);
+void el_port_inputs(el_tick_t tick);
 
 /* Called by the dispatcher once per logical instant, after publication,
  * interface writes and device reads: the host board records its trace
- * here. `tick` is the absolute logical tick (64-bit: traces run long). */
-void el_port_instant(uint64_t tick);
+ * here. `tick` is the absolute logical tick (el_types.h: el_tick_t). */
+void el_port_instant(el_tick_t tick);
 
 /* Non-volatile storage for `persist` params: `size` bytes at `offset`.
  * Return false on failure (reported by the caller). */

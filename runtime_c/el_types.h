@@ -1,15 +1,31 @@
 /* EasyLab runtime: basic types and the arithmetic of the IR (docs/ir.md).
  *
  * Every generated file and every runtime file includes this header first.
- * Portable C99 (also C89 with a 16-bit int for the F16 port): fixed-width
+ * Portable C99, and C89 with a 16-bit int (the f16 board): fixed-width
  * types, no heap, no recursion.
  */
 #ifndef EL_TYPES_H
 #define EL_TYPES_H
 
+/* A board whose compiler has no <stdint.h> (C89) defines EL_BOARD_STDINT
+ * and gives the fixed-width types and their limits in el_board_stdint.h. */
+#if defined(EL_BOARD_STDINT)
+#include "el_board_stdint.h"
+#else
 #include <stdint.h>
+#endif
 #include <stddef.h>
 #include <float.h>
+
+/* Whether the compiler has a 64-bit integer type: C99 compilers do; C89
+ * ones (Softune fcc907s, sdcc --std-c89) do not, and the runtime then does
+ * its wide arithmetic in software (el_wide.h) and counts absolute ticks in
+ * 32 bits. */
+#if defined(INT64_MAX)
+#define EL_HAS_INT64 1
+#else
+#define EL_HAS_INT64 0
+#endif
 
 #if defined(__STDC_VERSION__) && __STDC_VERSION__ >= 199901L
 #include <stdbool.h>
@@ -25,33 +41,53 @@ typedef unsigned char bool;
 typedef uint32_t el_time_t;
 #define EL_TIME_MAX UINT32_MAX
 
+/* The absolute logical tick (the dispatcher's count of instants' ticks).
+ * 64-bit: traces run long. Without a 64-bit type it wraps after 2^32
+ * ticks (49.7 days of 1 ms ticks), which nothing in a firmware notices:
+ * the port's waits and the lateness count already compare 32-bit ticks. */
+#if EL_HAS_INT64
+typedef uint64_t el_tick_t;
+#else
+typedef uint32_t el_tick_t;
+#endif
+
 /* Saturate v into [lo, hi]. Arguments are evaluated more than once. */
 #define EL_CLAMP(v, lo, hi) ((v) < (lo) ? (lo) : ((v) > (hi) ? (hi) : (v)))
 
-/* Inline helpers: `static inline` where the compiler has it (C99). */
+/* Inline helpers: `static inline` where the compiler has it (C99). A C89
+ * compiler has no inline, and warns about a static function a file does
+ * not use: there EL_HELPER only declares the helper, and el_arith.c (which
+ * defines EL_DEFINE_HELPERS) defines it once. */
 #if defined(__STDC_VERSION__) && __STDC_VERSION__ >= 199901L
 #define EL_INLINE static inline
+#define EL_HELPER(decl, body) static inline decl body
 #else
 #define EL_INLINE static
+#if defined(EL_DEFINE_HELPERS)
+#define EL_HELPER(decl, body) decl; decl body
+#else
+#define EL_HELPER(decl, body) decl;
+#endif
 #endif
 
 /* Saturation as functions, so that generic actor code never compares a
  * narrow type with a bound it cannot reach (which compilers warn about). */
-EL_INLINE int64_t el_clamp_i64(int64_t v, int64_t lo, int64_t hi)
-{
-    return v < lo ? lo : (v > hi ? hi : v);
-}
-
-EL_INLINE float el_clamp_f32(float v, float lo, float hi)
-{
-    return v < lo ? lo : (v > hi ? hi : v);
-}
+#if EL_HAS_INT64
+EL_HELPER(int64_t el_clamp_i64(int64_t v, int64_t lo, int64_t hi),
+          { return v < lo ? lo : (v > hi ? hi : v); })
+#endif
+EL_HELPER(int32_t el_clamp_i32(int32_t v, int32_t lo, int32_t hi),
+          { return v < lo ? lo : (v > hi ? hi : v); })
+EL_HELPER(uint32_t el_clamp_u32(uint32_t v, uint32_t lo, uint32_t hi),
+          { return v < lo ? lo : (v > hi ? hi : v); })
+EL_HELPER(float el_clamp_f32(float v, float lo, float hi),
+          { return v < lo ? lo : (v > hi ? hi : v); })
 
 /* Three-way comparison of model integers (-1, 0, 1): generated guards
  * compare through these, so that a comparison whose outcome the types
  * already decide (an unsigned value >= 0) is no compiler warning. */
 #define EL_CMP_FN(name, T) \
-    EL_INLINE int8_t el_cmp_##name(T a, T b) { return (int8_t)(a < b ? -1 : (a > b ? 1 : 0)); }
+    EL_HELPER(int8_t el_cmp_##name(T a, T b), { return (int8_t)(a < b ? -1 : (a > b ? 1 : 0)); })
 EL_CMP_FN(i8, int8_t)
 EL_CMP_FN(u8, uint8_t)
 EL_CMP_FN(i16, int16_t)
@@ -83,10 +119,13 @@ EL_CMP_FN(u32, uint32_t)
 
 /* Wrapping integer arithmetic of model expressions: computed in the
  * unsigned type of the same width, so overflow is defined and the result
- * is the same on every board (two's complement). */
+ * is the same on every board (two's complement). The product goes through
+ * `* 1u`: with a 32-bit int, two uint16_t operands are promoted to (signed)
+ * int, and 65535 * 65535 would overflow it; an unsigned operand makes the
+ * multiplication unsigned on every int width. */
 #define EL_WRAP_ADD(T, U, a, b) ((T)(U)((U)(a) + (U)(b)))
 #define EL_WRAP_SUB(T, U, a, b) ((T)(U)((U)(a) - (U)(b)))
-#define EL_WRAP_MUL(T, U, a, b) ((T)(U)((U)(a) * (U)(b)))
+#define EL_WRAP_MUL(T, U, a, b) ((T)(U)((U)(a) * 1u * (U)(b)))
 #define EL_WRAP_NEG(T, U, a) ((T)(U)(0u - (U)(a)))
 
 int8_t el_div_i8(int8_t a, int8_t b);
@@ -106,5 +145,9 @@ float el_div_f32(float a, float b);
 /* time + time and time - time saturate at 0 and EL_TIME_MAX. */
 el_time_t el_time_add(el_time_t a, el_time_t b);
 el_time_t el_time_sub(el_time_t a, el_time_t b);
+
+/* Wide integer arithmetic for actor code (64-bit, in software without a
+ * 64-bit type). */
+#include "el_wide.h"
 
 #endif /* EL_TYPES_H */

@@ -63,6 +63,28 @@ def build(model: Path | str, board: str, out: Path, *args: str, ok: bool = True,
     return Built(proc, executable, sim)
 
 
+def run_program(exe: Path, *args, timeout: float = 120, ok: bool = True) -> subprocess.CompletedProcess:
+    """A built program (a host firmware, a simulator) with ARGS; ``ok``: must
+    it exit with status 0?"""
+    proc = subprocess.run([str(exe), *map(str, args)], capture_output=True, text=True, timeout=timeout,
+                          stdin=subprocess.DEVNULL)
+    if ok:
+        assert proc.returncode == 0, f"{exe.name} {' '.join(map(str, args))}: status {proc.returncode}\n{proc.stderr}"
+    return proc
+
+
+def write_model(folder: Path, text: str, files: dict[str, str] | None = None, name: str = "model.elab") -> Path:
+    """A model file in ``folder`` and the files beside it (handler and impl
+    files, imports), by path relative to the folder."""
+    for rel, content in (files or {}).items():
+        target = folder / rel
+        target.parent.mkdir(parents=True, exist_ok=True)
+        target.write_text(content, encoding="utf-8")
+    path = folder / name
+    path.write_text(text, encoding="utf-8")
+    return path
+
+
 def stimulus_of(name: str) -> Path | None:
     """An example's own stimulus (examples/NAME.stimulus.csv), if it has one."""
     path = ROOT / "examples" / f"{name}.stimulus.csv"

@@ -53,6 +53,12 @@ uint32_t el_avr_uart_last_rx(uint8_t n);
  * full ring (saturating). */
 uint16_t el_avr_uart_errors(uint8_t n);
 
+/* ---- the I2C bus (avr_twi.c; runtime_c/el_bus.h) ---- */
+
+/* Try a job parked on a busy chip again; the tick's timer interrupt calls
+ * it when the model has devices on the bus (EL_AVR_I2C). */
+void el_avr_twi_poll(void);
+
 /* ---- the ADC (avr_port.c) ---- */
 
 /* Enable the ADC (AVCC reference, clock F_CPU / 128) and disconnect the

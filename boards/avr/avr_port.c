@@ -83,6 +83,9 @@ static volatile uint16_t isr_left = EL_AVR_TICK_ISRS; /* interrupts left in this
 ISR(TIMER2_COMPA_vect)
 {
     isr_count++;
+#if defined(EL_AVR_I2C) && EL_AVR_I2C
+    el_avr_twi_poll(); /* a job waiting for a busy chip on the I2C bus */
+#endif
 #if EL_AVR_TICK_ISRS > 1
     if (--isr_left == 0u) {
         isr_left = EL_AVR_TICK_ISRS;

@@ -22,7 +22,7 @@ import shlex
 import subprocess
 from pathlib import Path
 
-from easylab.board import resources
+from easylab.board import handlers, resources
 from easylab.board.base import BoardBase
 from easylab.board.cbuild import (compile_objects, elf_sections, include_flags, mode_flags, require_tool, run,
                                   runtime_sources, write_files)
@@ -72,10 +72,19 @@ class AvrBoard(BoardBase):
     # ---------------------------------------------------------------- code
 
     def check(self, program: Program) -> resources.Resolved:
-        return resources.check(program, self.name, self.part.part(), self.drivers)
+        resolved = resources.check(program, self.name, self.part.part(), self.drivers)
+        handlers.check_files(program, self.name)
+        return resolved
 
     def produce(self, program: Program, checked: resources.Resolved, release: bool) -> dict[str, str]:
-        return devices.files(program, self, checked, release)
+        """The device tables and configuration, and the handlers a model
+        brings for the board (they may use the I2C bus: el_bus.h)."""
+        return {**devices.files(program, self, checked, release),
+                **handlers.source(program, self.name, includes=("el_bus.h",), chip_select=self.chip_select)}
+
+    def chip_select(self, pin: str) -> str:
+        """A chip select for handler files (EL_CS): struct el_pin of el_board.h."""
+        return devices.chip_select(pin)
 
     def compile(self, program: Program, checked: object, out_dir: Path, generated: list[Path],
                 options: CompileOptions) -> Compiled:

@@ -11,7 +11,8 @@ import math
 import re
 from dataclasses import dataclass
 
-from easylab.board.resources import Resolved, parse_claim
+from easylab.board import handlers
+from easylab.board.resources import Resolved, parse_claim, parse_select
 from easylab.board.simtables import item_symbol
 from easylab.core.errors import BuildError
 from easylab.ir.program import Program
@@ -116,6 +117,12 @@ def _pin_regs(pin: str) -> tuple[str, str, int]:
     return f"&PIN{m.group(1)}", f"_BV({m.group(2)})", int(m.group(2))
 
 
+def chip_select(pin: str) -> str:
+    """A pin as the buses take a chip select: ``struct el_pin`` (el_board.h)."""
+    reg, mask, _ = _pin_regs(pin)
+    return f"{{ {reg}, {mask} }}"
+
+
 def _pwm_init(mcu: Mcu, pin: str) -> tuple[str, dict]:
     timer, ch = mcu.pwm[pin]
     wide = timer in mcu.wide_timers
@@ -126,11 +133,30 @@ def _pwm_init(mcu: Mcu, pin: str) -> tuple[str, dict]:
     return init, {"timer": timer, "channel": ch, "pin": pin}
 
 
+def _eeprom_log_slot(dev, values: int) -> int:
+    """Bytes per slot of an EEPROM log: the smallest power of two that
+    holds a record (a sequence number and the values) and divides the page."""
+    page, size = int(dev.params["page"][1]), int(dev.params["bytes"][1])
+    slot = 4
+    while slot < 2 + 2 * values:
+        slot *= 2
+    if slot > min(page, 64) or page % slot or size % page or size > 0x10000 or size & (size - 1):
+        raise BuildError(f"{dev.location}: error: device '{dev.path}': a record of {values} values takes a slot "
+                         f"of {slot} bytes, which must divide its page of {page} bytes (64 at the most) in a "
+                         f"memory of whole pages whose size is a power of two up to 65536 bytes ({size}): fewer "
+                         f"values, or another page or size")
+    return slot
+
+
 def device_views(program: Program, board) -> list[DeviceView]:
+    """The descriptions of the devices that run the board's drivers (those
+    whose types bring handler files for the board run those instead)."""
     mcu = board.part
     specs = board.drivers
     views = []
     for dev in program.devices:
+        if handlers.handler_file(dev, board.name) is not None:
+            continue
         spec = specs[dev.driver]
         claims = [parse_claim(c) for c in dev.claims]
         items = [_item_c(program, i)[0] for i in dev.items]
@@ -172,6 +198,21 @@ def device_views(program: Program, board) -> list[DeviceView]:
             v = DeviceView(dev.id, dev.path, d, dev.location, "el_drv_line_camera_t",
                            f"{{ {n}u, &el_dev{dev.id}_state, &{items[0]} }}", spec["header"],
                            {"uart": n, "baud": int(spec.get("baud", 115200))}, "el_drv_line_camera_state_t")
+        elif d == "i2c_temperature":
+            bus, addr = claims[0][1], parse_select(dev.claims[0])[1]
+            v = DeviceView(dev.id, dev.path, d, dev.location, "el_drv_i2c_temperature_t",
+                           f"{{ {bus}u, 0x{addr:02x}u, &{items[0]} }}", spec["header"], {"i2c": bus, "addr": addr})
+        elif d in ("i2c_eeprom_log", "spi_eeprom_log"):
+            bus, (how, where) = claims[0][1], parse_select(dev.claims[0])
+            values = program.items[dev.items[0]].count
+            slot = _eeprom_log_slot(dev, values)
+            slots = int(dev.params["bytes"][1]) // slot
+            record = items[0] if values > 1 else f"&{items[0]}"
+            place = f"0x{where:02x}u" if how == "addr" else chip_select(where)
+            v = DeviceView(dev.id, dev.path, d, dev.location, f"el_drv_{d}_t",
+                           f"{{ {bus}u, {place}, {{ {values}u, {slot}u, {slots}u, {record} }}, "
+                           f"&el_dev{dev.id}_state }}", spec["header"], {d[:3]: bus, how: where, "slot": slot},
+                           f"el_drv_{d}_state_t")
         else:  # a driver listed in board.toml without generator support
             raise BuildError(f"{dev.location}: error: the avr backend cannot describe devices of driver '{d}' yet")
         v.hw["data"] = data_names
@@ -228,10 +269,48 @@ def config_header(program: Program, board, res: Resolved, release: bool) -> str:
         elif u["use"] == "modbus-rtu":
             lines.append(f"#define EL_AVR_MODBUS_UART {n}u")
             lines.append(f"#define EL_AVR_MODBUS_TX {tx}u")
+    lines += _i2c_config(board, res) + _spi_config(board, res)
     if board.sim:
         lines += ["", "#define EL_AVR_SIM 1 /* simulation build: instants reported through GPIOR0 */"]
     lines += ["", "#endif /* EL_AVR_CONFIG_H */", ""]
     return "\n".join(lines)
+
+
+def _i2c_config(board, res: Resolved) -> list[str]:
+    """The TWI's settings when a device is on the I2C bus (avr_twi.c)."""
+    if ("i2c", 0) not in res.buses:
+        return []
+    i2c = board.description.table("i2c")
+    sda, scl = board.part.i2c[0]
+    port = sda[1]
+    return ["", f"/* i2c[0] on the TWI: {', '.join(c.owner for c in res.buses[('i2c', 0)])} */",
+            "#define EL_AVR_I2C 1", f"#define EL_AVR_I2C_HZ {int(i2c.get('clock_hz', 400000))}UL",
+            f"#define EL_I2C_WAIT_US {int(i2c.get('wait_us', 2000))}UL /* the longest wait for a job */",
+            f"#define EL_I2C_BUSY_US {int(i2c.get('busy_us', 10000))}UL /* a busy chip is tried again this long */",
+            f"#define EL_AVR_I2C_PORT PORT{port} /* SDA {sda}, SCL {scl}: internal pull-ups */",
+            f"#define EL_AVR_I2C_PULLUPS (_BV({sda[2]}) | _BV({scl[2]}))"]
+
+
+_SPI_DIVIDERS = {2: (0, 1), 4: (0, 0), 8: (1, 1), 16: (1, 0), 32: (2, 1), 64: (2, 0), 128: (3, 0)}  # SPR, SPI2X
+
+
+def _spi_config(board, res: Resolved) -> list[str]:
+    """The SPI's settings when a device is on the SPI bus (avr_spi.c): the
+    fastest clock F_CPU / 2^k at most the board's."""
+    if ("spi", 0) not in res.buses:
+        return []
+    hz = int(board.description.table("spi").get("clock_hz", 4000000))
+    divider = next((k for k in sorted(_SPI_DIVIDERS) if board.clock_hz // k <= hz), 128)
+    spr, x2 = _SPI_DIVIDERS[divider]
+    sck, mosi, _miso, ss = board.part.spi[0]
+    port = sck[1]
+    return ["", f"/* spi[0], master: {', '.join(c.owner for c in res.buses[('spi', 0)])} */",
+            "#define EL_AVR_SPI 1", f"#define EL_AVR_SPI_HZ {board.clock_hz // divider}UL /* F_CPU / {divider} */",
+            f"#define EL_AVR_SPI_SPR {spr}u", f"#define EL_AVR_SPI_2X {x2}u",
+            f"#define EL_AVR_SPI_DDR DDR{port} /* SCK {sck}, MOSI {mosi}, SS {ss}: outputs */",
+            f"#define EL_AVR_SPI_PORT PORT{port}",
+            f"#define EL_AVR_SPI_OUTPUTS (_BV({sck[2]}) | _BV({mosi[2]}) | _BV({ss[2]}))",
+            f"#define EL_AVR_SPI_SS _BV({ss[2]})"]
 
 
 def devices_header(program: Program, views: list[DeviceView]) -> str:
@@ -249,7 +328,8 @@ def devices_header(program: Program, views: list[DeviceView]) -> str:
             name, ctype = _item_c(program, i)
             if name not in seen:
                 seen.add(name)
-                lines.append(f"extern {ctype} {name};")
+                count = program.items[i].count
+                lines.append(f"extern {ctype} {name}{f'[{count}]' if count > 1 else ''};")
     lines.append("")
     for v in views:
         if v.state_type:

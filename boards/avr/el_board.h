@@ -20,6 +20,13 @@
 /* The runtime's entry point (runtime_c/el_dispatch.c); main() calls it. */
 void el_run(int argc, char **argv);
 
+/* A pin, as the buses take a chip select (runtime_c/el_bus.h: el_pin_t):
+ * its PINx register (DDRx and PORTx follow it) and its bit. */
+struct el_pin {
+    volatile uint8_t *pin;
+    uint8_t mask;
+};
+
 #include "el_avr_devices.h" /* generated: el_dev<id> and the drivers */
 
 #endif /* EL_BOARD_H */

@@ -29,6 +29,8 @@ class Mcu:
     reserved_pwm: dict[str, str]
     wide_timers: list[int]
     unavailable: dict[str, str] = field(default_factory=dict)
+    i2c: dict[int, list[str]] = field(default_factory=dict)  # the TWI: bus 0 -> (SDA, SCL)
+    spi: dict[int, list[str]] = field(default_factory=dict)  # bus 0 -> (SCK, MOSI, MISO, SS)
 
     @property
     def small(self) -> bool:
@@ -43,7 +45,8 @@ class Mcu:
                     for pin, output in self.reserved_pwm.items()}
         return Part(self.name, self.pins, self.uart, self.adc, dict(self.pwm), interrupt, self.unavailable, reserved,
                     network=False, pwm_source="timer output",
-                    no_interrupt="which has neither a pin-change nor an external interrupt")
+                    no_interrupt="which has neither a pin-change nor an external interrupt",
+                    i2c=self.i2c, spi=self.spi)
 
 
 def read_mcus(table: dict) -> dict[str, Mcu]:
@@ -58,5 +61,7 @@ def read_mcus(table: dict) -> dict[str, Mcu]:
                         {int(k): str(v) for k, v in m.get("adc", {}).items()},
                         {k: (int(v[0]), str(v[1])) for k, v in m.get("pwm", {}).items()},
                         dict(m.get("reserved_pwm", {})), [int(t) for t in m.get("sixteen_bit_timers", [])],
-                        dict(m.get("unavailable", {})))
+                        dict(m.get("unavailable", {})),
+                        {int(k): list(v) for k, v in m.get("i2c", {}).items()},
+                        {int(k): list(v) for k, v in m.get("spi", {}).items()})
     return out

@@ -8,6 +8,7 @@ from __future__ import annotations
 import subprocess
 from pathlib import Path
 
+from easylab.board import handlers
 from easylab.board.base import BoardBase
 from easylab.board.cbuild import (elf_sections, include_flags, mode_flags, require_tool, run, runtime_sources)
 from easylab.board.contract import Compiled, CompileOptions, SizeReport, Simulator
@@ -17,12 +18,25 @@ from easylab.ir.program import Device, Program
 
 class HostBoard(BoardBase):
     """Every resource claim is accepted (a process has no pins to run out
-    of); every device handler calls the simulated driver of el_board.h."""
+    of); a device runs the host handlers its type brings from the model's
+    folder, else the simulated driver of el_board.h (stimulus in, trace
+    out)."""
 
     has_simulator = True
 
     def device_call(self, device: Device, handler: str) -> str:
-        return f"el_sim_{handler}({device.id}u);"
+        model = handlers.call(device, handler, self.name)
+        if model is None:
+            return f"el_sim_{handler}({device.id}u);"
+        if handler == "read":  # the handler starts from the stimulus due now (docs/language.md)
+            return f"el_sim_sample({device.id}u); {model}".rstrip()
+        return model
+
+    def check(self, program: Program) -> object:
+        """Every claim and every device goes (a device without host handlers
+        is simulated); the handler files the build uses must be readable."""
+        handlers.check_files(program, self.name)
+        return None
 
     def compile(self, program: Program, checked: object, out_dir: Path, generated: list[Path],
                 options: CompileOptions) -> Compiled:

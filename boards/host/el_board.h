@@ -37,6 +37,12 @@ void el_sim_stop(uint8_t device);
 void el_sim_read(uint8_t device);
 /* The device's `in` data were just published. Nothing to do on the host. */
 void el_sim_write(uint8_t device);
+/* Before the host handlers of a device whose type brings them from the
+ * model's folder read it (docs/language.md, "Device handlers"): every
+ * `out` datum of the device takes the stimulus value due at the instant
+ * being processed, or its initial value when the stimulus has none yet, so
+ * that a simulation handler computes its data from the stimulus. */
+void el_sim_sample(uint8_t device);
 
 /* The runtime's entry point (runtime_c/el_dispatch.c). */
 void el_run(int argc, char **argv);

@@ -112,6 +112,11 @@ uint64_t el_host_now_us(void);
  * Returns false on error (nothing loaded). */
 bool el_host_stimulus_load(const char *path);
 void el_host_stimulus_free(void);
+/* The loaded stimulus's events in order (for a simulator that replays it
+ * inside a firmware): the row's time, the item, the elements it sets
+ * (first, n) and one value (el_host_type_size bytes). False past the last. */
+bool el_host_stimulus_event(size_t index, uint64_t *time_us, uint16_t *item, uint16_t *first, uint16_t *n,
+                            void *value);
 
 /* ---- trace (host_trace.c) ---- */
 

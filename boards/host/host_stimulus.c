@@ -566,6 +566,21 @@ void el_host_stimulus_inputs(void)
         advance(el_host_now_us());
 }
 
+bool el_host_stimulus_event(size_t index, uint64_t *time_us, uint16_t *item, uint16_t *first, uint16_t *n,
+                            void *value)
+{
+    const column_t *col;
+    if (!loaded || index >= event_count)
+        return false;
+    col = &columns[events[index].column];
+    *time_us = events[index].time_us;
+    *item = col->item;
+    *first = col->first;
+    *n = col->n;
+    memcpy(value, &events[index].value, el_host_type_size(el_items[col->item].type));
+    return true;
+}
+
 void el_sim_read(uint8_t device)
 {
     size_t c;
@@ -579,4 +594,18 @@ void el_sim_read(uint8_t device)
             continue;
         store(col);
     }
+}
+
+void el_sim_sample(uint8_t device)
+{
+    uint16_t i;
+
+    if (device >= el_device_count)
+        return;
+    for (i = 0; i < el_item_count; i++) {
+        const el_item_t *it = &el_items[i];
+        if (it->kind == EL_K_DEV_OUT && it->device == device)
+            memset(it->addr, 0, el_host_type_size(it->type) * it->count); /* 0, false, 0.0f */
+    }
+    el_sim_read(device);
 }

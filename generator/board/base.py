@@ -9,6 +9,7 @@ from pathlib import Path
 
 from ..core.errors import BuildError
 from ..ir.program import Device, Program
+from . import handlers
 from .cbuild import defined_symbols
 from .contract import BoardCannotRun, Compiled, CompileOptions, Simulator
 from .description import BoardDescription
@@ -55,13 +56,26 @@ class BoardBase:
     # ---------------------------------------------------------------- code
 
     def device_call(self, device: Device, handler: str) -> str:
+        """The handler of the device's type from the model's folder for this
+        board (easylab.board.handlers), else the board's driver."""
+        model = handlers.call(device, handler, self.name)
+        if model is not None:
+            return model
         return f"el_drv_{device.driver}_{handler}(&el_dev{device.id});"
 
     def check(self, program: Program) -> object:
+        """Every device whose type brings handler files has one for this
+        board, and every such file can be read."""
+        problems = [p for p in (handlers.lacking(d, self.name) for d in program.devices) if p]
+        if problems:
+            raise BuildError(f"the model does not fit the {self.name} board:\n" + "\n".join(problems))
+        handlers.check_files(program, self.name)
         return None
 
     def produce(self, program: Program, checked: object, release: bool) -> dict[str, str]:
-        return {}
+        """The handlers of the devices whose types bring a file for this
+        board (el_handlers.c)."""
+        return handlers.source(program, self.name)
 
     def compile(self, program: Program, checked: object, out_dir: Path, generated: list[Path],
                 options: CompileOptions) -> Compiled:

@@ -31,6 +31,7 @@ class CompileOptions:
     extra_cflags: tuple[str, ...] = ()  # --cflags
     cc: str | None = None  # --cc: another C compiler than the board's
     schedule: str | None = None  # --schedule, for the hints of a program that does not fit
+    check: bool = False  # --check: the board's further checks of the C (a board without any has nothing to add)
 
 
 @dataclass

@@ -2,13 +2,16 @@
 with pins runs (docs/boards.md, "MCUs and resources").
 
 A board describes each of its parts in board.toml: the pins a model may
-claim, the pins behind each UART, ADC channel and PWM output, the pins
-that can interrupt, and the pins the board keeps for itself. Each claim of
-the model (devices' ``claims``, interfaces' ``on uartN``) stands for
-physical pins; a resource the part lacks, a pin claimed twice through
-different resources, or a device whose driver the board lacks or drives
-differently is a problem, and all problems are reported together, each at
-its source line.
+claim, the pins behind each UART, ADC channel, PWM output and bus (I2C,
+SPI), the pins that can interrupt, and the pins the board keeps for
+itself. Each claim of the model (devices' ``claims``, interfaces' ``on
+uartN``) stands for physical pins; a bus's lines are shared by the devices
+on it (``i2c[0] addr 0x48``, ``spi[0] cs "PB2"``), a chip select is its
+device's own. A resource the part lacks, a pin claimed twice through
+different resources, a bus address I2C does not allow, or a device whose
+driver the board lacks or drives differently (and whose type brings no
+handler file for the board) is a problem, and all problems are reported
+together, each at its source line.
 """
 
 from __future__ import annotations
@@ -16,11 +19,15 @@ from __future__ import annotations
 import re
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Callable
 
 from ..core.errors import BuildError
 from ..ir.program import Device, Program
+from . import handlers
+from .claims import parse_claim, parse_select
 
-_CLAIM = re.compile(r'^([A-Za-z_]+)\[(?:"([^"]*)"|(\d+))\]$')
+# The 7-bit addresses I2C leaves to devices (0x00..0x07 and 0x78..0x7F are reserved).
+I2C_ADDRESSES = range(0x08, 0x78)
 _PIN_NAME = re.compile(r"^(.*?)(\d+)$")
 
 
@@ -40,15 +47,24 @@ class Part:
     network: bool = False  # Modbus TCP needs one
     pwm_source: str = "PWM output"  # what drives a PWM pin, in messages ("timer output", "CCP output")
     no_interrupt: str = "which cannot interrupt"  # why a pin is no encoder pin, in messages
+    i2c: dict[int, list[str]] = field(default_factory=dict)  # I2C bus n -> its pins (SDA, SCL)
+    spi: dict[int, list[str]] = field(default_factory=dict)  # SPI bus n -> its pins (SCK, MOSI, MISO, SS)
+    pin_name: str = r"^(.*?)(\d+)$"  # a pin's port and bit, for pin ranges in messages ("P43": r"^(P.)(\d)$")
+
+    @property
+    def kinds(self) -> list[str]:
+        """The resource kinds this part has, for messages."""
+        return ["pin", "pwm", "adc", "uart"] + (["i2c"] if self.i2c else []) + (["spi"] if self.spi else [])
 
 
 @dataclass
 class Claim:
     kind: str
-    index: object  # str (a pin's name) or int (a UART, an ADC channel)
+    index: object  # str (a pin's name) or int (a UART, an ADC channel, a bus)
     text: str
     owner: str  # "device 'led'" / "interface 'debug'"
     location: str  # file:line or ""
+    select: tuple[str, object] | None = None  # a place on a bus: ("addr", 0x48), ("cs", "PB2")
 
     def where(self) -> str:
         return f"{self.location}: " if self.location else ""
@@ -61,14 +77,7 @@ class Resolved:
     problems: list[str] = field(default_factory=list)
     uarts: dict[int, dict] = field(default_factory=dict)  # uart -> {"use": ..., "baud": ..., ...}
     physical: dict[str, Claim] = field(default_factory=dict)  # pin -> its first claim
-
-
-def parse_claim(text: str) -> tuple[str, object] | None:
-    """``pin["PB5"]`` -> ("pin", "PB5"); ``uart[1]`` -> ("uart", 1)."""
-    m = _CLAIM.match(text.strip())
-    if m is None:
-        return None
-    return m.group(1), (m.group(2) if m.group(2) is not None else int(m.group(3)))
+    buses: dict[tuple[str, int], list[Claim]] = field(default_factory=dict)  # ("i2c", 0) -> the devices on it
 
 
 def interface_location(program: Program, kind: str) -> str:
@@ -85,11 +94,12 @@ def interface_location(program: Program, kind: str) -> str:
     return ""
 
 
-def pin_ranges(pins: list[str]) -> str:
-    """PB0..PB5, PC0..PC5, ...: pins grouped by their name before the number."""
+def pin_ranges(pins: list[str], pattern: str = _PIN_NAME.pattern) -> str:
+    """PB0..PB5, PC0..PC5, ...: pins grouped by their port (``pattern``'s
+    first group) and numbered by their bit (its second)."""
     groups: dict[str, list[int]] = {}
     for p in pins:
-        m = _PIN_NAME.match(p)
+        m = re.match(pattern, p)
         if m:
             groups.setdefault(m.group(1), []).append(int(m.group(2)))
     return ", ".join(f"{port}{min(bits)}..{port}{max(bits)}" if len(bits) > 1 else f"{port}{bits[0]}"
@@ -104,7 +114,7 @@ def _physical_pins(board: str, part: Part, claim: Claim, problems: list[str]) ->
         if not isinstance(idx, str) or idx not in part.pins:
             why = f"the {name}'s {idx} is {part.unavailable[idx]}" if idx in part.unavailable \
                 else f"the {name} has no pin {idx}"
-            problems.append(f"{lead} {why}; pins: {pin_ranges(part.pins)}")
+            problems.append(f"{lead} {why}; pins: {pin_ranges(part.pins, part.pin_name)}")
             return None
         return [idx]
     if kind == "pwm":
@@ -135,8 +145,54 @@ def _physical_pins(board: str, part: Part, claim: Claim, problems: list[str]) ->
                             f"{' only' if len(part.uart) == 1 else ''})")
             return None
         return list(part.uart[idx])
-    problems.append(f"{lead} the {board} board has no resource kind '{kind}' (kinds: pin, pwm, adc, uart)")
+    if kind in ("i2c", "spi"):
+        return _bus_pins(part, claim, lead, problems)
+    problems.append(f"{lead} the {board} board has no resource kind '{kind}' (kinds: {', '.join(part.kinds)})")
     return None
+
+
+def _bus_pins(part: Part, claim: Claim, lead: str, problems: list[str]) -> list[str] | None:
+    """The lines of an I2C or SPI bus (shared by the devices on it) and a
+    device's chip select, or None (a problem was recorded)."""
+    kind, idx, name = claim.kind, claim.index, part.name
+    buses = part.i2c if kind == "i2c" else part.spi
+    if not isinstance(idx, int) or idx not in buses:
+        have = ", ".join(f"{kind}[{n}]" for n in sorted(buses)) or "none"
+        problems.append(f"{lead} the {name} has no {kind.upper()} bus {idx} ({kind.upper()} buses: {have})")
+        return None
+    lines = list(buses[idx])
+    how, where = claim.select if claim.select else (None, None)
+    if kind == "i2c" and how not in (None, "addr"):
+        problems.append(f"{lead} a device on an I2C bus is named by its address: i2c[{idx}] addr 0x48")
+        return None
+    if kind == "i2c" and how == "addr" and where not in I2C_ADDRESSES:
+        problems.append(f"{lead} I2C leaves addresses 0x08..0x77 to devices (7 bits; the others are reserved)")
+        return None
+    if kind == "spi" and how not in (None, "cs"):
+        problems.append(f"{lead} a device on an SPI bus is named by its chip-select pin: spi[{idx}] cs \"PB2\"")
+        return None
+    if kind == "spi" and how == "cs":
+        if not isinstance(where, str) or where not in part.pins:
+            problems.append(f"{lead} its chip select {where} is not a pin of the {name}; pins: "
+                            f"{pin_ranges(part.pins)}")
+            return None
+        if where in lines[:3]:
+            problems.append(f"{lead} {where} is the bus's {('SCK', 'MOSI', 'MISO')[lines.index(where)]}: a chip "
+                            f"select is a pin of its own{f' (or the bus SS, {lines[3]})' if len(lines) > 3 else ''}")
+            return None
+        if where not in lines:
+            lines.append(where)
+    return lines
+
+
+def _shared_line(part: Part, claim: Claim, pin: str) -> tuple | None:
+    """The bus whose line ``pin`` is for this claim (devices on one bus
+    share its lines), or None for a pin the claim holds alone (a chip
+    select other than the bus's own SS pin)."""
+    buses = {"i2c": part.i2c, "spi": part.spi}.get(claim.kind)
+    if buses is None or pin not in buses.get(claim.index, ()):
+        return None
+    return (claim.kind, claim.index)
 
 
 def resolve(program: Program, board: str, part: Part, drivers: dict[str, dict]) -> Resolved:
@@ -153,7 +209,8 @@ def resolve(program: Program, board: str, part: Part, drivers: dict[str, dict]) 
                 res.problems.append(f"{dev.location}: error: device '{dev.path}' claims {text}, which the {board} "
                                     f"board cannot read")
                 continue
-            claims.append(Claim(parsed[0], parsed[1], text, f"device '{dev.path}'", dev.location))
+            claims.append(Claim(parsed[0], parsed[1], text, f"device '{dev.path}'", dev.location,
+                                parse_select(text)))
     for iface in program.interfaces:
         loc = interface_location(program, iface.kind)
         if iface.kind == "modbus-tcp" and not part.network:
@@ -164,11 +221,19 @@ def resolve(program: Program, board: str, part: Part, drivers: dict[str, dict]) 
         if parsed is not None:
             claims.append(Claim(parsed[0], parsed[1], iface.resource, f"interface '{iface.kind.replace('-', ' ')}'",
                                 loc))
+    shared: dict[str, tuple | None] = {}  # pin -> the bus whose line it is
     for claim in claims:
-        for pin in _physical_pins(board, part, claim, res.problems) or []:
+        pins = _physical_pins(board, part, claim, res.problems)
+        if pins is not None and claim.kind in ("i2c", "spi"):
+            res.buses.setdefault((claim.kind, claim.index), []).append(claim)
+        for pin in pins or []:
             first = res.physical.get(pin)
+            line = _shared_line(part, claim, pin)
             if first is None:
                 res.physical[pin] = claim
+                shared[pin] = line
+            elif line is not None and shared.get(pin) == line:
+                continue  # one more device on the bus
             elif first.text != claim.text:
                 res.problems.append(
                     f"{claim.where()}error: pin {pin} is claimed twice on the {part.name}: as {claim.text} by "
@@ -176,17 +241,23 @@ def resolve(program: Program, board: str, part: Part, drivers: dict[str, dict]) 
                     + (f" ({first.location})" if first.location else "")
                     + "; each pin has one owner: choose another pin, channel or UART")
     for dev in program.devices:
-        _check_driver(program, board, part, drivers, dev, res.problems)
+        lacking = handlers.lacking(dev, board)
+        if lacking is not None and dev.driver not in drivers:
+            res.problems.append(lacking)
+        elif handlers.handler_file(dev, board) is None:
+            _check_driver(program, board, part, drivers, dev, res.problems)
     for iface in program.interfaces:
         parsed = parse_claim(iface.resource) if iface.resource is not None else None
         if iface.kind in ("debug", "modbus-rtu") and parsed and parsed[0] == "uart" and parsed[1] in part.uart:
             res.uarts[parsed[1]] = {"use": iface.kind, **iface.settings}
     for dev in program.devices:  # devices that own a UART (a camera module's link)
-        spec = drivers.get(dev.driver)
+        model = handlers.handler_file(dev, board) is not None
+        spec = drivers.get(dev.driver) if not model else {}
         for text in dev.claims if spec is not None else ():
             parsed = parse_claim(text)
             if parsed and parsed[0] == "uart" and parsed[1] in part.uart:
-                res.uarts[parsed[1]] = {"use": dev.driver, "baud": int(spec.get("baud", 115200)), "device": dev.path}
+                res.uarts[parsed[1]] = {"use": "device" if model else dev.driver,
+                                        "baud": int(spec.get("baud", 115200)), "device": dev.path}
     return res
 
 
@@ -207,22 +278,27 @@ def _check_driver(program: Program, board: str, part: Part, drivers: dict[str, d
                         f"not {', '.join(dev.claims) or 'none'}")
         return
     data = [f"{'out' if program.items[i].kind == 'dev_out' else 'in'} {program.items[i].type.name}" for i in dev.items]
-    if data != list(spec.get("data", [])) or any(program.items[i].count != 1 for i in dev.items):
+    rates = bool(spec.get("rates"))  # the driver takes data with a rate (records of several values)
+    if data != list(spec.get("data", [])) or (not rates and any(program.items[i].count != 1 for i in dev.items)):
         problems.append(f"{dev.location}: error: device '{dev.path}': the {board} driver '{dev.driver}' drives the "
-                        f"data {', '.join(spec.get('data', [])) or 'none'} (one value each), not "
-                        f"{', '.join(data) or 'none'}")
+                        f"data {', '.join(spec.get('data', [])) or 'none'}{'' if rates else ' (one value each)'}, "
+                        f"not {', '.join(data) or 'none'}")
         return
     if spec.get("interrupt_pins"):
         for kind, pin in parsed:
             if kind == "pin" and pin in part.pins and pin not in part.interrupt_pins:
                 problems.append(f"{dev.location}: error: device '{dev.path}' ({dev.driver}) needs an interrupt on "
                                 f"{pin}, {part.no_interrupt} on the {part.name}; pins that can: "
-                                f"{pin_ranges(sorted(part.interrupt_pins)) or 'none'}")
+                                f"{pin_ranges(sorted(part.interrupt_pins), part.pin_name) or 'none'}")
 
 
-def check(program: Program, board: str, part: Part, drivers: dict[str, dict]) -> Resolved:
-    """:func:`resolve`, raising BuildError with every problem if any."""
+def check(program: Program, board: str, part: Part, drivers: dict[str, dict],
+          more: Callable[[Program, Resolved], list[str]] | None = None) -> Resolved:
+    """:func:`resolve`, raising BuildError with every problem if any; ``more``
+    adds a board's own problems (file:line: error: ...) to the same report."""
     res = resolve(program, board, part, drivers)
+    if more is not None:
+        res.problems += more(program, res)
     if res.problems:
         count = len(res.problems)
         raise BuildError(f"the model does not fit the {board} board with the {part.name} "

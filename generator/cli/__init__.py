@@ -64,6 +64,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--cflags", metavar="FLAGS", help="extra compiler flags, e.g. \"-fsanitize=address,undefined\"")
     p.add_argument("--sim", action="store_true", help="a simulation build and the board's simulator, built beside "
                                                       "it (docs/boards.md)")
+    p.add_argument("--check", action="store_true", help="the board's further checks of the C, if it has any "
+                                                        "(docs/boards.md)")
     p.set_defaults(func=model_commands.cmd_build)
 
     board_commands.add_parsers(sub)

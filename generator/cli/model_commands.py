@@ -109,7 +109,7 @@ def cmd_build(args) -> int:
     try:
         built = build(program, args.board, out, extra_cflags=shlex.split(args.cflags or ""), cc=args.cc,
                       release=args.release, mcu=args.mcu, sim=args.sim, schedule=args.schedule,
-                      board_path=args.board_path)
+                      board_path=args.board_path, check=args.check)
     except BuildError as err:
         raise CliError(str(err)) from None
     for note in built.notes:

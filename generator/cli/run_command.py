@@ -64,8 +64,9 @@ def add_parser(sub) -> None:
     p = sub.add_parser(
         "run", help="run a model on this machine (interpreter and actor plug-ins)",
         description="Interpret a model on this machine: the IR's dispatch table, charts and dataflows, with "
-                    "each actor's C code compiled into a cached plug-in. Devices are simulated as on the host "
-                    "board (stimulus CSV in, CSV or VCD trace out); the trace equals the host firmware's.")
+                    "each actor's C code compiled into a cached plug-in. Devices run as on the host board: the "
+                    "host handlers their types bring from the model's folder (a plug-in too), else simulated "
+                    "(stimulus CSV in, CSV or VCD trace out); the trace equals the host firmware's.")
     p.add_argument("file", metavar="MODEL", help="model file (.elab)")
     p.add_argument("--stimulus", metavar="FILE.csv", help="device `out` data, params and vars from a CSV file: "
                                                           "time_us, then their names (the host board's format)")

@@ -22,7 +22,7 @@ from .. import __version__
 from ..core import expr as I
 from ..core import types as T
 from ..ir.program import ActorSpec, Buffer, Chart, Dataflow, Fire, Item, Loop, Program, Task
-from .c_syntax import C_KIND_ENUM, C_TYPE_ENUM, ExprWriter, c_literal, ident, type_limits
+from .c_syntax import C_KIND_ENUM, C_TYPE_ENUM, ExprWriter, c_literal, ident, type_param_macros
 from .impl_files import split_impl
 
 NONE_STEP = 0xFF
@@ -130,11 +130,7 @@ class _Builder:
         fields = []
         defines: list[tuple[str, str]] = []
         for tp, bound in spec.type_bindings.items():
-            wide, lo, hi = type_limits(bound)
-            clamp = "el_clamp_f32" if bound is T.FLOAT32 else "el_clamp_i64"
-            defines += [(tp, bound.c_name), (f"{tp}_WIDE", wide), (f"{tp}_MIN", lo), (f"{tp}_MAX", hi),
-                        (f"{tp}_SAT(v)", f"(({bound.c_name}){clamp}(({wide})(v), {lo}, {hi}))"),
-                        (f"{tp}_LIMIT(v, lo, hi)", f"(({bound.c_name}){clamp}(({wide})(v), ({wide})(lo), ({wide})(hi)))")]
+            defines += type_param_macros(tp, bound, spec.type_bindings)
         for name, (t, value) in spec.const_args.items():
             defines.append((name, c_literal(t, value)))
         for name, t, size in spec.states:

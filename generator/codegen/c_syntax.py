@@ -45,13 +45,51 @@ def c_literal(t: T.ValueType, value) -> str:
     return f"(({t.c_name}){value}{suffix})"
 
 
-def type_limits(t: T.ValueType) -> tuple[str, str, str]:
-    """(T_WIDE, T_MIN, T_MAX) of a type parameter bound to ``t``."""
+def _operand(t: T.ValueType) -> str:
+    """The el_wide.h operand suffix that takes a value of ``t``."""
+    return "U" if t is T.UINT32 else "I"
+
+
+def type_param_macros(name: str, t: T.ValueType, bindings: dict[str, T.ValueType]) -> list[tuple[str, str]]:
+    """The macros actor code sees for a type parameter ``name`` bound to
+    ``t`` (docs/language.md, "Inline C convention"): the type, its limits,
+    its wide type and the accumulator operations on it (runtime_c/el_wide.h:
+    int64_t where the compiler has one, software words where it does not),
+    saturation back into the type, and the conversion of a value of each
+    other type parameter of ``bindings`` into this one's wide type."""
+    c = t.c_name
     if t is T.FLOAT32:
-        return "float", "(-FLT_MAX)", "FLT_MAX"
-    if t is T.BOOL:
-        return "int64_t", "0", "1"
-    return "int64_t", c_literal(t, t.min), c_literal(t, t.max)
+        lo, hi = "(-FLT_MAX)", "FLT_MAX"
+        ops = {op: f"((w) {sym}= (float)(v))" for op, sym in (("ADD", "+"), ("SUB", "-"), ("MUL", "*"), ("DIV", "/"))}
+        macros = [(f"{name}_WIDE", "float"), (f"{name}_W(w, v)", "((w) = (float)(v))")]
+        macros += [(f"{name}_W{op}(w, v)", text) for op, text in ops.items()]
+        macros += [(f"{name}_W{op}_I(w, v)", text) for op, text in ops.items()]
+        macros += [(f"{name}_SAT(w)", f"(({c})el_clamp_f32((float)(w), {lo}, {hi}))"),
+                   (f"{name}_NARROW(w)", f"(({c})(w))"),
+                   (f"{name}_LIMIT(v, lo, hi)", f"(({c})el_clamp_f32((float)(v), (float)(lo), (float)(hi)))")]
+    else:
+        lo, hi = ("0", "1") if t is T.BOOL else (c_literal(t, t.min), c_literal(t, t.max))
+        k = _operand(t)
+        sat = f"(({c})EL_W_SAT_{'U32' if k == 'U' else 'I32'}(w, {lo}, {hi}))"
+        clamp = "el_clamp_u32" if k == "U" else "el_clamp_i32"
+        wide = "uint32_t" if k == "U" else "int32_t"
+        macros = [(f"{name}_WIDE", "el_wide_t"), (f"{name}_W(w, v)", f"EL_W_SET_{k}(w, v)")]
+        macros += [(f"{name}_W{op}(w, v)", f"EL_W_{op}_{k}(w, v)") for op in ("ADD", "SUB", "MUL", "DIV")]
+        macros += [(f"{name}_W{op}_I(w, v)", f"EL_W_{op}_I(w, v)") for op in ("ADD", "SUB", "MUL", "DIV")]
+        narrow = f"(({c})EL_W_NARROW_{'U32' if k == 'U' else 'I32'}(w))"
+        macros += [(f"{name}_SAT(w)", sat), (f"{name}_NARROW(w)", narrow),
+                   (f"{name}_LIMIT(v, lo, hi)", f"(({c}){clamp}(({wide})(v), ({wide})(lo), ({wide})(hi)))")]
+    for other, u in bindings.items():
+        if other == name:
+            continue
+        if t is T.FLOAT32:
+            conv = "((w) = (float)(v))"
+        elif u is T.FLOAT32:
+            conv = "EL_W_SET_F(w, v)"
+        else:
+            conv = f"EL_W_SET_{_operand(u)}(w, v)"
+        macros.append((f"{name}_W_{other}(w, v)", conv))
+    return [(name, c), (f"{name}_MIN", lo), (f"{name}_MAX", hi), *macros]
 
 
 # ====================================================================== expressions

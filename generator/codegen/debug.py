@@ -24,6 +24,7 @@ from __future__ import annotations
 import functools
 import json
 import re
+import struct
 from dataclasses import dataclass
 from pathlib import Path
 from types import SimpleNamespace
@@ -91,16 +92,21 @@ class DebugItem:
 
 
 def _bound(t: T.ValueType, value) -> str:
-    """A C initialiser of el_dbg_bound_t for a range bound (run-time units)."""
+    """A C initialiser of el_dbg_bound_t for a range bound (run-time units).
+    C89 initialises a union through its first member only, the int32_t
+    `i`: an unsigned bound is its two's complement bits there, a float
+    bound its IEEE 754 bits (which `.f` reads back; el_dbg_check_float)."""
     if t is T.FLOAT32:
-        text = repr(float(value))
-        if "e" not in text and "." not in text and "inf" not in text:
-            text += ".0"
-        return f"{{ .f = {text}f }}"
-    if t.name in ("int8", "int16", "int32"):
-        v = int(value)
-        return "{ .i = (-2147483647L - 1L) }" if v == -2**31 else f"{{ .i = {v}L }}"
-    return f"{{ .u = {int(value)}UL }}"
+        bits = struct.unpack("<i", struct.pack("<f", float(value)))[0]
+        return f"{{ {_int32(bits)} /* {float(value)!r}f */ }}"
+    v = int(value)
+    if not t.signed and v > 2**31 - 1:
+        return f"{{ {_int32(v - 2**32)} /* {v}UL */ }}"
+    return f"{{ {_int32(v)} }}"
+
+
+def _int32(v: int) -> str:
+    return "(-2147483647L - 1L)" if v == -2**31 else f"{v}L"
 
 
 def debug_items(program: Program, view) -> list[DebugItem]:

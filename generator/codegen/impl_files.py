@@ -1,22 +1,36 @@
-"""Actor ``impl`` files: their file-scope code and the bodies of their
-``EL_START``/``EL_STEP``/``EL_STOP`` blocks (docs/language.md)."""
+"""C files from the model's folder: actor ``impl`` files and device
+handler files. Each is file-scope code and the bodies of blocks a macro
+introduces: ``EL_START``/``EL_STEP``/``EL_STOP`` for an actor,
+``EL_OPEN``/``EL_START``/``EL_READ``/``EL_WRITE``/``EL_STOP``/``EL_CLOSE``
+for a device (docs/language.md)."""
 
 from __future__ import annotations
 
 import re
 
-_BLOCK_MACRO = re.compile(r"\bEL_(START|STEP|STOP)\b")
+ACTOR_BLOCKS = ("start", "step", "stop")
+DEVICE_BLOCKS = ("open", "start", "read", "write", "stop", "close")
+_ANY_BLOCK = re.compile(r"\bEL_(" + "|".join(b.upper() for b in dict.fromkeys(ACTOR_BLOCKS + DEVICE_BLOCKS)) + r")\b")
 
 
-def split_impl(text: str, file: str) -> tuple[str, dict[str, str]]:
-    """Split an impl file into its file-scope code and the bodies of its
-    ``EL_START``/``EL_STEP``/``EL_STOP`` blocks (comments and strings skipped)."""
+def split_impl(text: str, file: str, blocks: tuple[str, ...] = ACTOR_BLOCKS) -> tuple[str, dict[str, str]]:
+    """Split a C file into its file-scope code and the bodies of its blocks
+    (``blocks``, lower case; comments and strings skipped). A block macro of
+    the other kind of file, or a block given twice, is a ValueError naming
+    the file."""
     masked = _mask_c(text)
     bodies: dict[str, str] = {}
     prelude = []
     pos = 0
-    for m in _BLOCK_MACRO.finditer(masked):
+    for m in _ANY_BLOCK.finditer(masked):
         kind = m.group(1).lower()
+        if kind not in blocks:
+            line = masked.count("\n", 0, m.start()) + 1
+            raise ValueError(f"{file}:{line}: EL_{m.group(1)} is not a block of this file; its blocks are "
+                             + ", ".join(f"EL_{b.upper()}" for b in blocks))
+        if kind in bodies:
+            line = masked.count("\n", 0, m.start()) + 1
+            raise ValueError(f"{file}:{line}: EL_{m.group(1)} is given twice")
         open_at = masked.find("{", m.end())
         if open_at < 0 or masked[m.end():open_at].strip():
             raise ValueError(f"{file}: EL_{m.group(1)} must be followed by a block {{ ... }}")

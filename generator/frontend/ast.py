@@ -167,6 +167,10 @@ class Actual(Named):
 class Resource(Node):
     kind: str
     index: Expr | None
+    # A device's place on a shared bus: "addr" (an address) or "cs" (a
+    # chip-select pin), and its value; None for a resource owned whole.
+    select_kind: str | None = None
+    select: Expr | None = None
 
 
 @dataclass(frozen=True)
@@ -190,6 +194,16 @@ class Part(Named):
 
 
 @dataclass(frozen=True)
+class DriverImpl(Node):
+    """``impl BOARD "file.c"`` after a driver: the device's handlers on that
+    board, from a C file beside the declaring model file."""
+
+    board: str
+    board_span: Span
+    file: str
+
+
+@dataclass(frozen=True)
 class DeviceType(Named):
     params: tuple[FormalParam, ...]
     claims: tuple[Resource, ...]
@@ -198,6 +212,8 @@ class DeviceType(Named):
     parts: tuple[Part, ...]
     driver: str | None
     driver_span: Span | None
+    impls: tuple[DriverImpl, ...] = ()
+    states: tuple["StateVar", ...] = ()
 
 
 @dataclass(frozen=True)

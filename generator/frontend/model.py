@@ -67,6 +67,7 @@ class DevicePort:
     direction: str
     type: ValueType
     rate: int
+    array: bool = False  # declared with a rate: an array in handler code, even for rate 1
 
 
 @dataclass
@@ -75,14 +76,29 @@ class Claim:
     index: object  # int or str
     span: object
     owner: str  # a device path or an interface name
+    # A device's place on a shared bus: ("addr", 0x48) or ("cs", "PB2");
+    # None when the claim owns the resource whole.
+    select: tuple[str, object] | None = None
 
     @property
     def key(self) -> tuple:
+        return (self.kind, self.index, self.select)
+
+    @property
+    def resource(self) -> tuple:
+        """The resource itself, whatever the place on it."""
         return (self.kind, self.index)
 
     def __str__(self) -> str:
-        index = f'"{self.index}"' if isinstance(self.index, str) else str(self.index)
-        return f"{self.kind}[{index}]"
+        text = f"{self.kind}[{_claim_value(self.index)}]"
+        if self.select is not None:
+            how, value = self.select
+            text += f" {how} {f'0x{value:02x}' if how == 'addr' else _claim_value(value)}"
+        return text
+
+
+def _claim_value(value) -> str:
+    return f'"{value}"' if isinstance(value, str) else str(value)
 
 
 @dataclass
@@ -96,6 +112,8 @@ class PrimitiveDevice:
     ports: dict[str, DevicePort]
     claims: list[Claim]
     span: object  # where the instance or part is declared
+    handlers: dict[str, str] = field(default_factory=dict)  # board -> its handler file (absolute)
+    states: list[tuple[str, ValueType, int | None]] = field(default_factory=list)  # (name, type, array size)
 
 
 @dataclass

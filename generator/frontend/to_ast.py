@@ -223,6 +223,12 @@ class ToAst(Transformer):
     def resource(self, meta, ch):
         return ast.Resource(self._span(meta), str(ch[0]), ch[1] if len(ch) > 1 else None)
 
+    def claim(self, meta, ch):
+        if len(ch) == 1:
+            return ch[0]
+        r = ch[0]
+        return ast.Resource(self._span(meta), r.kind, r.index, str(ch[1]), ch[2])
+
     def claims(self, meta, ch):
         return ("claims", tuple(ch))
 
@@ -241,12 +247,16 @@ class ToAst(Transformer):
                         args=ch[2])
 
     def driver(self, meta, ch):
-        return ("driver", self._string(ch[0]), self._span(meta))
+        return ("driver", self._string(ch[0]), self._span(meta), tuple(ch[1:]))
+
+    def driver_impl(self, meta, ch):
+        return ast.DriverImpl(self._span(meta), str(ch[0]), self._tspan(ch[0]), self._string(ch[1]))
 
     def device_type(self, meta, ch):
         name, params, members = ch[0], ch[1], ch[2:]
-        claims, ports, exports, parts = [], [], [], []
+        claims, ports, exports, parts, states = [], [], [], [], []
         driver = driver_span = None
+        impls: tuple = ()
         for m in members:
             if isinstance(m, ast.DataPort):
                 ports.append(m)
@@ -254,15 +264,17 @@ class ToAst(Transformer):
                 exports.append(m)
             elif isinstance(m, ast.Part):
                 parts.append(m)
+            elif isinstance(m, ast.StateVar):
+                states.append(m)
             elif m[0] == "claims":
                 claims.extend(m[1])
             elif m[0] == "driver":
                 if driver is not None:
                     raise ModelError([Diagnostic(m[2], "a device type has at most one 'driver'")])
-                driver, driver_span = m[1], m[2]
+                driver, driver_span, impls = m[1], m[2], m[3]
         return ast.DeviceType(**self._named(meta, name), params=params, claims=tuple(claims),
                               ports=tuple(ports), exports=tuple(exports), parts=tuple(parts),
-                              driver=driver, driver_span=driver_span)
+                              driver=driver, driver_span=driver_span, impls=impls, states=tuple(states))
 
     def device_decl(self, meta, ch):
         return ast.DeviceInstance(**self._named(meta, ch[0]), type_name=str(ch[1]),

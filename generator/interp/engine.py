@@ -21,6 +21,7 @@ from typing import Callable
 
 from ..ir.program import Program
 from .clock import Clock
+from .devices import ModelDevices
 from .interfaces import LOAD_REFUSED, LOAD_REPLACED, Interfaces, Library
 from .plugins import PluginCache, PluginError
 from .replacement import CarriedPublication, Replacement, carry, transfer
@@ -121,7 +122,7 @@ class Engine:
             if self.interfaces.debug is not None and not io.has_debug:
                 raise PluginError(f"model '{program.name}' has no debug interface, which this run serves "
                                   "(declare one: `debug on uart0`)")
-        return ProgramState(program, plugins, self.cache.runner, io)
+        return ProgramState(program, plugins, self.cache.runner, io, ModelDevices(program, self.cache))
 
     @property
     def io(self) -> Interfaces | None:
@@ -318,10 +319,14 @@ class Engine:
         # before the trace records: they change no published value.
         inline = state.io is None and self.clock.pace is None
         if released:
-            if self.stimulus is not None:
-                for device, readers in state.readers:
-                    if not readers.isdisjoint(released):
-                        self.stimulus.read_device(device, t, state.published)
+            for device, readers in state.readers:
+                if readers.isdisjoint(released):
+                    continue
+                if state.model_devices is not None and \
+                        state.model_devices.read(device, state.published, self.stimulus, t):
+                    continue  # its host handlers from the model's folder
+                if self.stimulus is not None:
+                    self.stimulus.read_device(device, t, state.published)
             state.release(plan, t, inline)
         self._record(t)
         for task_id in plan.python if inline else released:
@@ -409,6 +414,7 @@ class Engine:
                 report.carried_tasks.append(task_state.task.name)
         self.carried.sort(key=lambda c: c.due_us)
         transfer(old, new, report)
+        new.model_devices.take_over(old.model_devices, old.published, new.published)
         for task in old.tasks:
             if task.activations:
                 name = task.task.name

@@ -251,6 +251,12 @@ class PluginCache:
         self._compile(what, source, digest, library, counted)
         return open_library(library)
 
+    def load_library(self, what: str, source: str, open_library):
+        """``open_library(path)`` of the cached library of another plug-in
+        ``source`` (a device's handlers: interp/devices.py), built with the
+        actors' flags and counted as a plug-in."""
+        return self._library(what, source, self.digest(source), open_library)
+
     def load_all(self, specs: list[ActorSpec]) -> list[Plugin]:
         """The plug-ins of every specialisation (by spec id), compiled in
         parallel; the first failure (in spec order) is raised."""

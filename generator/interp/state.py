@@ -23,6 +23,7 @@ from . import runner as R
 from . import values as V
 from .charts import ChartRunner
 from .dataflow import ActorState, DataflowRunner
+from .devices import ModelDevices
 from .interfaces import PROBE, Interfaces
 from .plugins import Plugin
 
@@ -76,11 +77,12 @@ class InstantPlan:
     """What one instant of the table does, as spans of the runner: its
     publications, its releases, and its releases followed by the bodies that
     need no Python (``inline``, task ids); the tasks whose bodies need Python
-    (``python``, with a chart), the chart tasks it publishes, and whether
-    the runner does all of it (``native``)."""
+    (``python``, with a chart), the chart tasks it publishes, the tasks it
+    publishes that drive a device with host handlers, and whether the runner
+    does all of it (``native``)."""
 
     def __init__(self, instant: Instant, publish: R.Span, release: R.Span, release_bodies: R.Span,
-                 inline: list[int], chart_tasks: list[int], native: bool):
+                 inline: list[int], chart_tasks: list[int], native: bool, device_tasks: list[int]):
         self.tick = instant.tick
         self.released = instant.release
         self.publish = publish
@@ -89,6 +91,7 @@ class InstantPlan:
         self.inline = inline
         self.python = [t for t in instant.release if t not in inline]
         self.chart_tasks = chart_tasks
+        self.device_tasks = device_tasks  # tasks whose publication a device's write() follows
         self.native = native
 
 
@@ -97,10 +100,12 @@ class ProgramState:
     (``plugins[spec id]``; ``runner`` runs the plans), as the firmware holds
     it at boot."""
 
-    def __init__(self, program: Program, plugins: list[Plugin], runner: R.Runner, io: Interfaces | None = None):
+    def __init__(self, program: Program, plugins: list[Plugin], runner: R.Runner, io: Interfaces | None = None,
+                 model_devices: ModelDevices | None = None):
         self.program = program
         self.plugins = plugins
         self.io = io
+        self.model_devices = model_devices  # devices running host handlers from the model's folder
         self.runner = runner
         self.cursor = R.Cursor()  # the next instant of the table (the engine's position)
         # The published items: with interfaces, the library's own arrays.
@@ -125,6 +130,11 @@ class ProgramState:
                                    self.run_dataflow) for c in program.charts]
         self.readers = [(d.id, set(d.read_by)) for d in program.devices if d.read_by]
         self.charts_of_task = [[cid for kind, cid in t.runs if kind == "chart"] for t in program.tasks]
+        # Per task, the devices running host handlers whose write() follows its publication.
+        handled = model_devices.devices if model_devices is not None else {}
+        self.writes_of_task = [[d.id for d in program.devices if d.id in handled and d.written_by == t.id]
+                               for t in program.tasks]
+        self.handled_readers = {t for d in program.devices if d.id in handled for t in d.read_by}
         if io is not None and io.has_debug:  # the debugger's probes where the firmware has them
             for runner_ in self.dataflows:
                 if runner_ is not None:
@@ -193,11 +203,14 @@ class ProgramState:
                          [op for t in instant.release for op in release[t]],
                          [op for t in inline for op in body[t]], inline))
         charts = [[t for t in instant.publish if self.charts_of_task[t]] for instant in instants]
-        native = [not c and len(row[3]) == len(i.release) for i, c, row in zip(instants, charts, rows)]
+        # Python's too: the deadlines and releases with a device running host handlers.
+        devices = [[t for t in instant.publish if self.writes_of_task[t]] for instant in instants]
+        native = [not c and not d and self.handled_readers.isdisjoint(i.release) and len(row[3]) == len(i.release)
+                  for i, c, d, row in zip(instants, charts, devices, rows)]
         table = R.Table([p + r + b for p, r, b, _ in rows], [i.tick for i in instants], native,
                         self.program.hyperperiod, self.program.tick_us)
         plans = [InstantPlan(instant, table.span(k, 0, len(p)), table.span(k, len(p), len(r)),
-                             table.span(k, len(p), len(r) + len(b)), inline, charts[k], native[k])
+                             table.span(k, len(p), len(r) + len(b)), inline, charts[k], native[k], devices[k])
                  for k, (instant, (p, r, b, inline)) in enumerate(zip(instants, rows))]
         return table, plans
 
@@ -258,13 +271,17 @@ class ProgramState:
 
     def publish(self, plan: InstantPlan) -> None:
         """The deadlines of an instant: the released tasks' outputs, channel
-        tokens and chart activity become visible (device ``write()`` does
-        nothing on a simulated board)."""
+        tokens and chart activity become visible, then ``write()`` of the
+        devices they drive (which does nothing on a simulated device)."""
         charts = [t for t in plan.chart_tasks if self.tasks[t].pending]
+        devices = [t for t in plan.device_tasks if self.tasks[t].pending]
         self.run_ops(plan.publish)
         for task in charts:
             for chart in self.charts_of_task[task]:
                 self.charts[chart].publish()
+        for task in devices:
+            for device in self.writes_of_task[task]:
+                self.model_devices.write(device, self.published)
 
     def release(self, plan: InstantPlan, time_us: int, bodies: bool = False) -> None:
         """The releases of an instant: latch the tasks' items, take their
@@ -298,12 +315,18 @@ class ProgramState:
         task_state.pending = True
 
     def boot(self) -> None:
+        """Devices' open() and start() (model.c's order), then the actors'
+        start code."""
+        if self.model_devices is not None:
+            self.model_devices.boot(self.published)
         for actor in self.actors:
             actor.start()
 
     def shutdown(self) -> None:
         for actor in self.actors:
             actor.stop()
+        if self.model_devices is not None:
+            self.model_devices.shutdown(self.published)
 
 
 

@@ -61,9 +61,14 @@ class _Lowering:
                     address=d.decl.service.address if d.decl.service else None, persist=d.decl.persist))
         seen: set[int] = set()
         for dev in self.m.devices:
+            formal_types = {f.name: T.ALL_TYPES[f.type.name] for f in dev.type.params}
             device = Device(len(self.devices), dev.path, dev.driver, dev.type.name,
                             {k: v for k, v in dev.args.items()}, [], [str(c) for c in dev.claims],
-                            location(dev.span))
+                            location(dev.span), handlers=dict(dev.handlers),
+                            params={k: (formal_types[k], _runtime_value(formal_types[k], v))
+                                    for k, v in dev.args.items()},
+                            states=list(dev.states),
+                            array_ports=[p.name for p in dev.ports.values() if p.array])
             self.devices.append(device)
             for port in dev.ports.values():
                 datum = self.m.device_data[f"{dev.path}.{port.name}"]

@@ -57,6 +57,14 @@ class Item:
 
 @dataclass
 class Device:
+    """A primitive device. ``claims`` are written as in the model
+    (``pin["PB5"]``, ``i2c[0] addr 0x48``). ``handlers`` name, per board,
+    the C file from the model's folder that implements the device's
+    handlers there (docs/language.md, "Device handlers"); on a board with
+    none the board's own driver ``driver`` runs. ``params`` are the
+    arguments with their types (run-time units, as items' initial values)
+    and ``states`` what the model's handlers keep per device."""
+
     id: int
     path: str
     driver: str
@@ -67,6 +75,10 @@ class Device:
     location: str
     read_by: list[int] = field(default_factory=list)  # tasks reading its out data
     written_by: int | None = None  # the task driving its in data
+    handlers: dict[str, str] = field(default_factory=dict)  # board -> handler file (absolute)
+    params: dict[str, tuple[T.ValueType, object]] = field(default_factory=dict)
+    states: list[tuple[str, T.ValueType, int | None]] = field(default_factory=list)
+    array_ports: list[str] = field(default_factory=list)  # data declared with a rate (arrays in C)
 
 
 # ====================================================================== actors

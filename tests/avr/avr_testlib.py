@@ -9,10 +9,10 @@ simavr and libsimavr: nothing here is skipped.
 
 from __future__ import annotations
 
-import subprocess
 from pathlib import Path
 
-from firmware_builds import EXAMPLE_NAMES, EXAMPLES, ROOT, Built, build, cli, stimulus_of  # noqa: F401
+from firmware_builds import (EXAMPLE_NAMES, EXAMPLES, ROOT, Built, build, cli, run_program,  # noqa: F401
+                             stimulus_of)
 
 HERE = Path(__file__).resolve().parent
 
@@ -43,9 +43,4 @@ def host_build(model: Path | str, out: Path) -> Path:
     return build(model, "host", out).executable
 
 
-def run(exe: Path, *args, timeout: float = 120, ok: bool = True) -> subprocess.CompletedProcess:
-    proc = subprocess.run([str(exe), *map(str, args)], capture_output=True, text=True, timeout=timeout,
-                          stdin=subprocess.DEVNULL)
-    if ok:
-        assert proc.returncode == 0, f"{exe.name} {' '.join(map(str, args))}: status {proc.returncode}\n{proc.stderr}"
-    return proc
+run = run_program  # a built program with ARGS (firmware_builds)

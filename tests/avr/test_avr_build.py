@@ -136,9 +136,9 @@ def test_one_pin_through_two_resources_is_refused_naming_both_owners(tmp_path):
      'modbus rtu on uart1\n', "atmega2560",
      "pin PD3 is claimed twice on the atmega2560: as uart[1] by interface 'modbus rtu' and as pin[\"PD3\"]"),
     # a resource kind the board does not have
-    ('device type Spi() {\n    claims spi[0]\n    out v: uint8\n    driver "spi_dev"\n}\ndevice s: Spi()\nvar x: uint8\n'
+    ('device type Can() {\n    claims can[0]\n    out v: uint8\n    driver "can_dev"\n}\ndevice s: Can()\nvar x: uint8\n'
      'dataflow D { s.v -> x }\ntask t period 10 ms { run D }\n', "atmega2560",
-     "claims spi[0], but the avr board has no resource kind 'spi' (kinds: pin, pwm, adc, uart)"),
+     "claims can[0], but the avr board has no resource kind 'can' (kinds: pin, pwm, adc, uart, i2c, spi)"),
     # Modbus TCP
     ('var x: uint8 service ro\nmodbus tcp port 1502\n', "atmega2560",
      "the Modbus TCP interface needs a network, and the avr board has none"),

@@ -69,3 +69,13 @@ def conformance_mcu(board: str) -> list[str]:
     """``--mcu M`` for the suite's example builds on a board (none: its default)."""
     mcu = conformance(board).get("mcu")
     return ["--mcu", mcu] if mcu else []
+
+
+def conformance_model(board: str) -> Path:
+    """The model of the suite's own builds (sizes, release builds): board.toml's
+    [conformance] `model`, relative to the board's folder, for a board whose
+    pins examples/blink.elab does not name; else examples/blink.elab."""
+    from easylab.board.registry import board_folders
+
+    model = conformance(board).get("model")
+    return board_folders(BOARD_PATH)[board].folder / model if model else ROOT / "examples" / "blink.elab"

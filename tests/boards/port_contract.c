@@ -59,11 +59,11 @@ const uint8_t el_svc_modbus_links = 0u; /* no Modbus interface to serve */
 
 /* ---- what the dispatcher provides ---- */
 
-static uint64_t now_tick;
+static el_tick_t now_tick;
 static uint32_t idle_calls;
 
-uint64_t el_now_tick(void);
-uint64_t el_now_tick(void)
+el_tick_t el_now_tick(void);
+el_tick_t el_now_tick(void)
 {
     return now_tick;
 }

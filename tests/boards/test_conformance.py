@@ -7,7 +7,8 @@ EASYLAB_BOARD_PATH); a new board gets them by existing.
 - every example that fits the board gives the host board's trace, value
   by value and instant by instant (boards with a simulator);
 - resource claims the board cannot honour are refused, each naming the
-  claim, its owner and its line;
+  claim, its owner and its line; so is a device whose type brings handler
+  files for other boards only (unless the board simulates devices);
 - a build reports its size against the part;
 - a release build has none of the debug interface's code.
 """
@@ -21,7 +22,7 @@ from pathlib import Path
 import pytest
 
 from boards_testlib import (BOARD_PATH, CONTRACT, ENV, USER_BOARD, USER_BOARD_PATH, board_names, conformance,
-                            conformance_mcu)
+                            conformance_mcu, conformance_model)
 from firmware_builds import EXAMPLE_NAMES, ROOT, build, cli, stimulus_of
 
 BOARDS = board_names()
@@ -148,6 +149,25 @@ def test_claims_the_board_cannot_honour_are_refused_at_their_line(board, case, t
 
 
 @pytest.mark.parametrize("board", BOARDS)
+def test_a_device_with_handlers_for_other_boards_only_is_refused_saying_what_to_write(board, tmp_path):
+    """A device type bringing handler files for other boards (and no
+    driver of the board's): refused at its line; a board that simulates
+    devices (the host) simulates it instead."""
+    (tmp_path / "probe_elsewhere.c").write_text("EL_READ { level = true; }\n")
+    model = _model(tmp_path, 'device type Probe() {\n    out level: bool\n'
+                             '    driver "no_such_probe" impl no_such_board "probe_elsewhere.c"\n}\n'
+                             'device p: Probe()\nvar v: bool\ndataflow D { p.level -> v }\n'
+                             'task t period 10 ms { run D }\n')
+    if conformance(board).get("simulates_devices"):
+        build(model, board, tmp_path / "out", env=ENV)
+        return
+    err = build(model, board, tmp_path / "out", *conformance_mcu(board), ok=False, env=ENV).proc.stderr
+    assert re.search(rf"{re.escape(str(model))}:8: error: device 'p' \(Probe, driver 'no_such_probe'\) has no "
+                     rf"handlers for the {board} board: its type brings them for no_such_board only; .* "
+                     rf"impl {board} \"FILE\.c\"", err), err
+
+
+@pytest.mark.parametrize("board", BOARDS)
 def test_one_pin_through_two_resources_is_refused_naming_both(board, tmp_path):
     pin = conformance(board).get("pwm_pin")
     if pin is None:
@@ -164,11 +184,11 @@ def test_one_pin_through_two_resources_is_refused_naming_both(board, tmp_path):
 
 # ---------------------------------------------------------------- sizes, release builds
 
-def _api_build(board: str, name: str, out: Path, release: bool):
+def _api_build(board: str, model: Path, out: Path, release: bool):
     from easylab.build import build as do_build
     from easylab.pipeline import lower_file
 
-    program, result = lower_file(ROOT / "examples" / f"{name}.elab")
+    program, result = lower_file(model)
     assert program is not None, result.report()
     mcu = conformance(board).get("mcu")
     return do_build(program, board, out, release=release, mcu=mcu, board_path=BOARD_PATH)
@@ -176,12 +196,12 @@ def _api_build(board: str, name: str, out: Path, release: bool):
 
 @pytest.mark.parametrize("board", BOARDS)
 def test_a_build_reports_its_size(board, tmp_path):
-    built = _api_build(board, "blink", tmp_path / "b", release=False)
+    built = _api_build(board, conformance_model(board), tmp_path / "b", release=False)
     size = built.compiled.size
     assert size is not None and size.flash > 0 and size.ram > 0 and size.lines
     if size.flash_max is not None:
         assert size.flash <= size.flash_max and size.ram <= size.ram_max
-    proc = cli("build", ROOT / "examples/blink.elab", "--board", board, *conformance_mcu(board), "-o",
+    proc = cli("build", conformance_model(board), "--board", board, *conformance_mcu(board), "-o",
                tmp_path / "cli", env=ENV)
     assert proc.returncode == 0, proc.stderr
     assert size.lines[0] in proc.stdout.splitlines()
@@ -189,8 +209,8 @@ def test_a_build_reports_its_size(board, tmp_path):
 
 @pytest.mark.parametrize("board", BOARDS)
 def test_a_release_build_has_no_debug_code(board, tmp_path):
-    debug = _api_build(board, "blink", tmp_path / "debug", release=False)
-    release = _api_build(board, "blink", tmp_path / "release", release=True)
+    debug = _api_build(board, conformance_model(board), tmp_path / "debug", release=False)
+    release = _api_build(board, conformance_model(board), tmp_path / "release", release=True)
     debug_symbols = {s for s in debug.board.symbols(debug.compiled) if s.startswith("el_debug_")}
     release_symbols = {s for s in release.board.symbols(release.compiled) if s.startswith("el_debug_")}
     assert "el_debug_poll" in debug_symbols

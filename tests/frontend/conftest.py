@@ -10,6 +10,7 @@ from pathlib import Path
 import pytest
 
 from easylab.pipeline import check_file
+from firmware_builds import write_model
 
 ROOT = Path(__file__).resolve().parents[2]
 
@@ -20,12 +21,7 @@ def check_model(tmp_path):
     beside it) to tmp_path and checks it; returns (result, model path)."""
 
     def run(text: str, files: dict[str, str] | None = None, name: str = "model.elab"):
-        for rel, content in (files or {}).items():
-            target = tmp_path / rel
-            target.parent.mkdir(parents=True, exist_ok=True)
-            target.write_text(content, encoding="utf-8")
-        path = tmp_path / name
-        path.write_text(text, encoding="utf-8")
+        path = write_model(tmp_path, text, files, name)
         return check_file(path), path
 
     return run

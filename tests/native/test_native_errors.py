@@ -5,6 +5,7 @@ rejects gives its diagnostics and exit status 1."""
 from __future__ import annotations
 
 import os
+import re
 
 import pytest
 
@@ -32,16 +33,22 @@ def test_compiler_given_with_cc_is_missing(tmp_path):
 
 @pytest.mark.parametrize("board", BOARDS)
 def test_board_compiler_missing_names_the_debian_package(board, tmp_path):
-    """With no compiler on PATH, the board's own compiler is reported with
-    the Debian package that provides it."""
+    """With no compiler on PATH, the compiler the board runs here (its own,
+    or a proxy of one that does not run here) is reported with the Debian
+    package that provides it. The model is the board's conformance blink
+    (board.toml [conformance] model) where it has one."""
     from easylab.board.registry import load_board
 
-    cc = load_board(board).description.toolchain.cc
+    description = load_board(board).description
+    cc = description.toolchain.cc
+    model = description.raw.get("conformance", {}).get("model")
     empty = tmp_path / "bin"
     empty.mkdir()
     env = dict(os.environ, PATH=str(empty))
-    line = one_line_error(cli("build", BLINK, "--board", board, "-o", tmp_path / "out", env=env))
-    assert f"'{cc}'" in line and "(Debian package" in line  # "package: x" or "packages: x y"
+    line = one_line_error(cli("build", description.folder / model if model else BLINK, "--board", board, "-o",
+                              tmp_path / "out", env=env))
+    assert re.search(rf"'[\w.+-]+' of board '{board}' is not installed", line), line
+    assert "(Debian package" in line  # "package: x" or "packages: x y"
     if cc == "gcc":
         assert line.endswith("(Debian package: gcc)")
 

@@ -6,8 +6,8 @@
  *
  *   NAME-sim [--fast] [--duration T] [--cycles N] [--stimulus S.csv]
  *            [--trace T.csv|T.vcd] [--pins P.csv|P.vcd] [--nvram FILE]
- *            [--uartN pty:LINK|tcp:PORT|file:PATH|null] [--wait] [--elf FILE]
- *            [--report] [--help]
+ *            [--chips DIR] [--uartN pty:LINK|tcp:PORT|file:PATH|null] [--wait]
+ *            [--elf FILE] [--report] [--help]
  *
  * Instants: the simulation build's el_port_inputs and el_port_instant write
  * a marker to GPIOR0, which this harness hooks. At the inputs marker of an
@@ -16,7 +16,8 @@
  * params and vars are written into the MCU's RAM, device `out` data are put
  * on the hardware the build maps them to (an ADC channel's voltage, an input
  * pin's level, line camera frames on a UART, quadrature edges on encoder
- * pins), and the firmware's own drivers read them. While UART frames or
+ * pins, the temperature of a sensor on the I2C bus: sim_chips.c), and the
+ * firmware's own drivers read them. While UART frames or
  * encoder edges are still on their way it keeps GPIOR1 nonzero, and the
  * firmware waits. At the instant marker it copies every item and chart
  * from the MCU's RAM and records them with the host board's trace code
@@ -36,6 +37,7 @@
  * line or input file.
  */
 #include "sim_model.h"
+#include "sim_chips.h"
 #include "host_internal.h"
 
 #include "sim_avr.h"
@@ -123,6 +125,7 @@ static struct {
     const char *trace;
     const char *pins;
     const char *nvram;
+    const char *chips;
     const char *elf;
     bool wait;
     bool halt;
@@ -135,8 +138,8 @@ static void usage(FILE *f)
 {
     fprintf(f,
             "usage: %s [--fast] [--duration T] [--cycles N] [--stimulus FILE.csv] [--trace FILE.csv|FILE.vcd]\n"
-            "          [--pins FILE.csv|FILE.vcd] [--nvram FILE] [--uartN pty:LINK|tcp:PORT|file:PATH|null] [--wait] [--halt]\n"
-            "          [--elf FILE] [--report] [--help]\n"
+            "          [--pins FILE.csv|FILE.vcd] [--nvram FILE] [--chips DIR] [--uartN pty:LINK|tcp:PORT|file:PATH|null]\n"
+            "          [--wait] [--halt] [--elf FILE] [--report] [--help]\n"
             "Runs the %s firmware of model %s in simavr.\n"
             "  --fast            flat out (default: in step with the wall clock)\n"
             "  --duration T      end at the first instant at or after T (10s, 500ms, 250us, 2m, 1h)\n"
@@ -146,6 +149,8 @@ static void usage(FILE *f)
             "  --pins FILE       the model's pins as they change (.csv: cycle,time_us,pin,value; .vcd);\n"
             "                    a PWM output as its duty 0..255\n"
             "  --nvram FILE      the EEPROM (%lu bytes), read at start and written at the end\n"
+            "  --chips DIR       the memories of the EEPROMs on the I2C bus: DIR/i2cB-0xAA.bin, read at start\n"
+            "                    (erased when absent) and written at the end\n"
             "  --uartN SPEC      UART N on a pseudo-terminal (symlink LINK), TCP port, file or nothing\n"
             "  --wait            hold the CPU until every pty and TCP UART has a client\n"
             "  --halt            halt at the first instant for the debugger (the host's --debug ...,halt)\n"
@@ -201,7 +206,7 @@ static bool parse_duration(const char *text, uint64_t *us)
 static bool takes_value(const char *a)
 {
     static const char *const with_value[] = {"--duration", "--cycles", "--stimulus", "--trace", "--pins",
-                                             "--nvram", "--elf"};
+                                             "--nvram", "--chips", "--elf"};
     size_t i;
     for (i = 0; i < sizeof with_value / sizeof with_value[0]; i++)
         if (strcmp(a, with_value[i]) == 0)
@@ -260,6 +265,9 @@ static int parse_args(int argc, char **argv)
             i++;
         } else if (strcmp(a, "--nvram") == 0) {
             opt.nvram = v;
+            i++;
+        } else if (strcmp(a, "--chips") == 0) {
+            opt.chips = v;
             i++;
         } else if (strcmp(a, "--elf") == 0) {
             opt.elf = v;
@@ -429,6 +437,18 @@ static bool drive_hardware(uint16_t k)
             busy_count++;
         }
         return true;
+    }
+    case SIM_HW_I2C_TEMP: {
+        int32_t v = 0;
+        switch (it->type) { /* a device's first `out` datum, of an integer type */
+        case EL_T_I8: { int8_t x; memcpy(&x, it->addr, 1); v = x; break; }
+        case EL_T_U8: { uint8_t x; memcpy(&x, it->addr, 1); v = x; break; }
+        case EL_T_I16: { int16_t x; memcpy(&x, it->addr, 2); v = x; break; }
+        case EL_T_U16: { uint16_t x; memcpy(&x, it->addr, 2); v = x; break; }
+        case EL_T_I32: { int32_t x; memcpy(&x, it->addr, 4); v = x; break; }
+        default: { uint32_t x; memcpy(&x, it->addr, 4); v = x > 0x7FFFFFFFu ? 0x7FFFFFFF : (int32_t)x; break; }
+        }
+        return sim_chips_temperature((uint8_t)h->a, (uint8_t)h->b, v, it->name);
     }
     case SIM_HW_ENCODER: {
         int32_t v;
@@ -997,7 +1017,8 @@ int main(int argc, char **argv)
     hw_state = calloc(sim_hw_count ? sim_hw_count : 1u, sizeof *hw_state);
     if (hw_state == NULL)
         return EXIT_RUN;
-    if ((opt.stimulus != NULL && !el_host_stimulus_load(opt.stimulus)) || !nvram_load())
+    if ((opt.stimulus != NULL && !el_host_stimulus_load(opt.stimulus)) || !nvram_load() ||
+        !sim_chips_init(avr, opt.chips))
         return EXIT_USAGE;
     if ((opt.trace != NULL && !el_host_trace_open(opt.trace)) || !pins_open())
         return EXIT_USAGE;
@@ -1084,7 +1105,7 @@ int main(int argc, char **argv)
         exit_status = EXIT_RUN;
     if (pins_out != NULL && fclose(pins_out) != 0)
         exit_status = EXIT_RUN;
-    if (!nvram_save())
+    if (!nvram_save() || !sim_chips_save())
         exit_status = EXIT_RUN;
     if (opt.report) {
         fprintf(stderr, "%s: cycles %llu (asleep %llu), instants %llu, time %llu us\n", el_host_prog,

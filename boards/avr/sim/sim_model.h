@@ -27,7 +27,8 @@ enum {
     SIM_HW_PIN_OUT,  /* a: port letter, b: bit (the firmware drives it) */
     SIM_HW_CAMERA,   /* a: UART; c: baud; line camera frames (drivers/el_drv_line_camera.h) */
     SIM_HW_ENCODER,  /* a, b: port letter << 8 | bit of pins A and B; quadrature edges */
-    SIM_HW_PWM       /* the firmware drives a PWM output */
+    SIM_HW_PWM,      /* the firmware drives a PWM output */
+    SIM_HW_I2C_TEMP  /* a: bus, b: address; the temperature of the sensor there, 1/16 degC (sim_chips.h) */
 };
 
 typedef struct {
@@ -53,6 +54,23 @@ typedef struct {
     const char *name;  /* "PB5" */
     const char *what;  /* the device */
 } sim_pin_t;
+
+/* A chip on a bus (sim_chips.h): one per address a device claims on an
+ * I2C bus where a chip of a kind the harness models answers, one per chip
+ * select of a device whose chip it models on an SPI bus. */
+enum { SIM_CHIP_TEMPERATURE = 1, SIM_CHIP_EEPROM = 2, SIM_CHIP_SPI_EEPROM = 3 };
+
+typedef struct {
+    uint8_t bus;
+    uint8_t address; /* I2C: its address; SPI: its chip select's bit */
+    uint8_t kind;    /* SIM_CHIP_... */
+    uint32_t bytes;  /* EEPROM: its memory (a power of two) */
+    uint16_t page;   /* EEPROM: its page */
+    char port;       /* SPI: its chip select's port ('B') */
+} sim_chip_t;
+
+extern const sim_chip_t sim_chips[];
+extern const uint16_t sim_chip_count;
 
 extern const sim_addr_t sim_item_addr[];
 extern const sim_addr_t sim_chart_addr[];

@@ -57,6 +57,7 @@ class CheckerBase:
         self.device_types: dict[str, ast.DeviceType] = {}
         self.actor_types: dict[str, ast.ActorType] = {}
         self.actor_type_files: dict[str, str] = {}
+        self.declaration_files: dict[int, str] = {}  # id(declaration) -> its file (handler files are relative to it)
         self.devices: list[PrimitiveDevice] = []
         self.device_data: dict[str, DeviceDatum] = {}
         self.top_devices: dict[str, ast.DeviceInstance] = {}
@@ -125,6 +126,7 @@ class CheckerBase:
         """One namespace for the model and its imports; a clash names both."""
         for module in self.modules:
             for decl in module.declarations:
+                self.declaration_files[id(decl)] = module.file
                 first = self.globals.get(decl.name)
                 if first is not None:
                     self.error(decl.name_span, f"'{decl.name}' is already declared as {with_article(kind_name(first))}",

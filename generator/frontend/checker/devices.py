@@ -4,13 +4,15 @@ their arguments, claims and data (docs/language.md)."""
 from __future__ import annotations
 
 import re
+from pathlib import Path as FsPath
 
 from ...core.source import Span, closest, did_you_mean, note
 from ...core import types as T
 from .. import ast
 from ..expressions import ERROR, ExprTyper, Symbol
+from ..loader import module_dir
 from ..model import Claim, DeviceDatum, DevicePort, PrimitiveDevice
-from .base import MAX_RATE, show_value, in_library
+from .base import C_RESERVED, MAX_RATE, show_value, in_library
 
 
 class DeviceRules:
@@ -18,7 +20,7 @@ class DeviceRules:
 
     def check_device_type(self, decl: ast.DeviceType) -> None:
         names: dict[str, Span] = {}
-        for item in (*decl.params, *decl.ports, *decl.exports, *decl.parts):
+        for item in (*decl.params, *decl.ports, *decl.exports, *decl.parts, *decl.states):
             if item.name in names:
                 self.error(item.name_span, f"'{item.name}' is declared twice in device type '{decl.name}'",
                            notes=[note(names[item.name], "first declared here")])
@@ -36,6 +38,39 @@ class DeviceRules:
             self.error(decl.driver_span, f"driver name '{decl.driver}' must be a C identifier in lower case")
         if not decl.parts and decl.exports:
             self.error(decl.exports[0].span, "a re-export needs a part to take its data from")
+        self._check_handler_files(decl)
+
+    def _check_handler_files(self, decl: ast.DeviceType) -> None:
+        """``impl BOARD "file.c"`` after the driver, and the state its
+        handlers keep (docs/language.md, "Device handlers")."""
+        boards: dict[str, Span] = {}
+        for impl in decl.impls:
+            if impl.board in boards:
+                self.error(impl.board_span, f"device type '{decl.name}' has two handler files for board "
+                                            f"'{impl.board}'", notes=[note(boards[impl.board], "the first is here")])
+                continue
+            boards[impl.board] = impl.span
+            path = self.handler_path(decl, impl)
+            if not path.is_file():
+                self.error(impl.span, f"handler file '{impl.file}' not found (looked at {path})")
+        for st in decl.states:
+            self.resolve_type(st.type)
+        if decl.states and not decl.impls:
+            self.error(decl.states[0].span, f"device type '{decl.name}' has state but no handler files: state "
+                                            "is kept for the handlers a model brings",
+                       "name them after the driver: driver \"name\" impl BOARD \"file.c\"")
+        if not decl.impls:
+            return
+        for item, what in ([(p, "parameter") for p in decl.params] + [(p, "port") for p in decl.ports]
+                           + [(s, "state") for s in decl.states]):
+            if item.name in C_RESERVED or item.name.lower().startswith("el_"):
+                self.error(item.name_span, f"{what} '{item.name}' of device type '{decl.name}' cannot be named "
+                                           "like that: its handlers' C code sees it under its own name",
+                           "C keywords, C type names and names starting with el_ are reserved")
+
+    def handler_path(self, decl: ast.DeviceType, impl: ast.DriverImpl) -> FsPath:
+        """Where a handler file is: relative to the file declaring the type."""
+        return module_dir(FsPath(self.declaration_files[id(decl)])) / impl.file
 
     def elaborate_device(self, decl: ast.DeviceInstance) -> None:
         """Flatten a device instance into primitive devices and data paths."""
@@ -118,7 +153,7 @@ class DeviceRules:
                 if t is None:
                     continue
                 rate = self.eval_rate(p.rate, typer) if p.rate is not None else 1
-                ports[p.name] = DevicePort(p.name, p.direction, t, rate or 1)
+                ports[p.name] = DevicePort(p.name, p.direction, t, rate or 1, p.rate is not None)
             claims = []
             for r in dtype.claims:
                 claim = self.eval_claim(r, typer, path)
@@ -126,7 +161,14 @@ class DeviceRules:
                     claim.span = span  # the device's declaration, not the device type's claim
                     claims.append(claim)
                     self.claims.append(claim)
-            device = PrimitiveDevice(path, dtype, dtype.driver, args, ports, claims, span)
+            states = []
+            for st in dtype.states:
+                t = self.resolve_type(st.type)
+                size = self.eval_rate(st.type.size, typer) if st.type.size is not None else None
+                if t is not None:
+                    states.append((st.name, t, size))
+            handlers = {i.board: str(self.handler_path(dtype, i)) for i in dtype.impls}
+            device = PrimitiveDevice(path, dtype, dtype.driver, args, ports, claims, span, handlers, states)
             self.devices.append(device)
             for port in ports.values():
                 self.device_data.setdefault(f"{path}.{port.name}", DeviceDatum(device, port, f"{path}.{port.name}"))
@@ -168,19 +210,31 @@ class DeviceRules:
         return complete
 
     def eval_claim(self, r: ast.Resource, typer: ExprTyper, owner: str) -> Claim | None:
+        select = None
+        if r.select is not None:
+            v = typer.expect_const(r.select, None, f"'{r.select_kind}'")
+            if v.type is None:
+                return None
+            if r.select_kind == "addr" and not _whole(v):
+                self.error(r.select.span, "a bus address is a non-negative integer, as in addr 0x48")
+                return None
+            if r.select_kind == "cs" and not (v.type is T.STRING or _whole(v)):
+                self.error(r.select.span, "a chip select is a pin: its name as a string, as in cs \"PB2\"")
+                return None
+            select = (r.select_kind, v.const)
         if r.index is None:
-            m = re.fullmatch(r"([A-Za-z_]+?)(\d+)", r.kind)
+            m = re.fullmatch(r"([A-Za-z_][A-Za-z0-9_]*?)(\d+)", r.kind)
             if m is None:
                 self.error(r.span, f"resource '{r.kind}' needs an index, as in {r.kind}[0]")
                 return None
-            return Claim(m.group(1), int(m.group(2)), r.span, owner)
+            return Claim(m.group(1), int(m.group(2)), r.span, owner, select)
         v = typer.expect_const(r.index, None, "a resource index")
         if v.type is None:
             return None
-        if not (v.type is T.STRING or (v.type.is_integer and v.type is not T.TIME and v.const >= 0)):
+        if not (v.type is T.STRING or _whole(v)):
             self.error(r.index.span, "a resource index is a non-negative integer or a pin name string")
             return None
-        return Claim(r.kind, v.const, r.span, owner)
+        return Claim(r.kind, v.const, r.span, owner, select)
 
     def eval_rate(self, e: ast.Expr, typer: ExprTyper) -> int | None:
         v = typer.expect_const(e, None, "a rate")
@@ -215,3 +269,8 @@ class DeviceRules:
             return (f"'{path.text}' is a device, not a datum", f"name one of its data: {', '.join(options[:6])}")
         return (f"'{path.text}' does not name device data", None)
 
+
+
+def _whole(v) -> bool:
+    """A typed constant that is a non-negative integer (not a time)."""
+    return v.type.is_integer and v.type is not T.TIME and v.const >= 0

@@ -186,13 +186,31 @@ class TaskRules:
         self.interfaces.append(InterfaceInfo(iface, kind, claim, settings))
 
     def check_claims(self) -> None:
+        """One owner per resource; devices on a shared bus share it at
+        distinct places (addresses, chip selects), and a bus owned whole is
+        shared with nobody."""
         first: dict[tuple, Claim] = {}
+        whole: dict[tuple, Claim] = {}  # resource -> its first claim without a place
+        shared: dict[tuple, Claim] = {}  # resource -> its first claim at a place on it
         for c in self.claims:
             other = first.get(c.key)
+            if other is None and c.select is None:
+                other = shared.get(c.resource)
+            elif other is None:
+                other = whole.get(c.resource)
             if other is None:
                 first[c.key] = c
+                (whole if c.select is None else shared).setdefault(c.resource, c)
                 continue
-            self.error(c.span, f"resource {c} is claimed by {claim_owner(c)} and by {claim_owner(other)}",
+            if c.select is not None and c.key == other.key:
+                place = {"addr": "address", "cs": "chip select"}.get(c.select[0], c.select[0])
+                self.error(c.span, f"{c} is claimed by {claim_owner(c)} and by {claim_owner(other)}: the devices "
+                                   f"on one bus need distinct places on it",
+                           f"give one of them another {place}",
+                           [note(other.span, f"claimed by {claim_owner(other)} here")])
+                continue
+            self.error(c.span, f"resource {c} is claimed by {claim_owner(c)} and by {claim_owner(other)}"
+                       + (f" ({other})" if str(other) != str(c) else ""),
                        "each resource has one owner; choose another pin, channel or UART",
                        [note(other.span, f"claimed by {claim_owner(other)} here")])
 

@@ -60,5 +60,5 @@ EL_STEP
     r_hi = EL_ROM_READ_U16(&pt100_centiohm[hi]);
     /* 0.1 degC = (first + lo * step) * 10 + step * 10 * (r - r_lo) / (r_hi - r_lo), rounded */
     y = (int16_t)((PT100_FIRST_DEGC + (int16_t)lo * PT100_STEP_DEGC) * 10
-                  + (int16_t)(((r - r_lo) * (PT100_STEP_DEGC * 10u) + (uint32_t)(r_hi - r_lo) / 2u) / (uint32_t)(r_hi - r_lo)));
+                  + (int16_t)(((r - r_lo) * ((uint32_t)PT100_STEP_DEGC * 10u) + (uint32_t)(r_hi - r_lo) / 2u) / (uint32_t)(r_hi - r_lo)));
 }
