@@ -40,6 +40,11 @@ class Part:
     network: bool = False  # Modbus TCP needs one
     pwm_source: str = "PWM output"  # what drives a PWM pin, in messages ("timer output", "CCP output")
     no_interrupt: str = "which cannot interrupt"  # why a pin is no encoder pin, in messages
+    aliases: dict[str, str] = field(default_factory=dict)  # another name of a pin -> the part's name for it
+
+    def pin_name(self, name: object) -> object:
+        """The part's own name of a pin a claim names (an alias resolved)."""
+        return self.aliases.get(name, name) if isinstance(name, str) else name
 
 
 @dataclass
@@ -98,7 +103,8 @@ def pin_ranges(pins: list[str]) -> str:
 
 def _physical_pins(board: str, part: Part, claim: Claim, problems: list[str]) -> list[str] | None:
     """The pins behind a claim, or None (a problem was recorded)."""
-    kind, idx, name = claim.kind, claim.index, part.name
+    kind, name = claim.kind, part.name
+    idx = part.pin_name(claim.index) if kind in ("pin", "pwm") else claim.index
     lead = f"{claim.where()}error: {claim.owner} claims {claim.text}, but"
     if kind == "pin":
         if not isinstance(idx, str) or idx not in part.pins:
@@ -214,6 +220,7 @@ def _check_driver(program: Program, board: str, part: Part, drivers: dict[str, d
         return
     if spec.get("interrupt_pins"):
         for kind, pin in parsed:
+            pin = part.pin_name(pin)
             if kind == "pin" and pin in part.pins and pin not in part.interrupt_pins:
                 problems.append(f"{dev.location}: error: device '{dev.path}' ({dev.driver}) needs an interrupt on "
                                 f"{pin}, {part.no_interrupt} on the {part.name}; pins that can: "
