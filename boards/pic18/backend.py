@@ -31,7 +31,7 @@ from easylab.core.errors import BuildError
 from easylab.core.paths import runtime_dir
 from easylab.ir.program import Program
 
-from . import devices, linkmap, sdcc, simulator
+from . import devices, linkmap, sdcc, sdcc_quirks, simulator
 from .parts import STACK_BYTES, Mcu, read_mcus
 
 
@@ -107,7 +107,14 @@ class Pic18Board(BoardBase):
         portable = [p for p in generated if p.suffix == ".c"] + runtime_sources(options.release) \
             + self.description.source_paths
         hexfile = out_dir / f"{program.name}.hex"
-        objects, lkr = self._objects(build, portable, out_dir)
+        try:
+            objects, lkr = self._objects(build, portable, out_dir)
+        except sdcc_quirks.BigObjectsDoNotFit as err:
+            self._remove(hexfile)
+            raise BuildError(f"the program does not fit the {mcu.name}'s {mcu.ram} bytes of RAM: {err}"
+                             + ("; dataflow buffers shrink with --schedule min-buffer"
+                                if options.schedule != "min-buffer" and any(df.buffers for df in program.dataflows)
+                                else "")) from None
         try:
             lmap = linkmap.read_map(build.link(objects, hexfile, lkr))
         except BuildError as err:
@@ -196,9 +203,22 @@ class Pic18Board(BoardBase):
         return shlex.split(template.format(programmer=programmer or spec.get("programmer", "PK3"),
                                            part=self.part.programmer_part, hex=out_dir / f"{program.name}.hex"))
 
+    def build_program(self, sources: list[Path], work_dir: Path, name: str,
+                      runtime: tuple[str, ...] = ()) -> tuple[Path, linkmap.LinkMap]:
+        """A program of our own (the port contract program, a benchmark)
+        built against the port: ``sources`` (portable C defining el_run),
+        the runtime files named in ``runtime``, the port; release flags.
+        The configuration headers must be in ``work_dir`` (config_header,
+        or a generated model's). Returns the .hex and its map."""
+        build = self._build(work_dir, True)
+        ports = [p for p in self.description.source_paths if p.name != "pic18_interfaces.c"]
+        files = [*sources, *(p for p in runtime_sources(True) if p.name in runtime), *ports]
+        hexfile = work_dir / f"{name}.hex"
+        objects, lkr = self._objects(build, files, work_dir)
+        return hexfile, linkmap.read_map(build.link(objects, hexfile, lkr))
+
     def run_port_program(self, source: Path, work_dir: Path) -> str:
         """The program on the MCU in gpsim; its report comes on the EUSART."""
-        build = self._build(work_dir, True)
         t = devices.tick_timer(1000, self.fcy)
         mcu = self.part
         write_files(work_dir, {
@@ -210,10 +230,7 @@ class Pic18Board(BoardBase):
                 f"#define EL_PIC18_TICK_PR2 {t.pr2}u", f"#define EL_PIC18_TICK_ISRS {t.isrs}u",
                 "#define EL_PIC18_ADC_CHANNELS 0u", "#define EL_PIC18_ENCODERS 0u", ""]),
             "el_pic18_devices.h": "/* no devices */\n"})
-        ports = [p for p in self.description.source_paths if p.name != "pic18_interfaces.c"]
-        hexfile = work_dir / f"{source.stem}.hex"
-        objects, lkr = self._objects(build, [source, *ports], work_dir)
-        lmap = linkmap.read_map(build.link(objects, hexfile, lkr))
+        hexfile, lmap = self.build_program([source], work_dir, source.stem)
         harness = simulator.build_harness(self, work_dir, simulator.port_program_tables(self, hexfile, lmap),
                                           work_dir / f"{source.stem}-sim")
         report = work_dir / "uart0.txt"

@@ -131,15 +131,18 @@ static void divmod_s(el_w64_t *q, el_w64_t *rem, const el_w64_t *a, const el_w64
 {
     el_w64_t ua, ub;
     uint8_t na = SIGN(a) ? 1u : 0u, nb = SIGN(b) ? 1u : 0u;
+    /* Word by word: sdcc 4.2 copies a struct with a __memcpy it does not declare. */
     if (na) {
         el_w64_neg(&ua, a);
     } else {
-        ua = *a;
+        ua.lo = a->lo;
+        ua.hi = a->hi;
     }
     if (nb) {
         el_w64_neg(&ub, b);
     } else {
-        ub = *b;
+        ub.lo = b->lo;
+        ub.hi = b->hi;
     }
     divmod_u(q, rem, &ua, &ub);
     if (na != nb) {

@@ -15,6 +15,7 @@
 #ifndef EL_PIC18_W64_H
 #define EL_PIC18_W64_H
 
+#include <stddef.h>
 #include <stdint.h>
 
 /* A 64-bit integer as a little-endian uint64 lies in memory. (The lowering
@@ -48,6 +49,10 @@ void el_w64_shrs(el_w64_t *r, const el_w64_t *a, uint8_t n); /* arithmetic */
 void el_w64_shru(el_w64_t *r, const el_w64_t *a, uint8_t n); /* logical */
 int8_t el_w64_cmps(const el_w64_t *a, const el_w64_t *b);  /* -1, 0, 1 */
 int8_t el_w64_cmpu(const el_w64_t *a, const el_w64_t *b);
+
+/* A struct assignment becomes a call of memcpy (lower64.py): sdcc 4.2's own
+ * copy calls a __memcpy it does not declare. */
+void *memcpy(void *dst, const void *src, size_t n);
 
 #if defined(EL_W64_LOWERING)
 /* Only while lowering (never compiled): the types the program is written

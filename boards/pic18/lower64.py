@@ -313,6 +313,8 @@ class ExprLowerer:
             return False
         if isinstance(e, c_ast.FuncCall) and isinstance(e.name, c_ast.ID) and e.name.name in self.wide_funcs:
             return True
+        if isinstance(e, c_ast.Assignment) and self.type_of(e.lvalue).kind == "struct":
+            return True  # a struct copy: sdcc's call to __memcpy would not link (_Assignment)
         try:
             if self.type_of(e).wide:
                 return True
@@ -461,6 +463,13 @@ class ExprLowerer:
     def _Assignment(self, e: c_ast.Assignment) -> Low:
         target = self.lvalue(e.lvalue)
         value = self.lower(e.rvalue)
+        if target.t.kind == "struct" and not target.t.wide:
+            # sdcc 4.2 copies a struct with a call to a __memcpy it does not
+            # declare (the program then does not link): memcpy it is.
+            source = self.lvalue(e.rvalue) if not has_effects(value.expr) else value
+            size = c_ast.UnaryOp("sizeof", target.expr)
+            return Low(target.pre + source.pre + [call("memcpy", addr(target.expr), addr(source.expr), size)],
+                       target.expr, target.t)
         if e.op == "=":
             if not target.t.wide and not value.t.wide:
                 return Low(target.pre + value.pre, assign(target.expr, value.expr), target.t)

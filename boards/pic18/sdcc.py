@@ -15,7 +15,6 @@ map file gives the sizes and the symbols' addresses.
 
 from __future__ import annotations
 
-import hashlib
 import os
 import re
 import subprocess
@@ -27,8 +26,8 @@ from pycparser import c_ast, c_generator, c_parser
 
 from easylab.core.errors import BuildError
 
-from . import prune
-from .ctypes64 import LowerError, Target, TypeEnv
+from . import buildcache, ctypes64, datapointers, inline, lower64, lower64_stmt, prune, sdcc_quirks, strength
+from .ctypes64 import LowerError, Target
 from .lower64_stmt import lower_unit
 
 VERSION_FOLDER = "sdcc-pic16-4.2.0-1"  # boards/pic18/toolchain/build.sh's folder in the cache
@@ -38,17 +37,17 @@ SDCC_TIMEOUT = 300  # seconds: sdcc can hang on huge arrays
 TARGET = Target(int_bits=16, long_bits=32, char_signed=False)
 # sdcc's own library build uses these; about 8 % smaller code.
 OPT_FLAGS = ["--fomit-frame-pointer", "--obanksel=9", "--denable-peeps", "--optimize-cmp", "--optimize-df"]
-# Warnings are errors, but one: sdcc 4.2's pic16 port warns "Initializer
-# different levels of indirections" for every address of a RAM object in a
-# static initializer of a generic pointer (`(void *)&x` in el_items), and
-# emits the right pointer (address and the data-space tag 0x80) all the
-# same. gcc's -Wall -Werror on the same C catches real mismatches.
-WARNING_FLAGS = ["--Werror", "--disable-warning", "18"]
+# Warnings are errors, but two that say nothing about the C: sdcc 4.2's
+# pic16 port warns "Initializer different levels of indirections" (18) for
+# every address of a RAM object in a static initializer of a generic
+# pointer (`(void *)&x` in el_items) and emits the right pointer (address
+# and the data-space tag 0x80) all the same; "conditional flow changed by
+# optimizer" (110) and "unreachable code" (126) say that a condition's
+# value was known at compile time, as it is where portable code tests a
+# board's configuration macros (PC_EXACT_TICKS || ...). gcc's -Wall -Wextra
+# -Werror on the same C catches real mismatches.
+WARNING_FLAGS = ["--Werror", "--disable-warning", "18", "--disable-warning", "110", "--disable-warning", "126"]
 _WORD = re.compile(r"\b[A-Za-z_]\w*\b")
-# RAM objects larger than a bank (256 bytes) cannot be placed by gplink,
-# which keeps every section inside one bank: they get fixed addresses at
-# the top of RAM instead (big_objects).
-BANK_BYTES = 256
 
 
 @dataclass
@@ -107,6 +106,7 @@ class Build:
     obj_dir: Path
     w64_header: Path  # el_pic18_w64.h
     notes: list[str] = field(default_factory=list)
+    in_ram: set[str] = field(default_factory=set)  # the program's RAM objects (sdcc_quirks.ram_pointer_tags)
 
     def flags(self) -> list[str]:
         return ["-mpic16", f"-p{self.part}", "--std-c99", "--no-warn-non-free", *WARNING_FLAGS, *OPT_FLAGS,
@@ -116,10 +116,13 @@ class Build:
 
     def preprocess(self, source: Path) -> str:
         """The file as sdcc's preprocessor gives it, with the lowering's
-        view of 64-bit integers in front (el_pic18_w64.h)."""
+        view of 64-bit integers (el_pic18_w64.h) and the board's table reads
+        (el_pic18_rom.h) in front."""
         self.obj_dir.mkdir(parents=True, exist_ok=True)
         wrapper = self.obj_dir / f"{source.stem}.lower.c"
-        wrapper.write_text(f'#include "{self.w64_header}"\n#include "{source.resolve()}"\n', encoding="utf-8")
+        rom = self.w64_header.parent / "el_pic18_rom.h"
+        wrapper.write_text(f'#include "{self.w64_header}"\n#include "{rom}"\n#include "{source.resolve()}"\n',
+                           encoding="utf-8")
         proc = _run([self.tc.sdcc, *self.flags(), "-DEL_W64_LOWERING=1", "-E", wrapper],
                     f"preprocessing {source.name}")
         return proc.stdout
@@ -131,19 +134,15 @@ class Build:
         objects begin (``ram_end`` + 1 when there are none)."""
         with ThreadPoolExecutor(max_workers=2) as pool:
             texts = list(pool.map(self.preprocess, sources))
-        units = {}
-        wide: dict = {}
-        for src, text in zip(sources, texts):
-            try:
-                ast = c_parser.CParser().parse(text, str(src))
-                wide = lower_unit(ast, TARGET, wide)
-            except LowerError as err:
-                raise BuildError(f"{src.name}: {err}") from None
-            except Exception as err:  # pycparser's ParseError and the like
-                raise BuildError(f"parsing {src.name} for the 64-bit lowering failed: {err}") from None
-            units[src.stem + ("_gen" if src.parent == self.obj_dir.parent else "")] = ast
+        units = {src.stem + ("_gen" if src.parent == self.obj_dir.parent else ""): lowered(src, text)
+                 for src, text in zip(sources, texts)}
         prune.prune(units, roots)
-        big_start = place_big_objects(units, ram_end)
+        for ast in units.values():
+            inline.inline_single_calls(ast)
+            strength.reduce_products(ast, TARGET)
+            datapointers.data_pointers(ast)
+        big_start = sdcc_quirks.place_big_objects(units, TARGET, ram_end)
+        self.in_ram = sdcc_quirks.fix_initializers(units, TARGET)
         out = []
         gen = c_generator.CGenerator()
         for name, ast in units.items():
@@ -157,17 +156,25 @@ class Build:
     # ---- compiling, linking
 
     def compile(self, sources: list[Path]) -> list[Path]:
-        """sdcc -c for each file, in parallel; objects are reused when the
-        file and the flags are unchanged (their hash is kept beside)."""
+        """sdcc -c for each file, in parallel; an object compiled before from
+        the same text with the same flags comes from the build cache (a
+        hardware file's text is its preprocessed text)."""
+        ram = " ".join(sorted(self.in_ram))
+
         def one(src: Path) -> Path:
-            obj = self.obj_dir / (src.name.removesuffix(".sdcc.c").removesuffix(".c") + ".o")
-            digest = hashlib.sha256((" ".join(self.flags()) + "\n").encode() + src.read_bytes()).hexdigest()
-            stamp = obj.with_suffix(".hash")
-            if obj.exists() and stamp.exists() and stamp.read_text() == digest:
+            stem = src.name.removesuffix(".sdcc.c").removesuffix(".c")
+            obj, asm = self.obj_dir / f"{stem}.o", self.obj_dir / f"{stem}.asm"
+            text = src.read_bytes() if src.parent == self.obj_dir else \
+                _run([self.tc.sdcc, *self.flags(), "-E", src], f"preprocessing {src.name}").stdout.encode()
+            digest = buildcache.key(str(self.tc.root), *self.flags(), text, ram)
+            if buildcache.fetch_file("sdcc", digest, obj):
                 return obj
-            _run([self.tc.sdcc, *self.flags(), "-c", src, "-o", obj], f"compiling {src.name} with sdcc",
+            _run([self.tc.sdcc, *self.flags(), "-S", src, "-o", asm], f"compiling {src.name} with sdcc",
                  cwd=self.obj_dir)
-            stamp.write_text(digest)
+            asm.write_text(sdcc_quirks.ram_pointer_tags(asm.read_text(encoding="latin-1"), self.in_ram),
+                           encoding="latin-1")
+            _run(["gpasm", "-D__STACK_MODEL_SMALL", "-o", obj, "-c", asm], f"assembling {asm.name}", cwd=self.obj_dir)
+            buildcache.store_file("sdcc", digest, obj)
             return obj
         self.obj_dir.mkdir(parents=True, exist_ok=True)
         with ThreadPoolExecutor(max_workers=2) as pool:
@@ -182,35 +189,25 @@ class Build:
         return hexfile.with_suffix(".map")
 
 
-def _is_const(decl: c_ast.Decl) -> bool:
-    node = decl.type
-    while isinstance(node, c_ast.ArrayDecl):
-        node = node.type
-    return "const" in (getattr(node, "quals", None) or [])
+_LOWERING = buildcache.code_version(ctypes64, lower64, lower64_stmt)
 
 
-def place_big_objects(units: dict[str, c_ast.FileAST], ram_end: int) -> int:
-    """Give every RAM object larger than a bank a fixed address, from
-    ``ram_end`` (the last byte) down, each on a 4-byte boundary so that no
-    element of 1, 2 or 4 bytes straddles two banks (sdcc selects a bank per
-    access to a constant element). Returns the lowest address placed."""
-    top = ram_end + 1
-    for ast in units.values():
-        env = TypeEnv(TARGET)
-        big: dict[str, int] = {}
-        for ext in ast.ext:
-            if isinstance(ext, c_ast.Typedef):
-                env.typedef(ext)
-            elif isinstance(ext, c_ast.Decl) and not isinstance(ext.type, c_ast.FuncDecl):
-                size = env.size(env.of_decl(ext.type))
-                if ext.name and "extern" not in (ext.storage or []) and not _is_const(ext) and size is not None \
-                        and size > BANK_BYTES:
-                    top = (top - size) & ~3
-                    big[ext.name] = top
-        for ext in ast.ext:
-            if isinstance(ext, c_ast.Decl) and ext.name in big and not isinstance(ext.type, c_ast.FuncDecl):
-                ext.storage = [f"__at(0x{big[ext.name]:03X})", *(ext.storage or [])]
-    return top
+def lowered(src: Path, text: str) -> c_ast.FileAST:
+    """A preprocessed file parsed and lowered (from the build cache when this
+    text was lowered before by this code)."""
+    digest = buildcache.key(_LOWERING, text)
+    ast = buildcache.fetch_object("lowered", digest)
+    if ast is not None:
+        return ast
+    try:
+        ast = c_parser.CParser().parse(text, str(src))
+        lower_unit(ast, TARGET)
+    except LowerError as err:
+        raise BuildError(f"{src.name}: {err}") from None
+    except Exception as err:  # pycparser's ParseError and the like
+        raise BuildError(f"parsing {src.name} for the 64-bit lowering failed: {err}") from None
+    buildcache.store_object("lowered", digest, ast)
+    return ast
 
 
 def hardware_roots(build: Build, sources: list[Path]) -> set[str]:

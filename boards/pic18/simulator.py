@@ -15,7 +15,7 @@ from easylab.core.errors import BuildError
 from easylab.core.paths import runtime_dir
 from easylab.ir.program import Program
 
-from . import linkmap
+from . import buildcache, linkmap
 from .devices import device_views
 from .parts import pin_code
 
@@ -125,18 +125,31 @@ def build_harness(board, out_dir: Path, model_source: str, exe: Path) -> Path:
     folder = board.description.folder
     host = load_board("host").description.folder
     includes = [f"-I{folder / 'sim'}", f"-I{host}", f"-I{runtime_dir()}"]
-    c_sources = [host / s for s in spec.get("host_sources", [])] + [model_c]
     obj_dir = out_dir / "sim-obj"
     obj_dir.mkdir(parents=True, exist_ok=True)
-    objects = []
-    for src in c_sources:
-        obj = obj_dir / (src.stem + ".o")
-        run([cc, *spec.get("cflags", []), *includes, "-c", "-o", str(obj), str(src)], "building the simulator")
-        objects.append(obj)
-    cxx_sources = [folder / s for s in spec.get("cxx_sources", [])]
-    run([cxx, *spec.get("cxxflags", []), *includes, "-I/usr/include/gpsim", *pc.stdout.split(), "-o", str(exe),
-         *map(str, cxx_sources), *map(str, objects), *spec.get("ldflags", [])], "building the simulator")
+    cflags = [*spec.get("cflags", []), *includes]
+    cxxflags = [*spec.get("cxxflags", []), *includes, "-I/usr/include/gpsim", *pc.stdout.split()]
+    objects = [_object(cc, cflags, host / s, obj_dir) for s in spec.get("host_sources", [])]
+    objects += [_object(cxx, cxxflags, folder / s, obj_dir) for s in spec.get("cxx_sources", [])]
+    objects.append(_object(cc, cflags, model_c, obj_dir, cache=False))
+    run([cxx, "-o", str(exe), *map(str, objects), *spec.get("ldflags", [])], "building the simulator")
     return exe
+
+
+def _object(compiler: str, flags: list[str], src: Path, obj_dir: Path, cache: bool = True) -> Path:
+    """One of the harness's objects; the same preprocessed source with the
+    same flags comes from the build cache."""
+    obj = obj_dir / (src.stem + ".o")
+    digest = None
+    if cache:
+        text = run([compiler, *flags, "-E", str(src)], "building the simulator").stdout
+        digest = buildcache.key(compiler, *flags, text)
+        if buildcache.fetch_file("harness", digest, obj):
+            return obj
+    run([compiler, *flags, "-c", "-o", str(obj), str(src)], "building the simulator")
+    if digest is not None:
+        buildcache.store_file("harness", digest, obj)
+    return obj
 
 
 def port_program_tables(board, hexfile: Path, lmap: linkmap.LinkMap) -> str:

@@ -55,6 +55,8 @@
 
 #include <stdbool.h> /* C++'s bool for the runtime's C headers (__bool_true_false_are_defined) */
 
+#include "gpsim_hooks.h"
+
 extern "C" {
 #include "sim_model.h"
 }
@@ -84,46 +86,9 @@ unsigned busy_count;
 
 void on_write(unsigned address, unsigned value);
 
-/* A register in front of gpsim's own: every access passes on, writes are
- * reported. */
-class HookRegister : public Register {
-public:
-    HookRegister(Processor *p, Register *original)
-        : Register(p, original->name().c_str(), "EasyLab harness hook"), orig(original)
-    {
-        address = original->address;
-    }
-    unsigned int get() override { return orig->get(); }
-    unsigned int get_value() override { return orig->get_value(); }
-    void put(unsigned int v) override
-    {
-        orig->put(v);
-        on_write(address, v & 0xFFu);
-    }
-    void put_value(unsigned int v) override { orig->put_value(v); }
-    RegisterValue getRV() override { return orig->getRV(); }
-    void putRV(RegisterValue rv) override
-    {
-        orig->putRV(rv);
-        on_write(address, rv.data & 0xFFu);
-    }
-    RegisterValue getRV_notrace() override { return orig->getRV_notrace(); }
-    void putRV_notrace(RegisterValue rv) override { orig->putRV_notrace(rv); }
-    RegisterValue getRVN() override { return orig->getRVN(); }
-    RegisterValue getRVN_notrace() override { return orig->getRVN_notrace(); }
-    void setbit(unsigned int bit, bool v) override { orig->setbit(bit, v); }
-    bool get_bit(unsigned int bit) override { return orig->get_bit(bit); }
-    double get_bit_voltage(unsigned int bit) override { return orig->get_bit_voltage(bit); }
-    Register *getReg() override { return orig; }
-    REGISTER_TYPES isa() override { return orig->isa(); }
-
-private:
-    Register *orig;
-};
-
 void hook(unsigned address)
 {
-    cpu->registers[address] = new HookRegister(cpu, cpu->registers[address]);
+    cpu->registers[address] = new HookRegister(cpu, cpu->registers[address], on_write);
 }
 
 unsigned reg(unsigned address)
@@ -304,6 +269,7 @@ public:
     void callback() override { get_bp().halt(); }
 };
 
+/* The EEPROM's bytes at the end of the run. */
 uint8_t *eeprom_image()
 {
     static std::vector<uint8_t> image;
@@ -314,6 +280,20 @@ uint8_t *eeprom_image()
             image[i] = (uint8_t)rom[i]->get_value();
     }
     return image.data();
+}
+
+/* gpsim 0.31 gives the PIC18F4620 its 1024 bytes of data EEPROM but no
+ * EEADRH (the address's high byte): only the first 256 bytes could be
+ * reached. The harness makes the EEPROM one with EEADRH (its initialize
+ * does) and puts the register at its address. */
+void map_eeadrh()
+{
+    const unsigned EEADRH = 0xFAAu;
+    EEPROM_EXTND *ee = pic != nullptr ? dynamic_cast<EEPROM_EXTND *>(pic->eeprom) : nullptr;
+    if (ee == nullptr || ee->get_rom_size() <= 256u || ee->get_reg_eeadrh() != nullptr)
+        return;
+    ee->initialize(ee->get_rom_size(), 64, 64, 0x300000u, true);
+    pic->add_sfr_register(ee->get_reg_eeadrh(), EEADRH, RegisterValue(0, 0), "eeadrh");
 }
 
 void eeprom_store(const uint8_t *image)
@@ -398,34 +378,28 @@ int main(int argc, char **argv)
     if (r != SIM_EXIT_OK)
         return r == SIM_EXIT_HELP ? SIM_EXIT_OK : r;
 
-    /* libgpsim prints while loading: keep stdout clean. */
-    fflush(stdout);
-    int saved = dup(1), null = open("/dev/null", O_WRONLY);
-    if (null >= 0) {
-        dup2(null, 1);
-        close(null);
-    }
-    initialize_gpsim_core();
-    int loaded = CSimulationContext::GetContext()->LoadProgram(sim_opt.firmware, sim_processor, &cpu);
-    initialization_is_complete();
-    fflush(stdout);
-    if (saved >= 0) {
-        dup2(saved, 1);
-        close(saved);
+    int loaded;
+    {
+        QuietStdout quiet;
+        initialize_gpsim_core();
+        loaded = CSimulationContext::GetContext()->LoadProgram(sim_opt.firmware, sim_processor, &cpu);
+        initialization_is_complete();
+        pic = dynamic_cast<pic_processor *>(cpu);
+        if (loaded && cpu != nullptr)
+            map_eeadrh();
     }
     if (!loaded || cpu == nullptr) {
         el_host_error("cannot load the firmware %s into gpsim's %s", sim_opt.firmware, sim_processor);
         return SIM_EXIT_USAGE;
     }
-    pic = dynamic_cast<pic_processor *>(cpu);
     cpu->set_frequency(4.0 * sim_clock_hz);
     pin_driven.assign(64, -1);
     encoders.resize(sim_hw_count ? sim_hw_count : 1u);
 
-    uint8_t *image = eeprom_image();
-    if (!sim_start(image))
+    std::vector<uint8_t> erased(sim_nv_size, 0xFFu); /* gpsim starts the EEPROM at 0; a chip's erased bytes are 0xFF */
+    if (!sim_start(erased.data()))
         return SIM_EXIT_USAGE;
-    eeprom_store(image);
+    eeprom_store(erased.data());
 
     if (sim_mark_addr != 0xFFFFu)
         hook(sim_mark_addr);
