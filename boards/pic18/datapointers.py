@@ -1,17 +1,20 @@
-"""Pointer parameters that only ever point into RAM, made sdcc `__data`
-pointers.
+"""Pointers that only ever point into RAM, made sdcc `__data` pointers.
 
 A plain C pointer is a generic pointer for sdcc's pic16 port: three bytes,
 the third telling RAM, program memory or EEPROM apart, and every access
 through it a call of __gptrget/__gptrput. Generated code calls each
 actor's step function (a static function) with pointers to its state and
-to its tokens, all in RAM: declared `__data`, those pointers are two bytes
-and accessed through FSR0 directly, several times faster. The rule, per
-translation unit and for static functions whose address is never taken: a
-pointer parameter is `__data` when every call passes the address of a
-non-const object (or an element or member of one), an array of one, or a
-parameter that is itself `__data`. Nothing else changes; a `__data` pointer
+to its tokens, all in RAM, and inline.py turns those parameters into local
+pointers: declared `__data`, they are two bytes and accessed through FSR0
+directly, several times faster. Nothing else changes; a `__data` pointer
 converts to a generic one wherever one is expected.
+
+The rule, per translation unit, with C's scopes:
+- a pointer parameter of a static function whose address is never taken
+  is `__data` when every call passes the address of a non-const object (or
+  of an element or member of one), a non-const array, or a `__data` pointer;
+- a local pointer is `__data` when its initializer is such an address and
+  the function never assigns it with `=`.
 """
 
 from __future__ import annotations
@@ -19,44 +22,132 @@ from __future__ import annotations
 from pycparser import c_ast
 
 DATA = "__data"
+# What a name in scope is, for these rules.
+_DATA_PTR, _PTR, _ARRAY, _OBJECT, _ROM = "data pointer", "pointer", "array", "object", "rom"
 
 
-class _Uses(c_ast.NodeVisitor):
-    """Calls of each function, and functions whose address is taken."""
+def _kind(decl: c_ast.Decl, data: bool = False) -> str:
+    """What a declared name is; a const object counts as program memory
+    (sdcc keeps static ones there; the rule only loses a speed-up)."""
+    node = decl.type
+    if isinstance(node, c_ast.PtrDecl):
+        quals = node.type.quals if isinstance(node.type, c_ast.TypeDecl) else []
+        return _DATA_PTR if data or DATA in quals else _PTR
+    while isinstance(node, c_ast.ArrayDecl):
+        node = node.type
+    if "const" in (getattr(node, "quals", None) or []):
+        return _ROM
+    return _ARRAY if isinstance(decl.type, c_ast.ArrayDecl) else _OBJECT
 
+
+class _Scopes:
     def __init__(self):
-        self.calls: dict[str, list[tuple[c_ast.FuncCall, str | None]]] = {}
-        self.escaped: set[str] = set()
-        self.current: str | None = None
+        self.stack: list[dict[str, str]] = [{}]
+
+    def push(self, names: dict[str, str] | None = None) -> None:
+        self.stack.append(dict(names or {}))
+
+    def pop(self) -> None:
+        self.stack.pop()
+
+    def declare(self, name: str, kind: str) -> None:
+        self.stack[-1][name] = kind
+
+    def kind(self, name: str) -> str | None:
+        for scope in reversed(self.stack):
+            if name in scope:
+                return scope[name]
+        return None
+
+    def in_ram(self, e: c_ast.Node) -> bool:
+        """Does this pointer-valued expression point into RAM for sure?"""
+        if isinstance(e, c_ast.Cast):
+            return self.in_ram(e.expr)
+        if isinstance(e, c_ast.BinaryOp) and e.op in ("+", "-"):
+            return self.in_ram(e.left)
+        if isinstance(e, c_ast.ID):
+            return self.kind(e.name) in (_DATA_PTR, _ARRAY)
+        if isinstance(e, c_ast.UnaryOp) and e.op == "&":
+            return self._rooted_in_ram(e.expr)
+        return False
+
+    def _rooted_in_ram(self, e: c_ast.Node) -> bool:
+        """An lvalue inside a RAM object: X, X.m, X[i], p->m, p[i] with p __data."""
+        while isinstance(e, (c_ast.StructRef, c_ast.ArrayRef)):
+            if isinstance(e, c_ast.StructRef) and e.type == "->" or isinstance(e, c_ast.ArrayRef) and \
+                    isinstance(e.name, c_ast.ID) and self.kind(e.name.name) in (_DATA_PTR, _PTR):
+                return isinstance(e.name, c_ast.ID) and self.kind(e.name.name) == _DATA_PTR
+            e = e.name
+        return isinstance(e, c_ast.ID) and self.kind(e.name) in (_ARRAY, _OBJECT, _DATA_PTR)
+
+
+class _Walk(c_ast.NodeVisitor):
+    """One pass over the unit with scopes: the verdict on every call of the
+    candidate functions, and (``mark_locals``) the local pointers."""
+
+    def __init__(self, candidates: dict[str, c_ast.FuncDef], marked: dict[str, set[str]], mark_locals: bool):
+        self.scopes = _Scopes()
+        self.candidates, self.marked, self.mark_locals = candidates, marked, mark_locals
+        self.ok: dict[tuple[str, int], bool] = {}  # (function, parameter index) -> every call so far in RAM
+        self.assigned: set[str] = set()
+        self.locals: list[c_ast.Decl] = []
 
     def visit_FuncDef(self, node: c_ast.FuncDef) -> None:
-        self.current = node.decl.name
+        params = {}
+        for p in (node.decl.type.args.params if node.decl.type.args else []):
+            if isinstance(p, c_ast.Decl) and p.name:
+                params[p.name] = _kind(p, p.name in self.marked.get(node.decl.name, set()))
+        self.assigned = _assigned(node)
+        self.scopes.push(params)
         self.visit(node.body)
-        self.current = None
+        self.scopes.pop()
+
+    def visit_Compound(self, node: c_ast.Compound) -> None:
+        self.scopes.push()
+        for item in node.block_items or []:
+            self.visit(item)
+        self.scopes.pop()
+
+    def visit_Decl(self, node: c_ast.Decl) -> None:
+        if node.init is not None:
+            self.visit(node.init)
+        if isinstance(node.type, c_ast.FuncDecl) or not node.name:
+            return
+        data = isinstance(node.type, c_ast.PtrDecl) and isinstance(node.type.type, c_ast.TypeDecl) and \
+            node.init is not None and len(self.scopes.stack) > 1 and node.name not in self.assigned and \
+            "static" not in (node.storage or []) and self.scopes.in_ram(node.init)
+        if data and self.mark_locals:
+            self.locals.append(node)
+        self.scopes.declare(node.name, _kind(node, data))
+
+    def visit_FuncCall(self, node: c_ast.FuncCall) -> None:
+        name = node.name.name if isinstance(node.name, c_ast.ID) else None
+        if name in self.candidates:
+            args = node.args.exprs if node.args else []
+            for k, p in enumerate(_params(self.candidates[name])):
+                if _is_pointer(p):
+                    here = k < len(args) and self.scopes.in_ram(args[k])
+                    self.ok[name, k] = self.ok.get((name, k), True) and here
+        self.generic_visit(node)
+
+
+class _Named(c_ast.NodeVisitor):
+    """Functions named other than by a call (their address is taken)."""
+
+    def __init__(self):
+        self.escaped: set[str] = set()
+        self.called: set[str] = set()
 
     def visit_FuncCall(self, node: c_ast.FuncCall) -> None:
         if isinstance(node.name, c_ast.ID):
-            self.calls.setdefault(node.name.name, []).append((node, self.current))
+            self.called.add(node.name.name)
         else:
             self.visit(node.name)
         if node.args is not None:
             self.visit(node.args)
 
     def visit_ID(self, node: c_ast.ID) -> None:
-        self.escaped.add(node.name)  # a function named other than in a call
-
-
-def _const_objects(ast: c_ast.FileAST) -> set[str]:
-    """File-scope objects in program memory (const, not pointers to const)."""
-    out = set()
-    for ext in ast.ext:
-        if isinstance(ext, c_ast.Decl) and not isinstance(ext.type, c_ast.FuncDecl):
-            node = ext.type
-            while isinstance(node, c_ast.ArrayDecl):
-                node = node.type
-            if "const" in (getattr(node, "quals", None) or []):
-                out.add(ext.name)
-    return out
+        self.escaped.add(node.name)
 
 
 def _params(fdef: c_ast.FuncDef) -> list[c_ast.Decl | None]:
@@ -68,47 +159,9 @@ def _is_pointer(p: c_ast.Decl | None) -> bool:
     return p is not None and isinstance(p.type, c_ast.PtrDecl) and isinstance(p.type.type, c_ast.TypeDecl)
 
 
-def _in_ram(e: c_ast.Node, rom: set[str], data_params: set[str], arrays: set[str]) -> bool:
-    """Does this pointer-valued expression point into RAM for sure?"""
-    if isinstance(e, c_ast.Cast):
-        return _in_ram(e.expr, rom, data_params, arrays)
-    if isinstance(e, c_ast.BinaryOp) and e.op in ("+", "-"):
-        return _in_ram(e.left, rom, data_params, arrays)
-    if isinstance(e, c_ast.ID):
-        return e.name in data_params or (e.name in arrays and e.name not in rom)
-    if isinstance(e, c_ast.UnaryOp) and e.op == "&":
-        return _rooted_in_ram(e.expr, rom, data_params)
-    return False
-
-
-def _rooted_in_ram(e: c_ast.Node, rom: set[str], data_params: set[str]) -> bool:
-    """An lvalue inside a RAM object: X, X.m, X[i], p->m, p[i] with p __data."""
-    while isinstance(e, (c_ast.StructRef, c_ast.ArrayRef)):
-        if isinstance(e, c_ast.StructRef) and e.type == "->":
-            return isinstance(e.name, c_ast.ID) and e.name.name in data_params
-        e = e.name
-    if isinstance(e, c_ast.ID):
-        return e.name not in rom or e.name in data_params
-    return False
-
-
-def _arrays(ast: c_ast.FileAST) -> set[str]:
-    class V(c_ast.NodeVisitor):
-        names: set[str] = set()
-
-        def visit_Decl(self, node: c_ast.Decl) -> None:
-            if isinstance(node.type, c_ast.ArrayDecl) and node.name:
-                self.names.add(node.name)
-            self.generic_visit(node)
-    v = V()
-    v.names = set()
-    v.visit(ast)
-    return v.names
-
-
 def _assigned(fdef: c_ast.FuncDef) -> set[str]:
-    """Names a function's body assigns with `=` (a parameter given another
-    pointer stays generic)."""
+    """Names a function's body assigns with `=` (a pointer given another
+    one stays generic)."""
     class V(c_ast.NodeVisitor):
         names: set[str] = set()
 
@@ -122,71 +175,48 @@ def _assigned(fdef: c_ast.FuncDef) -> set[str]:
     return v.names
 
 
-class _Locals(c_ast.NodeVisitor):
-    """Local pointers initialised with a RAM address and never given
-    another (inline.py's parameters, for one)."""
-
-    def __init__(self, rom: set[str], arrays: set[str], data: set[str]):
-        self.rom, self.arrays, self.data = rom, arrays, data
-        self.found: list[c_ast.Decl] = []
-        self.assigned: set[str] = set()
-
-    def visit_FuncDef(self, node: c_ast.FuncDef) -> None:
-        self.assigned = _assigned(node)
-        self.visit(node.body)
-
-    def visit_Decl(self, node: c_ast.Decl) -> None:
-        if _is_pointer(node) and node.init is not None and node.name not in self.assigned \
-                and "static" not in (node.storage or []) \
-                and _in_ram(node.init, self.rom, self.data, self.arrays):
-            self.data.add(node.name)
-            self.found.append(node)
-        self.generic_visit(node)
+def _add_data(decl_type: c_ast.PtrDecl) -> None:
+    if DATA not in decl_type.type.quals:
+        decl_type.type.quals = [*decl_type.type.quals, DATA]
 
 
 def data_pointers(ast: c_ast.FileAST) -> list[str]:
-    """Mark the RAM-only pointer parameters of the unit's static functions
-    and its RAM-only local pointers `__data`, in place; returns them as
-    "function.name" (or the local's name)."""
-    uses = _Uses()
-    uses.visit(ast)
-    rom, arrays = _const_objects(ast), _arrays(ast)
-    funcs = {ext.decl.name: ext for ext in ast.ext if isinstance(ext, c_ast.FuncDef)
-             and "static" in (ext.decl.storage or []) and ext.decl.name not in uses.escaped}
-    marked: dict[str, set[str]] = {name: set() for name in funcs}
-    changed = True
-    while changed:  # a parameter passed on as an argument may become __data in turn
-        changed = False
-        for name, fdef in funcs.items():
-            calls = uses.calls.get(name, [])
-            if not calls:
-                continue
-            assigned = _assigned(fdef)
-            for k, p in enumerate(_params(fdef)):
-                if not _is_pointer(p) or p.name in marked[name] or p.name in assigned:
-                    continue
-                if all(call.args is not None and k < len(call.args.exprs)
-                       and _in_ram(call.args.exprs[k], rom, marked.get(caller, set()) if caller else set(), arrays)
-                       for call, caller in calls):
-                    marked[name].add(p.name)
-                    changed = True
+    """Mark the unit's RAM-only pointer parameters and local pointers
+    `__data`, in place; returns them ("function.parameter", or the local's
+    name)."""
+    named = _Named()
+    named.visit(ast)
+    candidates = {ext.decl.name: ext for ext in ast.ext if isinstance(ext, c_ast.FuncDef)
+                  and "static" in (ext.decl.storage or []) and ext.decl.name not in named.escaped
+                  and ext.decl.name in named.called}
+    marked: dict[str, set[str]] = {name: set() for name in candidates}
+    while True:  # a parameter passed on as an argument may become __data in turn
+        walk = _Walk(candidates, marked, False)
+        walk.visit(ast)
+        grown = False
+        for (name, k), ok in walk.ok.items():
+            p = _params(candidates[name])[k]
+            if ok and p.name not in marked[name] and p.name not in _assigned(candidates[name]):
+                marked[name].add(p.name)
+                grown = True
+        if not grown:
+            break
     prototypes: dict[str, list[c_ast.FuncDecl]] = {}
     for ext in ast.ext:
         if isinstance(ext, c_ast.Decl) and isinstance(ext.type, c_ast.FuncDecl):
             prototypes.setdefault(ext.name, []).append(ext.type)
     done = []
     for name, params in marked.items():
-        positions = [k for k, p in enumerate(_params(funcs[name])) if p is not None and p.name in params]
-        for fd in [funcs[name].decl.type, *prototypes.get(name, [])]:
+        positions = [k for k, p in enumerate(_params(candidates[name])) if p is not None and p.name in params]
+        for fd in [candidates[name].decl.type, *prototypes.get(name, [])]:
             args = fd.args.params if fd.args else []
             for k in positions:
-                if k < len(args) and _is_pointer(args[k]) and DATA not in args[k].type.type.quals:
-                    args[k].type.type.quals = [*args[k].type.type.quals, DATA]
+                if k < len(args) and _is_pointer(args[k]):
+                    _add_data(args[k].type)
         done += [f"{name}.{p}" for p in sorted(params)]
-    locals_ = _Locals(rom, arrays, {p for params in marked.values() for p in params})
-    locals_.visit(ast)
-    for decl in locals_.found:
-        if DATA not in decl.type.type.quals:
-            decl.type.type.quals = [*decl.type.type.quals, DATA]
+    walk = _Walk(candidates, marked, True)
+    walk.visit(ast)
+    for decl in walk.locals:
+        _add_data(decl.type)
         done.append(decl.name)
     return sorted(done)

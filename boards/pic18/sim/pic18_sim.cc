@@ -102,12 +102,26 @@ IOPIN *iopin(unsigned pin)
     return port != nullptr ? port->getPin(pin & 7u) : nullptr;
 }
 
-/* Drive an input pin to a voltage (a level: 0 V or 5 V). */
+std::vector<int> pin_driven; /* the level the harness drives an input pin to, by pin number */
+
+/* Drive an input pin to a voltage (an analog input) or a level. */
 void drive_pin(unsigned pin, double volts)
 {
     IOPIN *p = iopin(pin);
     if (p != nullptr)
         p->set_nodeVoltage(volts);
+}
+
+void drive_level(unsigned pin, bool level)
+{
+    IOPIN *p = iopin(pin);
+    pin_driven[pin] = level ? 1 : 0;
+    if (p != nullptr) {
+        /* With no stimulus node attached, gpsim takes a pin's digital level
+           from its forced state (setDrivenState alone does not reach PORTx). */
+        p->set_nodeVoltage(level ? cpu->get_Vdd() : 0.0);
+        p->forceDrivenState(level ? '1' : '0');
+    }
 }
 
 void set_busy()
@@ -118,7 +132,6 @@ void set_busy()
 
 /* ---- pins (--pins) ---- */
 
-std::vector<int> pin_driven; /* the level the harness drives an input pin to, by pin number */
 
 int pwm_duty(uint8_t ccp)
 {
@@ -169,14 +182,10 @@ public:
         ab = sim_quadrature(s->position);
         changed = (uint8_t)(ab ^ s->ab);
         s->ab = ab;
-        if (changed & 2u) {
-            pin_driven[h->a] = (ab >> 1) & 1u;
-            drive_pin(h->a, (ab & 2u) ? 5.0 : 0.0);
-        }
-        if (changed & 1u) {
-            pin_driven[h->b] = ab & 1u;
-            drive_pin(h->b, (ab & 1u) ? 5.0 : 0.0);
-        }
+        if (changed & 2u)
+            drive_level(h->a, (ab & 2u) != 0u);
+        if (changed & 1u)
+            drive_level(h->b, (ab & 1u) != 0u);
         record_pins();
         get_cycles().set_break(get_cycles().get() + ENCODER_EDGE_CYCLES, this);
     }
@@ -344,8 +353,7 @@ extern "C" bool sim_drive_hardware(uint16_t k)
     case SIM_HW_PIN_IN: {
         bool level;
         memcpy(&level, s->value, sizeof level);
-        pin_driven[h->a] = level ? 1 : 0;
-        drive_pin(h->a, level ? cpu->get_Vdd() : 0.0);
+        drive_level(h->a, level);
         record_pins();
         return true;
     }
