@@ -8,7 +8,10 @@ cycles, the footprint of the debug server, the Modbus response time.
    dropped, RAM-only pointers as __data) against the hand-written C of
    bench/handwritten/ compiled by the same sdcc, on the same inputs (the
    cases of bench_codegen.py; pt100_sensor is its PIC18 variant of
-   tests/pic18/models/, the same Acquire). A small libgpsim runner stamps
+   tests/pic18/models/, the same Acquire). Convert runs its nested
+   schedule against the hand-written nested version
+   (cd_to_dat_convert_nested.c): the flat schedule's buffers, generated or
+   hand-written, take 4,724 bytes, more than the part's RAM. A small libgpsim runner stamps
    the cycle counter at marks the program writes to a RAM byte. Program
    memory: the program with one side minus the program with neither.
    Goal: at most 1.10x the cycles of hand-written C.
@@ -190,6 +193,20 @@ def measure(name: str, case: dict, tmp: Path, runner: Path, tiny: bool = False) 
             "flash_ratio": round(gen_flash / hw_flash, 3)}
 
 
+# The flat Convert's buffers do not fit the RAM: the PIC18 compares the
+# nested schedule, with a hand-written version of its own.
+FLAT_CONVERT = "cd_to_dat Convert (flat)"
+
+
+def pic18_cases(cases: dict) -> dict:
+    """bench_codegen's cases the PIC18 runs: all but the flat Convert, the
+    nested one against the hand-written nested C."""
+    out = {name: case for name, case in cases.items() if name != FLAT_CONVERT}
+    nested = "cd_to_dat Convert (nested)"
+    out[nested] = dict(out[nested], handwritten="cd_to_dat_convert_nested.c")
+    return out
+
+
 def _size(out: str) -> tuple[int | None, int | None]:
     m = re.search(r"program memory (\d+) of \d+ .* RAM (\d+) of", out)
     return (int(m.group(1)), int(m.group(2))) if m else (None, None)
@@ -270,7 +287,9 @@ def main(out_dir: Path, tiny: bool = False) -> dict:
     with tempfile.TemporaryDirectory() as tmpdir:
         tmp = Path(tmpdir)
         runner = _runner(tmp)
-        cases = codegen.CASES if not tiny else dict(list(codegen.CASES.items())[:1])
+        cases = pic18_cases(codegen.CASES)
+        if tiny:
+            cases = dict(list(cases.items())[:1])
         results["cycles"] = [measure(name, case, tmp, runner, tiny) for name, case in cases.items()]
         results["sizes"] = blink_sizes(tmp, tiny)
         results["modbus"] = modbus_response(tmp, runner, tiny)

@@ -32,7 +32,7 @@ from easylab.core.paths import runtime_dir
 from easylab.ir.program import Program
 
 from . import devices, linkmap, sdcc, sdcc_quirks, simulator
-from .parts import STACK_BYTES, Mcu, read_mcus
+from .parts import Mcu, read_mcus
 
 
 class Pic18Board(BoardBase):
@@ -85,16 +85,19 @@ class Pic18Board(BoardBase):
     def _hardware(self) -> list[Path]:
         return [self.description.folder / s for s in self.description.raw.get("hardware_sources", [])]
 
-    def _objects(self, build: sdcc.Build, portable: list[Path], out_dir: Path) -> tuple[list[Path], Path]:
+    def _objects(self, build: sdcc.Build, portable: list[Path], out_dir: Path) -> tuple[list[Path], Path, int]:
         """Lower and compile the portable files, compile the hardware files;
-        write the linker script (which knows where the big objects went)."""
+        write the linker script (which knows where the big objects went).
+        Returns the objects, the script and where the big objects begin."""
         if shutil.which("gplink") is None:
             raise BuildError("gplink of board 'pic18' is not installed (Debian package: gputils)")
         hardware = self._hardware()
-        lowered, big_start = build.portable(portable, sdcc.hardware_roots(build, hardware), self.part.ram_last)
-        [lkr] = write_files(out_dir, {f"{self.part.name}.lkr": devices.linker_script(self.part,
-                                                                                     big_start=big_start)})
-        return build.compile(lowered + hardware), lkr
+        lowered, big_start = build.portable(portable, sdcc.hardware_roots(build, hardware),
+                                            self.part.stack_bottom - 1)
+        lkr, stack = write_files(out_dir, {
+            f"{self.part.name}.lkr": devices.linker_script(self.part, big_start=big_start),
+            "el_pic18_stack.c": devices.stack_source(self.part)})
+        return build.compile(lowered + hardware + [stack]), lkr, big_start
 
     def compile(self, program: Program, checked: object, out_dir: Path, generated: list[Path],
                 options: CompileOptions) -> Compiled:
@@ -108,30 +111,32 @@ class Pic18Board(BoardBase):
             + self.description.source_paths
         hexfile = out_dir / f"{program.name}.hex"
         try:
-            objects, lkr = self._objects(build, portable, out_dir)
+            objects, lkr, big_start = self._objects(build, portable, out_dir)
         except sdcc_quirks.BigObjectsDoNotFit as err:
             self._remove(hexfile)
+            bigger = [m.name for m in self.all_mcus.values() if m.ram > mcu.ram]
             raise BuildError(f"the program does not fit the {mcu.name}'s {mcu.ram} bytes of RAM: {err}"
                              + ("; dataflow buffers shrink with --schedule min-buffer"
                                 if options.schedule != "min-buffer" and any(df.buffers for df in program.dataflows)
-                                else "")) from None
+                                else "") + (f"; or build for --mcu {bigger[0]}" if bigger else "")) from None
         try:
             lmap = linkmap.read_map(build.link(objects, hexfile, lkr))
         except BuildError as err:
             if "No target memory available" not in str(err):
                 raise
             self._remove(hexfile)
-            raise BuildError(self._not_fit(program, self._measure(build, objects, out_dir), options)) from None
+            raise BuildError(self._not_fit(program, self._measure(build, objects, big_start, out_dir), options)) \
+                from None
         report = self.size_report(lmap)
         return Compiled(hexfile, portable + self._hardware(), report, image=hexfile)
 
-    def _measure(self, build: sdcc.Build, objects: list[Path], out_dir: Path) -> linkmap.LinkMap:
-        """A program too big for its part linked into the largest part's RAM
-        and the PIC18's whole 2 MB program address space, only to measure by
-        how much (empty when that fails too)."""
-        big = max(self.all_mcus.values(), key=lambda m: (m.ram, m.flash))
+    def _measure(self, build: sdcc.Build, objects: list[Path], big_start: int, out_dir: Path) -> linkmap.LinkMap:
+        """A program too big for its part linked into the part's memory map
+        grown to the PIC18's whole 2 MB of program memory and all the RAM
+        below the registers, only to measure by how much (empty when that
+        fails too)."""
         lkr = out_dir / "measure.lkr"
-        write_files(out_dir, {lkr.name: devices.linker_script(big, flash=0x200000)})
+        write_files(out_dir, {lkr.name: devices.linker_script(self.part, big_start, measure=True)})
         try:
             return linkmap.read_map(build.link(objects, out_dir / "measure.hex", lkr))
         except BuildError:
@@ -157,27 +162,31 @@ class Pic18Board(BoardBase):
         return SizeReport(lmap.flash, lmap.ram, mcu.flash, mcu.ram, [line])
 
     def _not_fit(self, program: Program, measured: linkmap.LinkMap, options: CompileOptions) -> str:
+        """The error of a program gplink could not place: its measured size
+        and by how much each memory overflows, with what would help."""
         mcu = self.part
         lines = []
-        if measured.sections:
-            lines.append(f"{mcu.name}: program memory {measured.flash} of {mcu.flash} bytes, RAM {measured.ram} "
-                         f"of {mcu.ram} bytes (static data and the {STACK_BYTES}-byte stack)")
-        if not measured.sections or measured.flash > mcu.flash:
-            over = f": {measured.flash - mcu.flash} bytes too many" if measured.sections else ""
-            msg = f"error: the program does not fit the {mcu.name}'s {mcu.flash} bytes of program memory{over}"
-            if not options.release and any(i.kind == "debug" for i in program.interfaces):
-                msg += "; the debug server takes about 20 KB of it: a --release build has none"
+        if not measured.sections:
+            msg = f"the program does not fit the {mcu.name}'s {mcu.flash} bytes of program memory or {mcu.ram} of RAM"
         else:
-            msg = (f"error: the program does not fit the {mcu.name}'s {mcu.ram} bytes of RAM: "
-                   f"{measured.ram - mcu.ram} bytes too many (static data plus the {STACK_BYTES}-byte stack)")
-            buffered = [df for df in program.dataflows if df.buffers]
-            if buffered and options.schedule != "min-buffer":
-                msg += "; dataflow buffers shrink with --schedule min-buffer"
+            lines.append(f"{mcu.name}: program memory {measured.flash} of {mcu.flash} bytes, RAM {measured.ram} "
+                         f"of {mcu.ram} bytes (static data and the {mcu.stack}-byte stack)")
+            over = []
+            if measured.flash > mcu.flash:
+                over.append(f"{mcu.flash} bytes of program memory ({measured.flash - mcu.flash} bytes too many)")
+            if measured.ram > mcu.ram:
+                over.append(f"{mcu.ram} bytes of RAM ({measured.ram - mcu.ram} bytes too many: static data plus "
+                            f"the {mcu.stack}-byte stack)")
+            msg = f"error: the program does not fit the {mcu.name}'s " + ", nor its ".join(over)
+        if not options.release and any(i.kind == "debug" for i in program.interfaces):
+            msg += "; the debug server takes about 20 KB of program memory: a --release build has none"
+        if measured.ram > mcu.ram and options.schedule != "min-buffer" and any(df.buffers for df in program.dataflows):
+            msg += "; dataflow buffers shrink with --schedule min-buffer"
         bigger = [m for m in self.all_mcus.values() if m.flash > mcu.flash]
         if bigger:
             msg += f"; or build for --mcu {bigger[0].name}"
         lines.append(msg)
-        if measured.sections and measured.ram > mcu.ram:
+        if measured.ram > mcu.ram:
             lines.append("largest in RAM: " + ", ".join(f"{name} {size} B ({src}.c)"
                                                         for size, name, src in measured.largest_ram()))
         return "\n".join(lines)

@@ -13,6 +13,7 @@ from easylab.board.simtables import item_symbol
 from easylab.core.errors import BuildError
 from easylab.ir.program import Program
 
+from .linkmap import SFR_START
 from .parts import Mcu, pin_code
 
 CONFIG_VERSION = 1
@@ -229,32 +230,50 @@ def devices_header(program: Program, views: list[DeviceView]) -> str:
     return "\n".join(lines)
 
 
-def linker_script(mcu: Mcu, flash: int | None = None, big_start: int | None = None) -> str:
+def linker_script(mcu: Mcu, big_start: int | None = None, measure: bool = False) -> str:
     """gplink's memory map: program memory, the configuration words, the
-    RAM banks (el_pic18_kept alone at the last byte; sdcc's libsdcc brings
-    the 256-byte software stack as a section of its own), the special
-    function registers. ``flash``: another program memory size (to measure
-    a program too big for the part); ``big_start``: where the objects larger
-    than a bank begin (sdcc.place_big_objects: a region of their own)."""
-    last = mcu.ram_last if big_start is None or big_start > mcu.ram_last else big_start - 1
-    big = [] if big_start is None or big_start > mcu.ram_last else [
-        f"DATABANK   NAME=big     START=0x{big_start:03X}  END=0x{mcu.ram_last:03X}  PROTECTED"]
+    RAM banks, then at the top of RAM the objects larger than a bank (from
+    ``big_start``: sdcc_quirks.place_big_objects), sdcc's software stack
+    (el_pic18_stack.c puts it there) and el_pic18_kept alone at the last
+    byte; the special function registers. ``measure``: the same map with the
+    PIC18's whole 2 MB of program memory and RAM up to the registers, to
+    measure a program too big for the part."""
+    below_stack = mcu.stack_bottom - 1
+    last = below_stack if big_start is None or big_start > below_stack else big_start - 1
+    big = [] if last == below_stack else [
+        f"DATABANK   NAME=big     START=0x{big_start:03X}  END=0x{below_stack:03X}  PROTECTED"]
     starts = [0x80] + list(range(0x100, last + 1, 0x100))
     banks = [f"DATABANK   NAME=gpr{start >> 8}  START=0x{start:03X}  END=0x{min((start | 0xFF), last):03X}"
              for start in starts]
+    beyond = mcu.ram_last + 2  # past the kept byte
+    extra = [] if not measure else [
+        f"DATABANK   NAME=more{start >> 8}  START=0x{start:03X}  END=0x{min(start | 0xFF, SFR_START - 1):03X}"
+        for start in [beyond] + list(range((beyond | 0xFF) + 1, SFR_START, 0x100)) if start < SFR_START]
     return "\n".join([
         f"// gplink's memory map of the {mcu.name} for EasyLab's pic18 board (devices.py). Do not edit.",
         "LIBPATH .",
-        f"CODEPAGE   NAME=page    START=0x0        END=0x{(flash or mcu.flash) - 1:X}",
+        f"CODEPAGE   NAME=page    START=0x0        END=0x{(0x200000 if measure else mcu.flash) - 1:X}",
         "CODEPAGE   NAME=idlocs  START=0x200000   END=0x200007   PROTECTED",
         "CODEPAGE   NAME=config  START=0x300000   END=0x30000D   PROTECTED",
         "CODEPAGE   NAME=devid   START=0x3FFFFE   END=0x3FFFFF   PROTECTED",
         f"CODEPAGE   NAME=eedata  START=0xF00000   END=0x{0xF00000 + mcu.eeprom - 1:X}   PROTECTED",
         "ACCESSBANK NAME=accessram START=0x0      END=0x7F",
         *banks, *big,
+        f"DATABANK   NAME=stack   START=0x{mcu.stack_bottom:03X}  END=0x{mcu.ram_last:03X}  PROTECTED",
         f"DATABANK   NAME=kept    START=0x{mcu.ram_last + 1:03X}  END=0x{mcu.ram_last + 1:03X}  PROTECTED",
-        "ACCESSBANK NAME=accesssfr START=0xF80    END=0xFFF      PROTECTED",
+        *extra,
+        f"ACCESSBANK NAME=accesssfr START=0x{SFR_START:03X}    END=0xFFF      PROTECTED",
         "SECTION    NAME=CONFIG  ROM=config", ""])
+
+
+def stack_source(mcu: Mcu) -> str:
+    """el_pic18_stack.c: sdcc's software stack at the top of RAM (below
+    el_pic18_kept), larger than a bank: the large stack model carries
+    the stack pointer's high byte (sdcc's --pstack-model=large)."""
+    return "\n".join([
+        f"/* The software stack of the {mcu.name} (boards/pic18/devices.py). Do not edit. */",
+        f"#pragma stack 0x{mcu.stack_bottom:03X} {mcu.stack}",
+        "typedef int el_pic18_stack_unit_t; /* a translation unit declares something */", ""])
 
 
 def hw_map(program: Program, board, res: Resolved, views: list[DeviceView]) -> dict:

@@ -40,7 +40,12 @@ class LinkMap:
 
     @property
     def stack(self) -> int:
-        return sum(s.size for s in self.sections if s.name == "stack_section")
+        """Bytes of the software stack (the section holding `_stack`)."""
+        return sum(s.size for s in self.sections if self._is_stack(s))
+
+    def _is_stack(self, section: Section) -> bool:
+        bottom = self.symbols.get("_stack")
+        return section.location == "data" and bottom is not None and section.address == bottom[0]
 
     def ram_symbols(self) -> dict[str, int]:
         """C name -> RAM address of every external and static object."""
@@ -48,14 +53,19 @@ class LinkMap:
                 if loc == "data" and name.startswith("_") and addr < SFR_START}
 
     def largest_ram(self, top: int = 6) -> list[tuple[int, str, str]]:
-        """(bytes, C name, file) of the biggest objects in RAM."""
-        at = {addr: (name[1:], Path(f).stem) for name, (addr, loc, f) in self.symbols.items()
-              if loc == "data" and name.startswith("_")}
+        """(bytes, C name, file) of the biggest objects in RAM: an object
+        ends where the next symbol of its section begins. A static object
+        renamed for sdcc (sdcc_quirks: NAME__UNIT) shows its own name."""
+        symbols = sorted((addr, name[1:], Path(f).stem.removesuffix(".sdcc"))
+                         for name, (addr, loc, f) in self.symbols.items()
+                         if loc == "data" and name.startswith("_") and addr < SFR_START)
         found = []
         for s in self.sections:
-            if s.location == "data" and s.address < SFR_START and s.address in at and s.name != "stack_section":
-                name, src = at[s.address]
-                found.append((s.size, name, src.removesuffix(".sdcc")))
+            if s.location != "data" or s.address >= SFR_START or self._is_stack(s):
+                continue
+            inside = [sym for sym in symbols if s.address <= sym[0] < s.address + s.size]
+            for (addr, name, src), nxt in zip(inside, inside[1:] + [(s.address + s.size, "", "")]):
+                found.append((nxt[0] - addr, name.removesuffix(f"__{src}"), src))
         return sorted(found, reverse=True)[:top]
 
 

@@ -7,9 +7,6 @@ from dataclasses import dataclass, field
 from easylab.board.resources import Part
 
 PORTS = "ABCDE"
-# RAM the linker keeps for sdcc's software stack (parameters, locals,
-# saved registers, the interrupt handler's context).
-STACK_BYTES = 256
 
 
 @dataclass
@@ -30,6 +27,9 @@ class Mcu:
     ext_int: dict[str, int]  # pin -> INTn
     change: list[str]  # PORTB's interrupt on change
     unavailable: dict[str, str] = field(default_factory=dict)
+    # sdcc's software stack (arguments, saved registers, the interrupt
+    # handler's context), at the top of RAM below el_pic18_kept.
+    stack: int = 512
 
     @property
     def device(self) -> str:
@@ -40,6 +40,11 @@ class Mcu:
     def ram_last(self) -> int:
         """The last byte of RAM that start-up clears (el_pic18_kept is the next)."""
         return self.ram - 2
+
+    @property
+    def stack_bottom(self) -> int:
+        """The software stack's lowest byte (it ends at ram_last)."""
+        return self.ram_last + 1 - self.stack
 
     def aliases(self) -> dict[str, str]:
         """PB5 for RB5: the port-and-bit names other boards use."""
@@ -68,5 +73,5 @@ def read_mcus(table: dict) -> dict[str, Mcu]:
                         {int(k): str(v) for k, v in m.get("adc", {}).items()},
                         {str(k): int(v) for k, v in m.get("pwm", {}).items()},
                         {str(k): int(v) for k, v in m.get("int", {}).items()}, list(m.get("change", [])),
-                        dict(m.get("unavailable", {})))
+                        dict(m.get("unavailable", {})), int(m.get("stack", 512)))
     return out

@@ -301,9 +301,12 @@ void el_pic18_pwm_set(uint8_t ccp, uint8_t duty)
 /* ---- encoders: 4x quadrature counting in the pins' interrupts ---- */
 
 #if EL_PIC18_ENCODERS > 0
+/* Every interrupt pin is on PORTB: the interrupt reads PORTB once and
+ * takes each encoder's bits by mask (no calls: a call in the interrupt
+ * makes sdcc save its whole call context). */
 typedef struct {
-    el_pic18_pin_t a, b;
-    uint8_t last; /* A << 1 | B */
+    uint8_t a_mask, b_mask; /* the pins' bits in PORTB */
+    uint8_t last;           /* A << 1 | B */
     volatile int32_t count;
 } encoder_t;
 
@@ -313,30 +316,36 @@ static uint8_t encoder_slots; /* slots opened */
 /* Index: previous A B << 2 | new A B. */
 static const int8_t encoder_steps[16] = {0, -1, 1, 0, 1, 0, 0, -1, -1, 0, 0, 1, 0, 1, -1, 0};
 
-static uint8_t encoder_ab(const encoder_t *e)
+static uint8_t encoder_ab(const encoder_t *e, uint8_t portb)
 {
-    return (uint8_t)((el_pic18_pin_read(e->a) ? 2u : 0u) | (el_pic18_pin_read(e->b) ? 1u : 0u));
+    return (uint8_t)(((portb & e->a_mask) != 0u ? 2u : 0u) | ((portb & e->b_mask) != 0u ? 1u : 0u));
 }
 
 /* The external interrupts sense one edge: the other one next. */
-static void int_edges(void)
+static void int_edges(uint8_t portb)
 {
-    INTCON2bits.INTEDG0 = PORTBbits.RB0 ? 0 : 1;
-    INTCON2bits.INTEDG1 = PORTBbits.RB1 ? 0 : 1;
-    INTCON2bits.INTEDG2 = PORTBbits.RB2 ? 0 : 1;
+    INTCON2bits.INTEDG0 = (portb & 0x01u) != 0u ? 0 : 1;
+    INTCON2bits.INTEDG1 = (portb & 0x02u) != 0u ? 0 : 1;
+    INTCON2bits.INTEDG2 = (portb & 0x04u) != 0u ? 0 : 1;
 }
 
-static void encoders_update(void)
+static void encoders_update(uint8_t portb)
 {
     uint8_t i;
     for (i = 0u; i < encoder_slots; i++) {
-        encoder_t *e = &encoders[i];
-        uint8_t ab = encoder_ab(e);
-        if (ab != e->last) {
-            e->count += encoder_steps[(uint8_t)(e->last << 2) | ab];
-            e->last = ab;
+        uint8_t ab = encoder_ab(&encoders[i], portb);
+        if (ab != encoders[i].last) {
+            encoders[i].count += encoder_steps[(uint8_t)(encoders[i].last << 2) | ab];
+            encoders[i].last = ab;
         }
     }
+}
+
+/* An edge flagged and enabled (INT0..INT2, PORTB's change). */
+static bool encoder_edge(void)
+{
+    return (INTCONbits.INT0IE && INTCONbits.INT0IF) || (INTCON3bits.INT1IE && INTCON3bits.INT1IF) ||
+           (INTCON3bits.INT2IE && INTCON3bits.INT2IF) || (INTCONbits.RBIE && INTCONbits.RBIF);
 }
 
 static void pin_interrupt_on(el_pic18_pin_t pin)
@@ -359,14 +368,14 @@ void el_pic18_encoder_open(uint8_t slot, el_pic18_pin_t a, el_pic18_pin_t b)
     encoder_t *e = &encoders[slot];
     el_pic18_pin_input(a);
     el_pic18_pin_input(b);
-    e->a = a;
-    e->b = b;
+    e->a_mask = PIN_MASK(a);
+    e->b_mask = PIN_MASK(b);
     e->count = 0;
-    e->last = encoder_ab(e);
+    e->last = encoder_ab(e, PORTB);
     if (encoder_slots <= slot) {
         encoder_slots = (uint8_t)(slot + 1u);
     }
-    int_edges();
+    int_edges(PORTB);
     pin_interrupt_on(a);
     pin_interrupt_on(b);
     el_pic18_irq_restore(state);
@@ -405,15 +414,22 @@ EL_PIC18_ISR(el_pic18_isr)
     }
 #endif
 #if EL_PIC18_ENCODERS > 0
-    if ((INTCONbits.INT0IE && INTCONbits.INT0IF) || (INTCON3bits.INT1IE && INTCON3bits.INT1IF) ||
-        (INTCON3bits.INT2IE && INTCON3bits.INT2IF) || (INTCONbits.RBIE && INTCONbits.RBIF)) {
-        (void)PORTB; /* ends the change condition of RB4..RB7 */
-        INTCONbits.INT0IF = 0;
-        INTCON3bits.INT1IF = 0;
-        INTCON3bits.INT2IF = 0;
-        INTCONbits.RBIF = 0;
-        int_edges();
-        encoders_update();
+    /* Until no edge is flagged and PORTB holds still: an edge during this
+     * loop is counted in it (a flag raised inside the handler would wait
+     * for the next interrupt, and the pin's next edge could come first).
+     * The INTx flags are cleared before PORTB is read, RBIF after (the read
+     * ends the change condition of RB4..RB7). */
+    if (encoder_edge()) {
+        uint8_t portb;
+        do {
+            INTCONbits.INT0IF = 0;
+            INTCON3bits.INT1IF = 0;
+            INTCON3bits.INT2IF = 0;
+            portb = PORTB;
+            INTCONbits.RBIF = 0;
+            int_edges(portb);
+            encoders_update(portb);
+        } while (encoder_edge() || PORTB != portb);
     }
 #endif
 }

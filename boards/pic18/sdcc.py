@@ -30,13 +30,15 @@ from . import buildcache, ctypes64, datapointers, inline, lower64, lower64_stmt,
 from .ctypes64 import LowerError, Target
 from .lower64_stmt import lower_unit
 
-VERSION_FOLDER = "sdcc-pic16-4.2.0-1"  # boards/pic18/toolchain/build.sh's folder in the cache
+VERSION_FOLDER = "sdcc-pic16-4.2.0-2"  # boards/pic18/toolchain/build.sh's folder in the cache
 OVERRIDE = "EASYLAB_PIC18_SDCC"  # another folder holding such a build
 STAMP = ".easylab-complete"
 SDCC_TIMEOUT = 300  # seconds: sdcc can hang on huge arrays
 TARGET = Target(int_bits=16, long_bits=32, char_signed=False)
 # sdcc's own library build uses these; about 8 % smaller code.
-OPT_FLAGS = ["--fomit-frame-pointer", "--obanksel=9", "--denable-peeps", "--optimize-cmp", "--optimize-df"]
+# The large stack model: the software stack is larger than a bank
+# (el_pic18_stack.c).
+OPT_FLAGS = ["--pstack-model=large", "--fomit-frame-pointer", "--obanksel=9", "--denable-peeps", "--optimize-cmp", "--optimize-df"]
 # Warnings are errors, but two that say nothing about the C: sdcc 4.2's
 # pic16 port warns "Initializer different levels of indirections" (18) for
 # every address of a RAM object in a static initializer of a generic
@@ -173,7 +175,7 @@ class Build:
                  cwd=self.obj_dir)
             asm.write_text(sdcc_quirks.ram_pointer_tags(asm.read_text(encoding="latin-1"), self.in_ram),
                            encoding="latin-1")
-            _run(["gpasm", "-D__STACK_MODEL_SMALL", "-o", obj, "-c", asm], f"assembling {asm.name}", cwd=self.obj_dir)
+            _run(["gpasm", "-D__STACK_MODEL_LARGE", "-o", obj, "-c", asm], f"assembling {asm.name}", cwd=self.obj_dir)
             buildcache.store_file("sdcc", digest, obj)
             return obj
         self.obj_dir.mkdir(parents=True, exist_ok=True)

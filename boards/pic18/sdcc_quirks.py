@@ -8,7 +8,9 @@ runtime and the generated tables, and each is checked by the board's tests
   256-byte bank, so they could not be placed. They get fixed addresses at
   the top of RAM (`__at`), each on a 4-byte boundary so that no element of
   1, 2 or 4 bytes straddles two banks (sdcc selects a bank per access to a
-  constant element).
+  constant element). sdcc reserves a `static` object with `__at` twice
+  (its own section and the fixed one: gpasm refuses the duplicate label),
+  so such an object loses `static` and takes a name unique to its unit.
 - A generic pointer initialised with the address of a struct member in RAM
   (`(void *)&s.count` in the debugger's tables) gets the tag of program
   memory (sdcc: "initialized generic pointer with unknown storage class
@@ -59,7 +61,7 @@ def place_big_objects(units: dict[str, c_ast.FileAST], target: Target, ram_end: 
     than the RAM above the access bank."""
     top = ram_end + 1
     placed: list[tuple[str, int]] = []
-    for ast in units.values():
+    for unit, ast in units.items():
         big: dict[str, int] = {}
         for decl, t, env in _objects(ast, target):
             size = env.size(t)
@@ -70,10 +72,34 @@ def place_big_objects(units: dict[str, c_ast.FileAST], target: Target, ram_end: 
                 placed.append((decl.name, size))
         for ext in ast.ext:
             if isinstance(ext, c_ast.Decl) and ext.name in big and not isinstance(ext.type, c_ast.FuncDecl):
-                ext.storage = [f"__at(0x{big[ext.name]:03X})", *(ext.storage or [])]
+                address = big[ext.name]
+                if "static" in (ext.storage or []):
+                    _rename(ast, ext.name, f"{ext.name}__{re.sub(r'[^A-Za-z0-9_]', '_', unit)}")
+                    ext.storage = [s for s in ext.storage if s != "static"]
+                ext.storage = [f"__at(0x{address:03X})", *(ext.storage or [])]
     if top < FIRST_BANK:
         raise BigObjectsDoNotFit(ram_end + 1 - FIRST_BANK, sorted(placed, key=lambda p: -p[1]))
     return top
+
+
+def _rename(ast: c_ast.FileAST, old: str, new: str) -> None:
+    """A file-scope object's new name, in its declarations and uses (the
+    runtime's units declare no local of the same name)."""
+    class Renamer(c_ast.NodeVisitor):
+        def visit_ID(self, node):
+            if node.name == old:
+                node.name = new
+
+        def visit_Decl(self, node):
+            if node.name == old:
+                node.name = new
+                t = node.type
+                while not isinstance(t, c_ast.TypeDecl):
+                    t = t.type
+                t.declname = new
+            self.generic_visit(node)
+
+    Renamer().visit(ast)
 
 
 class BigObjectsDoNotFit(Exception):
@@ -83,7 +109,7 @@ class BigObjectsDoNotFit(Exception):
         self.room, self.objects = room, objects
         total = sum(size for _, size in objects)
         super().__init__(f"the RAM objects larger than a bank take {total} bytes, more than the {room} bytes of "
-                         f"RAM above the access bank: " + ", ".join(f"{n} {s} B" for n, s in objects[:6]))
+                         f"RAM between the access bank and the stack: " + ", ".join(f"{n} {s} B" for n, s in objects[:6]))
 
 
 class _ArrayMembers(c_ast.NodeVisitor):

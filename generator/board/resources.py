@@ -91,14 +91,26 @@ def interface_location(program: Program, kind: str) -> str:
 
 
 def pin_ranges(pins: list[str]) -> str:
-    """PB0..PB5, PC0..PC5, ...: pins grouped by their name before the number."""
+    """PB0..PB5, PC0..PC2, PC4, PC5: pins grouped by their name before the
+    number, each run of three or more consecutive numbers as one range."""
     groups: dict[str, list[int]] = {}
     for p in pins:
         m = _PIN_NAME.match(p)
         if m:
             groups.setdefault(m.group(1), []).append(int(m.group(2)))
-    return ", ".join(f"{port}{min(bits)}..{port}{max(bits)}" if len(bits) > 1 else f"{port}{bits[0]}"
-                     for port, bits in groups.items())
+    runs: list[str] = []
+    for port, bits in groups.items():
+        bits = sorted(set(bits))
+        start = prev = bits[0]
+        for bit in bits[1:] + [None]:
+            if bit is not None and bit == prev + 1:
+                prev = bit
+                continue
+            runs.append(f"{port}{start}..{port}{prev}" if prev > start + 1 else
+                        ", ".join(f"{port}{b}" for b in range(start, prev + 1)))
+            if bit is not None:
+                start = prev = bit
+    return ", ".join(runs)
 
 
 def _physical_pins(board: str, part: Part, claim: Claim, problems: list[str]) -> list[str] | None:

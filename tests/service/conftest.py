@@ -18,7 +18,7 @@ from pathlib import Path
 
 import pytest
 
-from svc_testlib import AVR_NO_TCP, DATA, EXAMPLES, ROOT, AvrFirmware, Firmware, InterpFirmware
+from svc_testlib import DATA, EXAMPLES, MCU_NO_TCP, ROOT, SIM_MCUS, Firmware, InterpFirmware, McuFirmware
 SANITIZE = "-g -fsanitize=address,undefined -fno-sanitize-recover=all -fno-omit-frame-pointer"
 
 # ---------------------------------------------------------------- packaging shim
@@ -90,27 +90,32 @@ def build_model(model: Path, out: Path, cflags: str = "", release: bool = False)
     return _BUILDS[key]
 
 
-def build_avr(model: Path, out: Path, env: dict) -> Built:
-    """An ATmega2560 simulation build (``easylab build MODEL --board avr
-    --mcu atmega2560 --sim``, once per session); `exe` is its simavr harness.
-    A model's `modbus tcp` line is left out: the board has no network (the
-    tests of TCP are host-only)."""
+def build_sim(board: str, model: Path, out: Path, env: dict) -> Built:
+    """A simulation build for an MCU board (``easylab build MODEL --board
+    BOARD --mcu MCU --sim``: the ATmega2560, the PIC18F4620; once per
+    session); `exe` is its simulator harness. A model's `modbus tcp` line is
+    left out: the MCU boards have no network (the tests of TCP are
+    host-only); on the PIC18 (one EUSART) the Modbus RTU interface moves to
+    uart0 (firmware_builds.board_model)."""
     import subprocess
 
-    key = ("avr", str(model))
+    from firmware_builds import board_model
+
+    key = (board, str(model))
     if key not in _BUILDS:
+        model = board_model(board, model, "modbus-rtu", out / "model")
         text = model.read_text()
         if any(line.lstrip().startswith("modbus tcp") for line in text.splitlines()):
             out.mkdir(parents=True, exist_ok=True)
             model = out / model.name
             model.write_text("".join(line for line in text.splitlines(keepends=True)
                                      if not line.lstrip().startswith("modbus tcp")))
-        proc = subprocess.run([sys.executable, "-m", "easylab", "build", str(model), "--board", "avr", "--mcu",
-                               "atmega2560", "--sim", "-o", str(out / "avr")], capture_output=True, text=True,
-                              env=env, timeout=300, stdin=subprocess.DEVNULL)
-        assert proc.returncode == 0, f"avr build of {model} failed:\n{proc.stdout}{proc.stderr}"
+        proc = subprocess.run([sys.executable, "-m", "easylab", "build", str(model), "--board", board, "--mcu",
+                               SIM_MCUS[board], "--sim", "-o", str(out / board)], capture_output=True, text=True,
+                              env=env, timeout=600, stdin=subprocess.DEVNULL)
+        assert proc.returncode == 0, f"{board} build of {model} failed:\n{proc.stdout}{proc.stderr}"
         sim = next(Path(line.split(": ", 1)[1]) for line in proc.stdout.splitlines() if line.startswith("simulator: "))
-        _BUILDS[key] = Built(out / "avr", sim)
+        _BUILDS[key] = Built(out / board, sim)
     return _BUILDS[key]
 
 
@@ -136,9 +141,10 @@ def build_interp(model: Path, out: Path) -> Built:
 
 
 # The boards the Modbus RTU conformance tests run on: the host board's
-# process (RTU on a pty), and the AVR firmware (ATmega2560) in simavr with
-# the model's Modbus UART on a pty. A test runs on both with @on_boards
-# (svc_testlib), on the host only with @host_only(reason).
+# process (RTU on a pty), the AVR firmware (ATmega2560) in simavr and the
+# PIC18 firmware (PIC18F4620) in gpsim with the model's Modbus UART on a
+# pty, local execution. A test runs on all with @on_boards (svc_testlib),
+# on the host only with @host_only(reason).
 @pytest.fixture(scope="session")
 def board(request) -> str:
     """The board of builds, svc_all and firmware (host unless parametrised)."""
@@ -149,8 +155,8 @@ def pytest_collection_modifyitems(items):
     """Modbus TCP (a `tcp` parameter of a client or link fixture) is host-only."""
     for item in items:
         cs = getattr(item, "callspec", None)
-        if cs is not None and cs.params.get("board") == "avr" and "tcp" in cs.params.values():
-            item.add_marker(pytest.mark.skip(reason=AVR_NO_TCP))
+        if cs is not None and cs.params.get("board") in SIM_MCUS and "tcp" in cs.params.values():
+            item.add_marker(pytest.mark.skip(reason=MCU_NO_TCP))
 
 
 @pytest.fixture(scope="session")
@@ -159,8 +165,8 @@ def builds(shim, tool_env, board, tmp_path_factory):
 
     def get(name: str, cflags: str = "", release: bool = False) -> Built:
         model = DATA / f"{name}.elab" if (DATA / f"{name}.elab").exists() else EXAMPLES / f"{name}.elab"
-        if board == "avr":  # sanitizers are the host's; a debug build (release: no debug server, same Modbus)
-            return build_avr(model, d / name, tool_env)
+        if board in SIM_MCUS:  # sanitizers are the host's; a debug build (release: no debug server, same Modbus)
+            return build_sim(board, model, d / name, tool_env)
         if board == "interp":
             return build_interp(model, d / f"{name}_interp")
         tag = name + ("_asan" if cflags else "") + ("_rel" if release else "")
@@ -171,7 +177,7 @@ def builds(shim, tool_env, board, tmp_path_factory):
 @pytest.fixture(scope="session")
 def svc_all(builds) -> Built:
     """tests/service/data/service_all.elab with ASan and UBSan (host), or its
-    AVR simulation build without Modbus TCP."""
+    MCU simulation build without Modbus TCP."""
     return builds("service_all", SANITIZE)
 
 
@@ -179,12 +185,13 @@ def svc_all(builds) -> Built:
 
 @pytest.fixture
 def firmware(tmp_path, board):
-    """Start firmwares (host processes, or AVR harnesses); every one is
+    """Start firmwares (host processes, or MCU harnesses); every one is
     stopped (and checked) at the end."""
     started: list[Firmware] = []
 
     def start(exe, **kw) -> Firmware:
-        fw = {"avr": AvrFirmware, "interp": InterpFirmware}.get(board, Firmware)(exe, tmp_path, **kw).start()
+        kind = McuFirmware if board in SIM_MCUS else (InterpFirmware if board == "interp" else Firmware)
+        fw = kind(exe, tmp_path, **kw).start()
         started.append(fw)
         return fw
     yield start

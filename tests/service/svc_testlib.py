@@ -103,20 +103,23 @@ class Firmware:
         self.stop()
 
 
-AVR_NO_TCP = ("host-only: Modbus TCP needs a network; the AVR board has none (it refuses `modbus tcp` at "
-              "build time)")
+# The MCU boards the suite runs on, with the MCU of their simulation builds.
+SIM_MCUS = {"avr": "atmega2560", "pic18": "pic18f4620"}
+
+MCU_NO_TCP = ("host-only: Modbus TCP needs a network; the MCU boards (avr, pic18) have none (they refuse "
+              "`modbus tcp` at build time)")
 
 
-class AvrFirmware(Firmware):
-    """The AVR firmware (ATmega2560) in its simavr harness (NAME-sim, real
-    time) serving Modbus RTU on the model's Modbus UART on a pty: the same
-    `rtu` link and the same life cycle as Firmware. No Modbus TCP (`port`
-    stays None), no HMI."""
+class McuFirmware(Firmware):
+    """An MCU's firmware in its board's simulator harness (NAME-sim, real
+    time: the ATmega2560 in simavr, the PIC18F4620 in gpsim) serving Modbus
+    RTU on the model's Modbus UART on a pty: the same `rtu` link and the
+    same life cycle as Firmware. No Modbus TCP (`port` stays None), no HMI."""
 
     def __init__(self, exe: Path, workdir: Path, tcp: bool = True, rtu: bool = True, hmi: bool = False,
                  nvram: Path | None = None, extra: list[str] | None = None):
-        assert not hmi, "the AVR board has no HMI"
-        assert rtu, AVR_NO_TCP
+        assert not hmi, "the MCU boards have no HMI"
+        assert rtu, MCU_NO_TCP
         self.exe = exe
         self.port = None
         self.rtu = workdir / f"rtu{id(self)}"
@@ -251,20 +254,21 @@ def read_regs_pdu(fc: int, address: int, count: int) -> bytes:
     return struct.pack(">BHH", fc, address, count)
 
 
-def _boards_mark(avr_reason: str | None):
+def _boards_mark(mcu_reason: str | None):
     import pytest
-    avr = "avr" if avr_reason is None else pytest.param("avr", marks=pytest.mark.skip(reason=f"host-only: {avr_reason}"))
-    return pytest.mark.parametrize("board", ["host", avr, "interp"], indirect=True)
+    mcus = [b if mcu_reason is None else pytest.param(b, marks=pytest.mark.skip(reason=f"host-only: {mcu_reason}"))
+            for b in SIM_MCUS]
+    return pytest.mark.parametrize("board", ["host", *mcus, "interp"], indirect=True)
 
 
 def host_only(reason: str):
-    """Parametrise a test by board, the AVR board skipped for `reason`
+    """Parametrise a test by board, the MCU boards skipped for `reason`
     (local execution runs it: it is the host's)."""
     return _boards_mark(reason)
 
 
 # Run a test on every board (the fixtures board, builds, svc_all, firmware):
-# the host board, the AVR in simavr, local execution.
+# the host board, the AVR in simavr, the PIC18 in gpsim, local execution.
 on_boards = _boards_mark(None)
 
 

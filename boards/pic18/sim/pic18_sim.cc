@@ -21,9 +21,14 @@
  *   while encoder edges are on their way el_pic18_sim_busy stays nonzero and
  *   the firmware waits. At the instant mark the items are read from RAM and
  *   traced with the host board's own trace code.
+ *   At each inputs mark the guard at the bottom of sdcc's software stack
+ *   is checked: a stack that ran out ends the run with an error.
  * - TXREG: each byte the EUSART is given goes to the link of uart0.
+ * - EECON1 (the PIC18F4620): gpsim's data EEPROM reads ignore EEADRH; the
+ *   harness completes them (map_eeadrh, eeprom_read_fix).
  * - LATA..LATE, TRISA..TRISE, CCPR1L, CCP1CON, CCPR2L, CCP2CON, PR2: the
- *   traced pins' levels and PWM duties (--pins), stamped with the cycle.
+ *   traced pins' levels and PWM duties (--pins), stamped with the cycle
+ *   (a duty PWM_SETTLE_CYCLES after a CCP write: it spans two registers).
  * Bytes from the link enter the EUSART's receive FIFO one frame time apart
  * (the baud rate the firmware set), when reception is on.
  *
@@ -73,10 +78,14 @@ const unsigned PORTA = 0xF80u, LATA = 0xF89u, TRISA = 0xF92u;
 const unsigned TXREG = 0xFADu, RCREG = 0xFAEu, RCSTA = 0xFABu, TXSTA = 0xFACu;
 const unsigned SPBRG = 0xFAFu, SPBRGH = 0xFB0u, BAUDCON = 0xFB8u;
 const unsigned CCPR1L = 0xFBEu, CCP1CON = 0xFBDu, CCPR2L = 0xFBBu, CCP2CON = 0xFBAu, PR2 = 0xFCBu;
+const unsigned EEADRH_ADDR = 0xFAAu, EECON1_ADDR = 0xFA6u;
+const unsigned EE_RD = 0x01u, EE_CFGS = 0x40u, EE_EEPGD = 0x80u; /* EECON1 bits */
 
 /* Quadrature edges of one encoder are this many cycles apart (125 us):
  * room for the interrupts of several encoders stepping at once. */
 const guint64 ENCODER_EDGE_CYCLES = 1250u;
+/* The cycles from a write of a CCP register until its duty is recorded. */
+const guint64 PWM_SETTLE_CYCLES = 8u;
 /* The harness serves the links and the wall clock every slice of cycles. */
 const guint64 SLICE_CYCLES = 1000u;
 
@@ -85,6 +94,7 @@ pic_processor *pic;
 unsigned busy_count;
 
 void on_write(unsigned address, unsigned value);
+void eeprom_read_fix(unsigned eecon1);
 
 void hook(unsigned address)
 {
@@ -161,6 +171,28 @@ void record_pins()
         sim_pin_record(k, p->kind == SIM_PIN_PWM ? pwm_duty(p->ccp) : pin_level(p->pin), now);
     }
 }
+
+/* A duty is written in two registers (CCPRxL, then CCPxCON's low bits),
+ * and the CCP module takes it at its next period: the pins are recorded a
+ * few cycles after a CCP write, once both are written, not in between. */
+class PwmSettle : public TriggerObject {
+public:
+    bool pending = false;
+    void callback() override
+    {
+        pending = false;
+        record_pins();
+    }
+    void after_write()
+    {
+        if (!pending) {
+            pending = true;
+            get_cycles().set_break(get_cycles().get() + PWM_SETTLE_CYCLES, this);
+        }
+    }
+};
+
+PwmSettle pwm_settle;
 
 /* ---- encoders: quadrature edges from the last count to the new one ---- */
 
@@ -254,10 +286,39 @@ uint64_t read_tick()
     return t;
 }
 
+/* ---- the software stack's guard ---- */
+
+/* The lowest bytes of sdcc's software stack hold a pattern from the first
+ * instant on (start-up clears RAM before): a stack grown into them has run
+ * out (the registers it saves then overwrite the RAM below). */
+const unsigned STACK_GUARD_BYTES = 4u, STACK_GUARD = 0xA5u;
+bool stack_guarded;
+
+bool stack_guard_intact()
+{
+    for (unsigned i = 0; i < STACK_GUARD_BYTES; i++) {
+        if (!stack_guarded) {
+            cpu->registers[sim_stack_addr + i]->put_value(STACK_GUARD);
+        } else if (reg(sim_stack_addr + i) != STACK_GUARD) {
+            el_host_error("the %s's software stack (%u bytes, board.toml's stack) ran out at cycle %llu",
+                          sim_mcu, (unsigned)sim_stack_size, (unsigned long long)get_cycles().get());
+            return false;
+        }
+    }
+    stack_guarded = true;
+    return true;
+}
+
 void on_write(unsigned address, unsigned value)
 {
     if (address == sim_mark_addr) {
         if (value == MARK_INPUTS) {
+            if (!stack_guard_intact()) {
+                sim_exit_status = SIM_EXIT_RUN;
+                sim_stop = true;
+                get_bp().halt();
+                return;
+            }
             sim_instant_inputs(read_tick());
             set_busy();
             if (sim_stop)
@@ -267,6 +328,10 @@ void on_write(unsigned address, unsigned value)
         }
     } else if (address == TXREG) {
         sim_link_output(&sim_links[0], (uint8_t)value);
+    } else if (address == EECON1_ADDR) {
+        eeprom_read_fix(value);
+    } else if (address == CCPR1L || address == CCP1CON || address == CCPR2L || address == CCP2CON) {
+        pwm_settle.after_write();
     } else {
         record_pins();
     }
@@ -292,17 +357,32 @@ uint8_t *eeprom_image()
 }
 
 /* gpsim 0.31 gives the PIC18F4620 its 1024 bytes of data EEPROM but no
- * EEADRH (the address's high byte): only the first 256 bytes could be
- * reached. The harness makes the EEPROM one with EEADRH (its initialize
- * does) and puts the register at its address. */
+ * EEADRH (the address's high byte), and its data EEPROM read ignores
+ * EEADRH even where it has one: only the first 256 bytes could be reached.
+ * The harness makes the EEPROM one with EEADRH (its initialize does), puts
+ * the register at its address and completes each read (eeprom_read_fix,
+ * called after gpsim's own read on a write of EECON1). */
+EEPROM_EXTND *long_eeprom; /* the EEPROM when it has more than 256 bytes */
+
 void map_eeadrh()
 {
-    const unsigned EEADRH = 0xFAAu;
     EEPROM_EXTND *ee = pic != nullptr ? dynamic_cast<EEPROM_EXTND *>(pic->eeprom) : nullptr;
-    if (ee == nullptr || ee->get_rom_size() <= 256u || ee->get_reg_eeadrh() != nullptr)
+    if (ee == nullptr || ee->get_rom_size() <= 256u)
+        return;
+    long_eeprom = ee;
+    if (ee->get_reg_eeadrh() != nullptr)
         return;
     ee->initialize(ee->get_rom_size(), 64, 64, 0x300000u, true);
-    pic->add_sfr_register(ee->get_reg_eeadrh(), EEADRH, RegisterValue(0, 0), "eeadrh");
+    pic->add_sfr_register(ee->get_reg_eeadrh(), EEADRH_ADDR, RegisterValue(0, 0), "eeadrh");
+}
+
+void eeprom_read_fix(unsigned eecon1)
+{
+    if (long_eeprom == nullptr || (eecon1 & (EE_RD | EE_CFGS | EE_EEPGD)) != EE_RD)
+        return;
+    unsigned a = long_eeprom->get_reg_eeadrh()->get_value() << 8 | long_eeprom->get_reg_eeadr()->get_value();
+    if (a < long_eeprom->get_rom_size())
+        long_eeprom->get_reg_eedata()->put_value(long_eeprom->get_rom()[a]->get_value());
 }
 
 void eeprom_store(const uint8_t *image)
@@ -412,6 +492,8 @@ int main(int argc, char **argv)
     if (sim_mark_addr != 0xFFFFu)
         hook(sim_mark_addr);
     hook(TXREG);
+    if (long_eeprom != nullptr)
+        hook(EECON1_ADDR);
     for (unsigned p = 0; p < 5u; p++) {
         hook(LATA + p);
         hook(TRISA + p);

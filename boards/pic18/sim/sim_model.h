@@ -32,5 +32,8 @@ extern const uint8_t sim_uart_parity; /* the EUSART's parity (a 9th bit): 0 none
 extern const uint16_t sim_mark_addr;
 extern const uint16_t sim_busy_addr;
 extern const uint16_t sim_kept_addr;
+/* sdcc's software stack: its lowest byte and its size (el_pic18_stack.c). */
+extern const uint16_t sim_stack_addr;
+extern const uint16_t sim_stack_size;
 
 #endif /* SIM_MODEL_H */

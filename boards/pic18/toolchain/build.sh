@@ -15,7 +15,10 @@
 #   2. `apt-get source sdcc`, configured with every port but pic16 off; the
 #      pic16 library build includes two non-free autoconf fragments that the
 #      Debian source lacks: empty ones are enough (old time stamps, so that
-#      make does not try to run autoconf);
+#      make does not try to run autoconf); the libraries are compiled for
+#      the large stack model, as the board's code is (its software stack is
+#      larger than a 256-byte bank, and a small-model library function
+#      would address its arguments in the wrong bank);
 #   3. make, make install into PREFIX (about 3 minutes on 2 cores);
 #   4. device headers and device libraries of the board's parts, generated
 #      from gputils' .inc files (device_headers.py), archived with gplib.
@@ -24,7 +27,7 @@
 set -eu
 
 SDCC_VERSION=4.2.0
-RECIPE=1  # bump when the recipe changes: a new cache folder is built
+RECIPE=2  # bump when the recipe changes: a new cache folder is built (and sdcc.py's VERSION_FOLDER)
 PARTS="18f4520 18f4620"
 HERE=$(cd "$(dirname "$0")" && pwd)
 PREFIX=${1:-${EASYLAB_PIC18_SDCC:-${XDG_CACHE_HOME:-$HOME/.cache}/easylab/sdcc-pic16-$SDCC_VERSION-$RECIPE}}
@@ -73,7 +76,10 @@ case $SOURCE_VERSION in
     *) echo "note: Debian's sdcc source is $SOURCE_VERSION, not $SDCC_VERSION; trying anyway" >> "$LOG" ;;
 esac
 
-# ---- 2. configure: the pic16 port only
+# ---- 2. configure: the pic16 port only, its libraries for the large stack model
+sed -i 's/--fomit-frame-pointer/--pstack-model=large --fomit-frame-pointer/' \
+    device/lib/pic16/Makefile.in device/lib/pic16/*/Makefile.in
+grep -q "pstack-model=large" device/lib/pic16/libsdcc/Makefile.in || fail "the library flags were not found"
 mkdir -p device/non-free/lib/pic16
 for f in supported-devices.ac processors.ac; do
     : > "device/non-free/lib/pic16/$f"
