@@ -223,7 +223,7 @@ class Pic18Board(BoardBase):
         ports = [p for p in self.description.source_paths if p.name != "pic18_interfaces.c"]
         files = [*sources, *(p for p in runtime_sources(True) if p.name in runtime), *ports]
         hexfile = work_dir / f"{name}.hex"
-        objects, lkr = self._objects(build, files, work_dir)
+        objects, lkr, _ = self._objects(build, files, work_dir)
         return hexfile, linkmap.read_map(build.link(objects, hexfile, lkr))
 
     def run_port_program(self, source: Path, work_dir: Path) -> str:

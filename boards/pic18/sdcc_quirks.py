@@ -63,10 +63,15 @@ def place_big_objects(units: dict[str, c_ast.FileAST], target: Target, ram_end: 
     placed: list[tuple[str, int]] = []
     for unit, ast in units.items():
         big: dict[str, int] = {}
+        used = _used_names(ast)
+        dead = set()
         for decl, t, env in _objects(ast, target):
             size = env.size(t)
             if decl.name and "extern" not in (decl.storage or []) and not _is_const(decl) and size is not None \
                     and size > BANK_BYTES:
+                if "static" in (decl.storage or []) and decl.name not in used:
+                    dead.add(decl.name)  # no code left reads it (prune.py): sdcc would declare it, not define it
+                    continue
                 top = (top - size) & ~3
                 big[decl.name] = top
                 placed.append((decl.name, size))
@@ -77,9 +82,24 @@ def place_big_objects(units: dict[str, c_ast.FileAST], target: Target, ram_end: 
                     _rename(ast, ext.name, f"{ext.name}__{re.sub(r'[^A-Za-z0-9_]', '_', unit)}")
                     ext.storage = [s for s in ext.storage if s != "static"]
                 ext.storage = [f"__at(0x{address:03X})", *(ext.storage or [])]
+        ast.ext = [ext for ext in ast.ext if not (isinstance(ext, c_ast.Decl) and ext.name in dead)]
     if top < FIRST_BANK:
         raise BigObjectsDoNotFit(ram_end + 1 - FIRST_BANK, sorted(placed, key=lambda p: -p[1]))
     return top
+
+
+def _used_names(ast: c_ast.FileAST) -> set[str]:
+    """The identifiers a unit's code and initializers use."""
+    class Uses(c_ast.NodeVisitor):
+        def __init__(self):
+            self.names: set[str] = set()
+
+        def visit_ID(self, node):
+            self.names.add(node.name)
+
+    uses = Uses()
+    uses.visit(ast)
+    return uses.names
 
 
 def _rename(ast: c_ast.FileAST, old: str, new: str) -> None:
