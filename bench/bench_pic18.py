@@ -250,7 +250,8 @@ def modbus_response(tmp: Path, runner: Path, tiny: bool = False) -> dict:
     model = work / "mbbench.elab"
     model.write_text(avr.MODBUS_MODEL)
     program, board = _generate(model, work)
-    extra = [p for p in work.glob("*.c") if p.name != "model.c"]
+    # The service tables name the port's Modbus RTU functions (pic18_interfaces.c).
+    extra = [p for p in work.glob("*.c") if p.name != "model.c"] + [ROOT / "boards" / "pic18" / "pic18_interfaces.c"]
     n = 1 if tiny else 5
     bodies = {
         "pdu": "check += el_mb_pdu(mb_request, 5u, mb_response, false);",
