@@ -7,6 +7,7 @@ exception reply. No pymodbus traceback or log line reaches the user.
 from __future__ import annotations
 
 import logging
+from dataclasses import asdict, dataclass
 
 EXCEPTIONS = {1: "illegal function", 2: "illegal data address", 3: "illegal data value",
               4: "server device failure", 5: "acknowledge", 6: "server device busy"}
@@ -28,6 +29,21 @@ class DeviceException(LinkError):
         self.code = code
 
 
+@dataclass
+class LinkStats:
+    """Requests of a link and how they ended; one object may count for
+    several links in turn (a tool that reconnects keeps its totals)."""
+
+    requests: int = 0
+    replies: int = 0
+    exceptions: int = 0
+    timeouts: int = 0
+    lost: int = 0
+
+    def as_dict(self) -> dict[str, int]:
+        return asdict(self)
+
+
 def _quiet_pymodbus() -> None:
     for name in ("pymodbus", "pymodbus.logging"):
         logging.getLogger(name).setLevel(logging.CRITICAL + 1)
@@ -36,29 +52,32 @@ def _quiet_pymodbus() -> None:
 
 class ModbusLink:
     """Reads and writes by table and address; ``where`` names the link in
-    messages ("127.0.0.1:1502", "/dev/ttyUSB0 unit 17")."""
+    messages ("127.0.0.1:1502", "/dev/ttyUSB0 unit 17"); ``stats`` counts its
+    requests."""
 
-    def __init__(self, client, unit: int, where: str, timeout: float):
+    def __init__(self, client, unit: int, where: str, timeout: float, stats: LinkStats | None = None):
         self.client = client
         self.unit = unit
         self.where = where
         self.timeout = timeout
+        self.stats = stats if stats is not None else LinkStats()
 
     # ------------------------------------------------------------ opening
 
     @classmethod
-    def tcp(cls, host: str, port: int, unit: int = 1, timeout: float = 1.0) -> "ModbusLink":
+    def tcp(cls, host: str, port: int, unit: int = 1, timeout: float = 1.0,
+            stats: LinkStats | None = None) -> "ModbusLink":
         _quiet_pymodbus()
         from pymodbus.client import ModbusTcpClient
         client = ModbusTcpClient(host, port=port, timeout=timeout, retries=0)
         where = f"{host}:{port}"
         if not client.connect():
             raise LinkError(f"cannot connect to {where} (nothing listens there, or it refused)")
-        return cls(client, unit, where, timeout)
+        return cls(client, unit, where, timeout, stats)
 
     @classmethod
     def rtu(cls, port: str, baud: int = 19200, parity: str = "N", unit: int = 1,
-            timeout: float = 1.0) -> "ModbusLink":
+            timeout: float = 1.0, stats: LinkStats | None = None) -> "ModbusLink":
         _quiet_pymodbus()
         from pymodbus.client import ModbusSerialClient
         par = PARITIES.get(parity.upper())
@@ -74,7 +93,7 @@ class ModbusLink:
         if not ok:
             hint = " (a pty refuses even or odd parity: use --parity N)" if par != "N" else ""
             raise LinkError(f"cannot open {port} at {baud} baud, parity {par}{hint}")
-        return cls(client, unit, where, timeout)
+        return cls(client, unit, where, timeout, stats)
 
     def close(self) -> None:
         try:
@@ -86,15 +105,21 @@ class ModbusLink:
 
     def _call(self, what: str, fn, *args, **kw):
         from pymodbus.exceptions import ConnectionException, ModbusException
+        self.stats.requests += 1
         try:
             r = fn(*args, device_id=self.unit, **kw)
         except ConnectionException:
+            self.stats.lost += 1
             raise LinkError(f"{what}: the connection to {self.where} is lost") from None
         except ModbusException:
+            self.stats.timeouts += 1
             raise LinkError(f"{what}: no reply from {self.where} within {self.timeout:g} s") from None
         except OSError as err:
+            self.stats.lost += 1
             raise LinkError(f"{what}: {self.where}: {err.strerror or err}") from None
+        self.stats.replies += 1
         if r.isError():
+            self.stats.exceptions += 1
             code = getattr(r, "exception_code", 0)
             raise DeviceException(f"{what}: the device refused: {EXCEPTIONS.get(code, 'exception')} "
                                   f"(exception {code:02d})", code)

@@ -19,9 +19,10 @@ import json
 import re
 import sys
 import time
+from dataclasses import dataclass
 from pathlib import Path
 
-from .modbus_link import ID_MODEL_NAME, ID_PROGRAM, DeviceException, LinkError, ModbusLink
+from .modbus_link import ID_MODEL_NAME, ID_PROGRAM, DeviceException, LinkError, LinkStats, ModbusLink
 from .service_map import MapError, ServiceItem, ServiceMap, ValueError_, load_map, read_groups
 
 PROG = "easylab-service"
@@ -42,7 +43,39 @@ def _parity(text: str | None, mapped: str | None) -> str:
     return {"none": "N", "even": "E", "odd": "O"}.get(mapped or "none", "N")
 
 
-def open_link(args, smap: ServiceMap) -> ModbusLink:
+@dataclass(frozen=True)
+class DeviceAddress:
+    """Where the device is (the command line, with the map's defaults): enough
+    to open its link again and again (the web panel reconnects)."""
+
+    smap: ServiceMap
+    tcp: tuple[str, int] | None
+    rtu: tuple[str, int, str] | None
+    unit: int
+    timeout: float
+    check: bool
+
+    @property
+    def where(self) -> str:
+        return f"{self.tcp[0]}:{self.tcp[1]}" if self.tcp else f"{self.rtu[0]} unit {self.unit}"
+
+    def connect(self, stats: LinkStats | None = None) -> ModbusLink:
+        """Open the link and, unless --no-check, check the device's program."""
+        if self.tcp:
+            link = ModbusLink.tcp(*self.tcp, self.unit, self.timeout, stats)
+        else:
+            link = ModbusLink.rtu(*self.rtu, self.unit, self.timeout, stats)
+        if self.check:
+            try:
+                check_identity(link, self.smap)
+            except BaseException:
+                link.close()
+                raise
+        return link
+
+
+def device_address(args, smap: ServiceMap) -> DeviceAddress:
+    """The device of the command line (UsageError when it is not given well)."""
     tcp_cfg = smap.interfaces.get("tcp", {})
     rtu_cfg = smap.interfaces.get("rtu", {})
     if args.tcp and args.rtu:
@@ -53,20 +86,17 @@ def open_link(args, smap: ServiceMap) -> ModbusLink:
         port = int(m.group(2)) if m and m.group(2) else int(tcp_cfg.get("port", 502))
         if not host or not 1 <= port <= 65535:
             raise UsageError(f"--tcp {args.tcp}: give HOST:PORT")
-        link = ModbusLink.tcp(host, port, args.unit if args.unit is not None else 1, args.timeout)
-    elif args.rtu:
-        link = ModbusLink.rtu(args.rtu, args.baud or int(rtu_cfg.get("baud", 19200)),
-                              _parity(args.parity, rtu_cfg.get("parity")),
-                              args.unit if args.unit is not None else int(rtu_cfg.get("unit", 1)), args.timeout)
-    else:
-        raise UsageError("give the device: --tcp HOST:PORT or --rtu PORT")
-    if not args.no_check:
-        try:
-            check_identity(link, smap)
-        except BaseException:
-            link.close()
-            raise
-    return link
+        return DeviceAddress(smap, (host, port), None, args.unit if args.unit is not None else 1, args.timeout,
+                             not args.no_check)
+    if args.rtu:
+        rtu = (args.rtu, args.baud or int(rtu_cfg.get("baud", 19200)), _parity(args.parity, rtu_cfg.get("parity")))
+        return DeviceAddress(smap, None, rtu, args.unit if args.unit is not None else int(rtu_cfg.get("unit", 1)),
+                             args.timeout, not args.no_check)
+    raise UsageError("give the device: --tcp HOST:PORT or --rtu PORT")
+
+
+def open_link(args, smap: ServiceMap) -> ModbusLink:
+    return device_address(args, smap).connect()
 
 
 def check_identity(link: ModbusLink, smap: ServiceMap) -> None:
@@ -218,6 +248,12 @@ def cmd_monitor(args, smap: ServiceMap) -> int:
     return EXIT_OK
 
 
+def backup_document(smap: ServiceMap, values: dict[str, object]) -> dict:
+    """A backup (docs/service.md) of the writable params' `values`."""
+    return {"format": BACKUP_FORMAT, "model": smap.model, "program_id": smap.program_id,
+            "params": {it.name: values[it.name] for it in smap.params()}}
+
+
 def cmd_backup(args, smap: ServiceMap) -> int:
     params = smap.params()
     link = open_link(args, smap)
@@ -225,14 +261,48 @@ def cmd_backup(args, smap: ServiceMap) -> int:
         values = read_values(link, params)
     finally:
         link.close()
-    doc = {"format": BACKUP_FORMAT, "model": smap.model, "program_id": smap.program_id,
-           "params": {it.name: values[it.name] for it in params}}
+    doc = backup_document(smap, values)
     try:
         Path(args.file).write_text(json.dumps(doc, indent=2) + "\n", encoding="utf-8")
     except OSError as err:
         raise UsageError(f"{args.file}: {err.strerror or err}") from None
     print(f"backed up {len(params)} params of model {smap.model} to {args.file}")
     return EXIT_OK
+
+
+def plan_restore(doc, smap: ServiceMap, source: str) -> tuple[list[tuple[ServiceItem, object]], list[str]]:
+    """The writes that restore the backup `doc` (read from `source`), and one
+    line per param skipped (no longer in the map, or read-only now). A
+    document that is no backup of this model, or a value that is not one of
+    its param's type, is a UsageError or ValueError_."""
+    if not isinstance(doc, dict) or doc.get("format") != BACKUP_FORMAT or not isinstance(doc.get("params"), dict):
+        raise UsageError(f"{source}: not a backup made by {PROG} backup")
+    if doc.get("model") != smap.model:
+        raise UsageError(f"{source} is a backup of model '{doc.get('model')}', the map is of model '{smap.model}'")
+    todo: list[tuple[ServiceItem, object]] = []
+    skipped: list[str] = []
+    for name, raw in doc["params"].items():
+        try:
+            it = smap.item(name)
+        except MapError:
+            skipped.append(f"{name}: not in the map any more, skipped")
+            continue
+        if not it.writable:
+            skipped.append(f"{name}: read-only now, skipped")
+            continue
+        todo.append((it, it.parse(str(int(raw)) if isinstance(raw, bool) else str(raw))))
+    return todo, skipped
+
+
+def restore_params(link: ModbusLink, todo: list[tuple[ServiceItem, object]]) -> list[tuple[ServiceItem, str]]:
+    """Write every planned value; the params the device refused, with why."""
+    refused: list[tuple[ServiceItem, str]] = []
+    for it, value in todo:
+        try:
+            write_value(link, it, value)
+        except DeviceException as err:
+            refused.append((it, str(err)))
+    return refused
 
 
 def cmd_restore(args, smap: ServiceMap) -> int:
@@ -242,34 +312,23 @@ def cmd_restore(args, smap: ServiceMap) -> int:
         raise UsageError(f"{args.file}: no such file") from None
     except (OSError, UnicodeDecodeError, json.JSONDecodeError) as err:
         raise UsageError(f"{args.file}: not a backup ({getattr(err, 'strerror', None) or err})") from None
-    if not isinstance(doc, dict) or doc.get("format") != BACKUP_FORMAT or not isinstance(doc.get("params"), dict):
-        raise UsageError(f"{args.file}: not a backup made by {PROG} backup")
-    if doc.get("model") != smap.model:
-        raise UsageError(f"{args.file} is a backup of model '{doc.get('model')}', the map is of model '{smap.model}'")
-    todo: list[tuple[ServiceItem, object]] = []
-    for name, raw in doc["params"].items():
-        try:
-            it = smap.item(name)
-        except MapError:
-            print(f"{PROG}: {name}: not in the map any more, skipped", file=sys.stderr)
-            continue
-        if not it.writable:
-            print(f"{PROG}: {name}: read-only now, skipped", file=sys.stderr)
-            continue
-        todo.append((it, it.parse(str(int(raw)) if isinstance(raw, bool) else str(raw))))
+    todo, skipped = plan_restore(doc, smap, args.file)
+    for line in skipped:
+        print(f"{PROG}: {line}", file=sys.stderr)
     link = open_link(args, smap)
-    failed = 0
     try:
-        for it, value in todo:
-            try:
-                write_value(link, it, value)
-            except DeviceException as err:
-                print(f"{PROG}: {it.name}: {err}", file=sys.stderr)
-                failed += 1
+        refused = restore_params(link, todo)
     finally:
         link.close()
-    print(f"restored {len(todo) - failed} of {len(todo)} params of model {smap.model} from {args.file}")
-    return EXIT_DEVICE if failed else EXIT_OK
+    for it, why in refused:
+        print(f"{PROG}: {it.name}: {why}", file=sys.stderr)
+    print(f"restored {len(todo) - len(refused)} of {len(todo)} params of model {smap.model} from {args.file}")
+    return EXIT_DEVICE if refused else EXIT_OK
+
+
+def cmd_web(args, smap: ServiceMap) -> int:
+    from .web.server import run_panel  # aiohttp only for this command
+    return run_panel(args, smap)
 
 
 # ====================================================================== command line
@@ -318,7 +377,34 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("file", metavar="FILE")
     p = add("restore", "write the params of a backup file back", cmd_restore)
     p.add_argument("file", metavar="FILE")
+    p = add("web", "serve the service panel: a web page to monitor, plot and tune the device", cmd_web)
+    p.formatter_class = argparse.RawDescriptionHelpFormatter
+    p.epilog = WEB_EPILOG
+    p.add_argument("--listen", default="127.0.0.1:8080", metavar="ADDR:PORT",
+                   help="where the panel listens (default 127.0.0.1:8080; port 0 picks a free one)")
+    p.add_argument("--token", metavar="TOKEN", help="the token a browser must present (default: none on a "
+                   "loopback address, a new random one printed at start elsewhere)")
+    p.add_argument("--every", default="250ms", metavar="PERIOD", help="sampling period (default 250ms)")
     return parser
+
+
+WEB_EPILOG = """\
+The page lists every service item of the map (unit, range, live value),
+plots chosen items, writes rw params (range checked first), and backs up
+and restores the params as files in the format of `backup`. The device is
+sampled every PERIOD by this process alone; when it stops answering the
+panel says so and reconnects by itself.
+
+Safety: on a loopback address (the default) only this machine can open the
+panel, and only under a loopback name. On any other address a token is
+required (--token, or a random one printed at start with the address to
+open); without it nothing can be read or written. Writes must come from the
+panel's own page (same origin, JSON, its CSRF header); requests wait for
+the device in a queue of 4 and get "busy" beyond that.
+
+  easylab-service --map build/m/host/service_map.json --tcp 127.0.0.1:1502 web
+  easylab-service --map service_map.json --rtu /dev/ttyUSB0 web --listen 0.0.0.0:8080
+"""
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -343,4 +429,7 @@ def main(argv: list[str] | None = None) -> int:
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    # `python -m`: run the module under its package name, so that its errors are
+    # the classes the modules importing it (the web panel) raise.
+    from . import service_cli
+    sys.exit(service_cli.main())

@@ -7,6 +7,7 @@ end and the backends: no backend imports the front end or the analyses."""
 from __future__ import annotations
 
 import ast
+import re
 from collections import defaultdict
 from pathlib import Path
 
@@ -74,36 +75,15 @@ def graph() -> dict[str, set[str]]:
 
 
 def cycles(g: dict[str, set[str]]) -> list[list[str]]:
-    """Strongly connected components with more than one module (Tarjan)."""
-    index, low, stack, on, out = {}, {}, [], set(), []
-    counter = [0]
+    """Strongly connected components with more than one module (the SDF
+    analysis's own Tarjan, on the import graph)."""
+    from easylab.analysis.sdf._digraph import strongly_connected_components
 
-    def visit(v):
-        index[v] = low[v] = counter[0]
-        counter[0] += 1
-        stack.append(v)
-        on.add(v)
-        for w in sorted(g[v]):
-            if w not in index:
-                visit(w)
-                low[v] = min(low[v], low[w])
-            elif w in on:
-                low[v] = min(low[v], index[w])
-        if low[v] == index[v]:
-            comp = []
-            while True:
-                w = stack.pop()
-                on.discard(w)
-                comp.append(w)
-                if w == v:
-                    break
-            if len(comp) > 1:
-                out.append(sorted(comp))
-
-    for v in sorted(g):
-        if v not in index:
-            visit(v)
-    return out
+    names = sorted(g)
+    number = {name: k for k, name in enumerate(names)}
+    succ = [sorted(number[t] for t in g[name] if t in number) for name in names]
+    return sorted(sorted(names[k] for k in comp)
+                  for comp in strongly_connected_components(range(len(names)), succ) if len(comp) > 1)
 
 
 def stage(module: str) -> str | None:
@@ -168,7 +148,7 @@ def test_no_board_names_in_the_generator():
         for node in ast.walk(tree):
             if isinstance(node, ast.Constant) and isinstance(node.value, str) and id(node) not in docstrings:
                 for name in names:
-                    if name in node.value.lower().split() or f"'{name}'" in node.value or f'"{name}"' in node.value:
+                    if re.search(rf"\b{name}\b", node.value, re.IGNORECASE):
                         wrong.append(f"{path.relative_to(ROOT)}:{node.lineno}: {node.value[:60]!r}")
     assert wrong == []
 

@@ -83,5 +83,35 @@ def test_wheel_carries_the_package_data(installed):
                 "templates/interp_interfaces.c.j2", "boards/host/host_interp.c", "boards/host/host_load.c",
                 "boards/host/host_serve.c", "interp/interfaces.py",
                 # the boards' backends and the contract they implement
-                "boards/host/backend.py", "boards/avr/backend.py", "boards/avr/devices.py", "board/contract.py"):
+                "boards/host/backend.py", "boards/avr/backend.py", "boards/avr/devices.py", "board/contract.py",
+                # the service panel's page, with uPlot and its licence
+                "host_tools/web/server.py", "host_tools/web/static/index.html", "host_tools/web/static/panel.js",
+                "host_tools/web/static/panel.css", "host_tools/web/static/vendor/uPlot.iife.min.js",
+                "host_tools/web/static/vendor/uPlot.min.css", "host_tools/web/static/vendor/uPlot.LICENSE"):
         assert (site / rel).is_file(), rel
+
+
+def test_wheel_serves_the_service_panel(installed, tmp_path):
+    """The installed `easylab-service web` serves its page and uPlot from the
+    wheel (no device needed to start)."""
+    import json
+    import re
+    import signal
+    import urllib.request
+
+    env_dir, _ = installed
+    smap = tmp_path / "service_map.json"
+    smap.write_text(json.dumps({"format": 1, "model": "m", "program_id": "0x1", "interfaces": {}, "items": []}))
+    clean_env = {k: v for k, v in os.environ.items() if k not in ("PYTHONPATH",)}
+    proc = subprocess.Popen([str(env_dir / "bin" / "easylab-service"), "--map", str(smap), "--tcp", "127.0.0.1:1",
+                             "web", "--listen", "127.0.0.1:0"], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                            text=True, cwd=tmp_path, env=clean_env)
+    try:
+        url = re.search(r"http://\S+", proc.stdout.readline()).group(0)
+        for path, marker in (("", "<title>EasyLab service panel</title>"), ("static/panel.js", "easylabPanel"),
+                             ("static/vendor/uPlot.iife.min.js", "uPlot")):
+            with urllib.request.urlopen(url + path, timeout=10) as r:
+                assert marker in r.read().decode(), path
+    finally:
+        proc.send_signal(signal.SIGTERM)
+        assert proc.wait(timeout=15) == 0, proc.stderr.read()

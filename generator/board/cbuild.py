@@ -11,20 +11,35 @@ from pathlib import Path
 
 from ..core.errors import BuildError
 from ..core.paths import runtime_dir
-from .description import BoardDescription
+from .description import BoardDescription, BoardError, read_description
+from .registry import board_folders
 
-# Which Debian package provides a compiler, for the message when it is missing.
-DEBIAN_PACKAGES = {"gcc": "gcc", "cc": "gcc", "clang": "clang", "avr-gcc": "gcc-avr", "sdcc": "sdcc"}
+# Which Debian package provides a compiler, for the message when it is missing
+# (besides the compilers the boards found name in their board.toml).
+DEBIAN_PACKAGES = {"gcc": "gcc", "cc": "gcc", "clang": "clang", "sdcc": "sdcc"}
 
 
 def require_tool(tool: str, board: str, debian_package: str | None = None, what: str = "C compiler") -> None:
     """BuildError naming the tool and its Debian package when it is not on PATH."""
     if shutil.which(tool) is not None:
         return
-    package = debian_package or DEBIAN_PACKAGES.get(Path(tool).name)
+    package = debian_package or DEBIAN_PACKAGES.get(Path(tool).name) or _package_named_by_a_board(tool)
     if package is None:
         raise BuildError(f"the {what} '{tool}' of board '{board}' is not installed (or not on PATH)")
     raise BuildError(f"the {what} '{tool}' of board '{board}' is not installed (Debian package: {package})")
+
+
+def _package_named_by_a_board(tool: str) -> str | None:
+    """The Debian package a board found names for its compiler ``tool``
+    (``--cc`` may name another board's compiler)."""
+    for found in board_folders().values():
+        try:
+            chain = read_description(found.folder).toolchain
+        except BoardError:
+            continue
+        if Path(chain.cc).name == Path(tool).name and chain.debian_package:
+            return chain.debian_package
+    return None
 
 
 def runtime_sources(release: bool, exclude: tuple[str, ...] = ()) -> list[Path]:

@@ -55,16 +55,15 @@ def build_parser() -> argparse.ArgumentParser:
                                    "toolchain into build/<model>/<board>/ (or -o DIR). The path of the "
                                    "program built is printed on the last line.")
     p.add_argument("file", metavar="FILE", help="model file (.elab)")
-    add_board_options(p, "the MCU of a cross board (avr: atmega328p, the default, or atmega2560)")
+    add_board_options(p, "the board's MCU (default: the board's own; `easylab boards` lists them)")
     p.add_argument("--release", action="store_true", help="a release build: no debug interface")
     p.add_argument("--schedule", choices=SCHEDULE_KINDS,
                    help="schedule kind of every dataflow (default: each dataflow's own, else sas)")
     p.add_argument("-o", "--output", metavar="DIR", help="output folder")
     p.add_argument("--cc", metavar="CC", help="use this C compiler instead of the board's")
     p.add_argument("--cflags", metavar="FLAGS", help="extra compiler flags, e.g. \"-fsanitize=address,undefined\"")
-    p.add_argument("--sim", action="store_true", help="a simulation build and the board's simulator (avr: "
-                                                      "instants reported to the simavr harness, built beside the "
-                                                      "ELF)")
+    p.add_argument("--sim", action="store_true", help="a simulation build and the board's simulator, built beside "
+                                                      "it (docs/boards.md)")
     p.set_defaults(func=model_commands.cmd_build)
 
     board_commands.add_parsers(sub)

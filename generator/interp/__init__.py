@@ -3,7 +3,9 @@ in compiled plug-ins (docs/local.md).
 
 - :mod:`.engine`: the LET dispatcher and the run (:class:`Engine`, live
   replacement with :meth:`Engine.replace_model`);
-- :mod:`.state`: one program at run time (items, tasks, channels, devices);
+- :mod:`.state`: one program at run time (items, tasks, channels, devices)
+  and its plans, per instant;
+- :mod:`.runner`: the plans' operations and their C runner (``runner.c``);
 - :mod:`.replacement`: what a live replacement carries over;
 - :mod:`.clock`: real time, paced and flat-out virtual time;
 - :mod:`.dataflow`: SDF schedules over the IR's buffers and external nodes;

@@ -98,4 +98,4 @@ class ChartRunner:
     def _act(self, actions) -> None:
         local = self.task.local
         for target, evaluate in actions:
-            local[target] = [evaluate(local, self.elapsed, self.slots)]
+            local[target][0] = evaluate(local, self.elapsed, self.slots)

@@ -9,9 +9,9 @@ newest tokens move to the front. This is the C backend's linear layout with
 the whole iteration as one loop body; it is valid for every admissible
 schedule, and since token values do not depend on the schedule (SDF
 determinacy) the values are the firmware's whatever layout it chose. With
-the layout static, every firing's token addresses are computed once: an
-activation is a short list of calls (runs of firings and copies in the C
-batch runner, external nodes in Python), in the schedule's order.
+the layout static, every firing's and every external node's token
+addresses are computed once: an activation is one plan of the runner
+(runner.py), in the schedule's order.
 """
 
 from __future__ import annotations
@@ -21,9 +21,10 @@ from dataclasses import dataclass, field
 from typing import Callable
 
 from ..ir.program import ActorInstance, ActorSpec, Buffer, Dataflow, Program
+from . import runner as R
 from . import values as V
 from .exprs import Evaluator, ExprCompiler
-from .plugins import BatchOp, Plugin
+from .plugins import Plugin
 
 
 class ActorState:
@@ -100,47 +101,45 @@ class EdgeBuffer:
 
 
 class DataflowRunner:
-    """Runs one dataflow of a task: the schedule unrolled into calls.
-
-    Firings and buffer copies go to the C batch runner (``run_batch``,
-    plugins.BATCH_SOURCE) in runs of consecutive operations, one call per
-    run; external nodes, which move values between edges and the task's
-    Python copies, are Python calls in between. The order is the
-    schedule's. ``task`` is the owning task's
-    :class:`~easylab.interp.engine.TaskState` (local copies, channel staging).
+    """Runs one dataflow of a task: the schedule unrolled into one plan of
+    the runner (firings, the edges' copies, external nodes moving values
+    between edges and the task's copies and staging arrays), run in one
+    call per activation. ``task`` is the owning task's
+    :class:`~easylab.interp.state.TaskState`.
     """
 
     def __init__(self, program: Program, dataflow: Dataflow, actors: dict[str, ActorState], task,
-                 run_batch: Callable[[int, int], None]):
+                 runner: R.Runner, cursor: R.Cursor):
         self.dataflow = dataflow
         self.actors = actors
         self.task = task
         reps = dataflow.repetitions
         self.buffers = [EdgeBuffer(b, len(b.initial), reps[b.src] * b.prod) for b in dataflow.buffers]
         self._program = program
-        self._run_batch = run_batch
-        self._externals = {e.node: e for e in dataflow.externals}
-        self.calls: list[tuple[Callable, tuple]] = []
-        # The same activation with the debugger's actor probe before each
-        # firing, one operation per call (used while a debugger is armed).
-        self.probed_calls: list[tuple[Callable, tuple]] = []
+        self._runner = runner
+        self._cursor = cursor
+        externals = {e.node: e for e in dataflow.externals}
+        # The debugger's probe before each firing, while it is armed: then
+        # the plan runs one operation per call.
         self.probe_actor: Callable[[int], None] | None = None
         self.armed: Callable[[], bool] = lambda: False
-        self._batch: list[BatchOp] = []  # C operations not yet in a call
-        self._batch_actors: list[int | None] = []  # the instance id of each firing in _batch
-        self._keep: list = []  # pointer and operation arrays the calls refer to
+        self._ops: list[R.Op] = []
+        self._firing: list[int | None] = []  # per operation: the instance it fires, if it is a firing
+        self._keep: list = []  # pointer arrays and scratch outputs the plan refers to
         fired: dict[str, int] = {}
         for node in dataflow.schedule.firings():
             k = fired.get(node, 0)
             fired[node] = k + 1
-            if node in self._externals:
-                self._external(self._externals[node], k)
+            if node in externals:
+                self._external(externals[node], k)
             else:
                 self._actor(actors[node], k)
         for edge in self.buffers:  # the delay tokens move to the front
             if edge.delay:
-                self._copy(edge.address(0), edge.address(edge.per_iteration), edge.delay * edge.size)
-        self._flush()
+                self._add(R.copy(edge.address(0), edge.buffer.type, edge.address(edge.per_iteration),
+                                 edge.buffer.type, edge.delay))
+        self.plan = R.OpList(self._ops)
+        self._singles: list[R.Span] | None = None  # the plan one operation at a time (for the probes)
         self.param_evaluators = [pe for a in actors.values() for pe in a.param_evaluators]
 
     def run(self) -> None:
@@ -149,37 +148,21 @@ class DataflowRunner:
         local = self.task.local
         for cell, evaluate in self.param_evaluators:
             cell[0] = evaluate(local, None, None)
-        for call, args in (self.probed_calls if self.armed() else self.calls):
-            call(*args)
-
-    def _probe(self, instance: int) -> None:
-        self.probe_actor(instance)
+        if self.armed():
+            if self._singles is None:
+                self._singles = [self.plan.span(k, 1) for k in range(self.plan.count)]
+            for single, instance in zip(self._singles, self._firing):
+                if instance is not None:
+                    self.probe_actor(instance)
+                self._runner.run(single, self._cursor)
+        else:
+            self._runner.run(self.plan.all, self._cursor)
 
     # ------------------------------------------------------------ plan
 
-    def _copy(self, dst: int, src: int, size: int) -> None:
-        self._batch.append(BatchOp(dst=dst, src=src, bytes=size))
-        self._batch_actors.append(None)
-
-    def _python(self, call: Callable, args: tuple) -> None:
-        self._flush()
-        self.calls.append((call, args))
-        self.probed_calls.append((call, args))
-
-    def _flush(self) -> None:
-        """The C operations so far become one call of the batch runner (and,
-        for the probed activation, one call per operation, each firing
-        after its probe)."""
-        if self._batch:
-            ops = (BatchOp * len(self._batch))(*self._batch)
-            self._keep.append(ops)
-            self.calls.append((self._run_batch, (ctypes.addressof(ops), len(self._batch))))
-            for k, instance in enumerate(self._batch_actors):
-                if instance is not None:
-                    self.probed_calls.append((self._probe, (instance,)))
-                self.probed_calls.append((self._run_batch, (ctypes.addressof(ops) + k * ctypes.sizeof(BatchOp), 1)))
-            self._batch = []
-            self._batch_actors = []
+    def _add(self, op: R.Op, instance: int | None = None) -> None:
+        self._ops.append(op)
+        self._firing.append(instance)
 
     def _edges_from(self, node: str, port: str | None) -> list[EdgeBuffer]:
         return [e for e in self.buffers if e.buffer.src == node and e.buffer.src_port == port]
@@ -197,45 +180,48 @@ class DataflowRunner:
         inputs, outputs, copies = [], [], []
         for port in actor.spec.ports:
             if port.direction == "in":
-                edge = self._edge_into(node, port.name)
+                edge = self._edge_into(node, port.name)  # of the port's type
                 inputs.append(edge.address(edge.read_at(k)))
                 continue
+            # The actor writes into an edge of its port's type, else into
+            # scratch room; every other edge of the port gets a copy.
             edges = self._edges_from(node, port.name)
-            if not edges:
+            direct = next((e for e in edges if e.buffer.type == port.type), None)
+            if direct is not None:
+                out = direct.address(direct.write_at(k))
+            else:
                 scratch = actor.scratch.setdefault(port.name, (V.ctype(port.type) * port.rate)())
-                outputs.append(ctypes.addressof(scratch))
-                continue
-            first = edges[0].address(edges[0].write_at(k))
-            outputs.append(first)
-            # An output feeding several edges gives each edge every token.
-            copies += [(e.address(e.write_at(k)), first, e.buffer.prod * e.size) for e in edges[1:]]
-        self._batch.append(BatchOp(step=actor.plugin.step_address, state=actor.state_address,
-                                   inputs=self._pointers(inputs), outputs=self._pointers(outputs),
-                                   params=ctypes.addressof(actor.params)))
-        self._batch_actors.append(actor.instance.id)
-        for copy in copies:
-            self._copy(*copy)
+                out = ctypes.addressof(scratch)
+            outputs.append(out)
+            copies += [R.copy(e.address(e.write_at(k)), e.buffer.type, out, port.type, e.buffer.prod)
+                       for e in edges if e is not direct]
+        self._add(R.fire(actor.plugin.step_address, actor.state_address, self._pointers(inputs),
+                         self._pointers(outputs), ctypes.addressof(actor.params)), actor.instance.id)
+        for op in copies:
+            self._add(op)
 
     def _external(self, ext, k: int) -> None:
         """An external node's k-th firing: items copy the task's copy (all
-        its values) per firing, channels move one token per firing."""
+        its values) per firing, channels move one token per firing between
+        the task's staging array and the edges."""
         task = self.task
         if ext.kind == "channel":
-            channel = ext.target
+            stage = task.staging[ext.target]
             if ext.direction == "in":
                 edges = self._edges_from(ext.node, None)
-                self._python(task.channel_to_edges, (channel, [(e.array, e.write_at(k)) for e in edges]))
+                for n, edge in enumerate(edges):
+                    self._add(R.read(stage, edge.address(edge.write_at(k)), edge.buffer.type, n == len(edges) - 1))
+                if not edges:
+                    self._add(R.read(stage, None, stage.type, True))
             else:
                 edge = self._edge_into(ext.node, None)
-                self._python(task.edge_to_channel, (channel, edge.array, edge.read_at(k)))
+                self._add(R.write(stage, edge.address(edge.read_at(k)), edge.buffer.type))
             return
-        item = ext.target
-        count = self._program.items[item].count
+        item = self._program.items[ext.target]
+        local = ctypes.addressof(task.local[item.id])
         if ext.direction == "in":
             for edge in self._edges_from(ext.node, None):
-                at = edge.write_at(k)
-                self._python(task.item_to_edge, (item, edge.array, at, at + count))
+                self._add(R.copy(edge.address(edge.write_at(k)), edge.buffer.type, local, item.type, item.count))
         else:
             edge = self._edge_into(ext.node, None)
-            at = edge.read_at(k)
-            self._python(task.edge_to_item, (item, edge.array, at, at + count))
+            self._add(R.copy(local, item.type, edge.address(edge.read_at(k)), edge.buffer.type, item.count))

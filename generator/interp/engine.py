@@ -19,14 +19,22 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Callable
 
-from ..ir.program import Instant, Program
+from ..ir.program import Program
 from .clock import Clock
 from .interfaces import LOAD_REFUSED, LOAD_REPLACED, Interfaces, Library
 from .plugins import PluginCache, PluginError
 from .replacement import CarriedPublication, Replacement, carry, transfer
-from .state import ProgramState
+from .state import InstantPlan, ProgramState
 from .stimulus import Stimulus
 from .trace import Sampler, TraceWriter, columns_of
+
+
+# A stretch of instants in the runner alone ends after this many instants or
+# operations (a few milliseconds): signals, replacements and other threads
+# are then attended to.
+NATIVE_INSTANTS = 100_000
+NATIVE_OPS = 1_000_000
+NEVER_US = 2 ** 64 - 1
 
 
 # ====================================================================== the engine
@@ -83,19 +91,27 @@ class Engine:
         self.sampler = Sampler(trace.columns if trace else columns_of(program))
         self.sampler.bind(program, self.state.published, self.state.charts)
         self.clock = Clock()
-        self.activations: dict[str, int] = {}
+        self._earlier_activations: dict[str, int] = {}  # of the programs replaced
+        self.native_instants = 0  # instants the runner ran alone (in stretches)
         self.overruns: dict[str, int] = {}
         self.last_time_us: int | None = None
         self.carried: list[CarriedPublication] = []
         self._armed: ProgramState | None = None  # the next program, swapped in at the next instant
         self._armed_lock = threading.Lock()
-        self._base = 0  # the current hyperperiod's first tick
-        self._index = 0  # the next instant in the table
         self._booted = False
 
     @property
     def program(self) -> Program:
         return self.state.program
+
+    @property
+    def activations(self) -> dict[str, int]:
+        """Activations per task name (of every program the run had)."""
+        counts = dict(self._earlier_activations)
+        for task in self.state.tasks:
+            if task.activations:
+                counts[task.task.name] = counts.get(task.task.name, 0) + task.activations
+        return counts
 
     def _prepare(self, program: Program) -> ProgramState:
         plugins = self.cache.load_all(program.specs)
@@ -105,7 +121,7 @@ class Engine:
             if self.interfaces.debug is not None and not io.has_debug:
                 raise PluginError(f"model '{program.name}' has no debug interface, which this run serves "
                                   "(declare one: `debug on uart0`)")
-        return ProgramState(program, plugins, self.cache.batch_runner, io)
+        return ProgramState(program, plugins, self.cache.runner, io)
 
     @property
     def io(self) -> Interfaces | None:
@@ -211,6 +227,11 @@ class Engine:
             self.clock = clock
         done = 0
         while instants is None or done < instants:
+            if self._native():
+                ran = self._run_native(duration_us, None if instants is None else instants - done)
+                if ran:
+                    done += ran
+                    continue
             t = self.next_time_us()
             if duration_us is not None and t >= duration_us:
                 self._wait(duration_us)  # a real-time run lasts its duration
@@ -219,6 +240,32 @@ class Engine:
                 break
             self.step()
             done += 1
+
+    def _native(self) -> bool:
+        """Whether the next instants may run in the runner alone: in virtual
+        time, with nothing to record, serve or swap in between, from an
+        instant that needs no Python."""
+        state = self.state
+        return (self.trace is None and state.io is None and self.clock.pace is None and self._armed is None
+                and not self.clock.stopped and state.instants[state.cursor.index].native)
+
+    def _run_native(self, duration_us: int | None, instants: int | None) -> int:
+        """A stretch of instants in one call of the runner (ProgramState.
+        run_native), up to the duration, a carried publication's deadline,
+        the stimulus's next write, ``instants``, or a bounded amount of work
+        (so that a signal or a replacement is never kept waiting long)."""
+        before = duration_us if duration_us is not None else NEVER_US
+        if self.carried:
+            before = min(before, self.carried[0].due_us)
+        if self.stimulus is not None:
+            quiet = self.stimulus.quiet_until(self._instant_time_us())
+            before = before if quiet is None else min(before, quiet)
+        limit = NATIVE_INSTANTS if instants is None else min(instants, NATIVE_INSTANTS)
+        ran = self.state.run_native(before, limit, NATIVE_OPS)
+        if ran:
+            self.last_time_us = self.state.cursor.now_us
+            self.native_instants += ran
+        return ran
 
     def _wait(self, time_us: int) -> bool:
         """Wait for logical time ``time_us`` (the interfaces served meanwhile,
@@ -247,20 +294,16 @@ class Engine:
         state = self.state
         while self.carried and self.carried[0].due_us <= t:
             self.carried.pop(0).deliver(state)
-        instant = self._instant_at(t)
-        if instant is not None:
-            for task_id in instant.publish:
-                task_state = state.tasks[task_id]
-                if task_state.pending:
-                    state.publish(task_state)
-                    task_state.pending = False
+        plan = self._instant_at(t)
+        if plan is not None:
+            state.publish(plan)
         if self._armed is not None:
             with self._armed_lock:
                 new, self._armed = self._armed, None
             self._swap(t, new)
             state = self.state
-            instant = self._instant_at(t)
-        if instant is None:  # a time only a carried publication had
+            plan = self._instant_at(t)
+        if plan is None:  # a time only a carried publication had
             self._record(t)
             return
         if self.stimulus is not None:
@@ -269,23 +312,21 @@ class Engine:
             state.io.set_tick(t // self.program.tick_us)
             self.serve_interfaces(state.io.instant)
             state = self.state
-        released = instant.release
+        released = plan.released
+        # Without interfaces (hooks around each body) in virtual time (no
+        # lateness), the bodies that need no Python run with the releases,
+        # before the trace records: they change no published value.
+        inline = state.io is None and self.clock.pace is None
         if released:
             if self.stimulus is not None:
                 for device, readers in state.readers:
                     if not readers.isdisjoint(released):
                         self.stimulus.read_device(device, t, state.published)
-            for task_id in released:
-                task_state = state.tasks[task_id]
-                state.release(task_state)
-                task_state.released_at_us = t
-                name = task_state.task.name
-                self.activations[name] = self.activations.get(name, 0) + 1
+            state.release(plan, t, inline)
         self._record(t)
-        for task_id in released:
+        for task_id in plan.python if inline else released:
             task_state = state.tasks[task_id]
             state.body(task_state)
-            task_state.pending = True
             if self.clock.late_us(t) > task_state.task.deadline * self.program.tick_us:
                 self.overruns[task_state.task.name] = self.overruns.get(task_state.task.name, 0) + 1
         self._advance()
@@ -298,27 +339,30 @@ class Engine:
     # ------------------------------------------------------------ the table
 
     def _instant_time_us(self) -> int:
-        return (self._base + self.state.instants[self._index].tick) * self.program.tick_us
+        cursor = self.state.cursor
+        return (cursor.base + self.state.instants[cursor.index].tick) * self.program.tick_us
 
-    def _instant_at(self, t: int) -> Instant | None:
-        return self.state.instants[self._index] if self._instant_time_us() == t else None
+    def _instant_at(self, t: int) -> InstantPlan | None:
+        return self.state.instants[self.state.cursor.index] if self._instant_time_us() == t else None
 
     def _advance(self) -> None:
-        self._index += 1
-        if self._index == len(self.state.instants):
-            self._index = 0
-            self._base += self.program.hyperperiod
+        cursor = self.state.cursor
+        cursor.index += 1
+        if cursor.index == len(self.state.instants):
+            cursor.index = 0
+            cursor.base += self.program.hyperperiod
 
     def _position(self, t: int) -> None:
         """Point at the program's first instant at or after time ``t``."""
         tick_us, hyper = self.program.tick_us, self.program.hyperperiod
         tick = -(-t // tick_us)
-        self._base = tick // hyper * hyper
-        ticks = [i.tick for i in self.state.instants]
-        self._index = next((k for k, x in enumerate(ticks) if self._base + x >= tick), None)
-        if self._index is None:
-            self._base += hyper
-            self._index = 0
+        cursor = self.state.cursor
+        cursor.base = tick // hyper * hyper
+        index = next((k for k, x in enumerate(self.state.instants) if cursor.base + x.tick >= tick), None)
+        if index is None:
+            cursor.base += hyper
+            index = 0
+        cursor.index = index
 
     # ------------------------------------------------------------ replacement
 
@@ -365,6 +409,10 @@ class Engine:
                 report.carried_tasks.append(task_state.task.name)
         self.carried.sort(key=lambda c: c.due_us)
         transfer(old, new, report)
+        for task in old.tasks:
+            if task.activations:
+                name = task.task.name
+                self._earlier_activations[name] = self._earlier_activations.get(name, 0) + task.activations
         self.state = new
         self._position(t)
         if self.stimulus is not None:

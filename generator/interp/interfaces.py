@@ -11,10 +11,11 @@ cached like the actor plug-ins. :class:`Interfaces` drives it:
 
 - the actors' state lives in the library (the plug-ins run on it), so the
   debugger reads and writes the very state the actors use;
-- the published items live in the interpreter; they are copied into the
-  library before each call that may serve a client and back after it, so
-  a client always sees the published values and its writes reach the
-  program at the points the firmware applies them;
+- the published items are the library's (the interpreter keeps them in
+  the library's arrays, :attr:`Interfaces.items`), and the library runs
+  only inside the interpreter's calls into it, so a client always sees the
+  published values and its writes reach the program at the points the
+  firmware applies them; the charts' slots are copied in before each call;
 - the interpreter calls the debugger's hooks where the firmware does
   (instant, task, chart, step, transition, actor), waits for real time in
   the library (serving the links), and resynchronises its clock after a
@@ -195,17 +196,21 @@ class Interfaces:
 
     # ------------------------------------------------------------ items
 
-    def push(self, published: list[list], charts) -> None:
-        """The interpreter's published items and chart slots into the library."""
+    def push(self, published: list, charts) -> None:
+        """The interpreter's published items and chart slots into the library
+        (items that are the library's own arrays stay as they are)."""
         for array, values in zip(self.items, published):
-            array[:] = values
+            if values is not array:
+                array[:] = values
         for array, runner in zip(self.chart_slots, charts):
             array[:] = [0xFF if s is None else s for s in runner.slots]
 
-    def pull(self, published: list[list]) -> None:
+    def pull(self, published: list) -> None:
         """What clients wrote (or persistent storage restored) back into the
         interpreter's published items."""
         for k, array in enumerate(self.items):
+            if published[k] is array:
+                continue
             values = array[:]
             if values != published[k]:
                 published[k] = values

@@ -45,6 +45,7 @@ from ..codegen.c_model import SpecView, spec_view as c_spec_view
 from ..codegen.render import environment
 from ..core.paths import runtime_dir
 from ..ir.program import ActorSpec
+from .runner import SOURCE as RUNNER_SOURCE, Runner
 
 PLUGIN_ABI_VERSION = 1
 COMPILER = "gcc"
@@ -153,51 +154,6 @@ def plugin_source(spec: ActorSpec) -> str:
 
 _STEP_TYPE = [ctypes.c_void_p] * 4
 
-# The interpreter's batch runner: one call runs a sequence of actor firings
-# (through their plug-ins' el_plugin_step) and buffer copies, in order.
-BATCH_SOURCE = r"""/* EasyLab local execution: a batch of actor firings and buffer copies in one
- * call from the interpreter (generator/interp/dataflow.py). */
-#include <stddef.h>
-#include <string.h>
-
-typedef void (*el_plugin_step_t)(void *state, const void *const *inputs, void *const *outputs,
-                                 const void *const *params);
-
-/* One operation: a firing (step != NULL), else a copy of `bytes` bytes. */
-typedef struct {
-    el_plugin_step_t step;
-    void *state;
-    const void *const *inputs;
-    void *const *outputs;
-    const void *const *params;
-    void *dst;
-    const void *src;
-    size_t bytes;
-} el_batch_op_t;
-
-__attribute__((visibility("default"))) void el_run_batch(const el_batch_op_t *ops, size_t count);
-
-void el_run_batch(const el_batch_op_t *ops, size_t count)
-{
-    size_t i;
-    for (i = 0; i < count; i++) {
-        if (ops[i].step != NULL)
-            ops[i].step(ops[i].state, ops[i].inputs, ops[i].outputs, ops[i].params);
-        else
-            memmove(ops[i].dst, ops[i].src, ops[i].bytes);
-    }
-}
-"""
-
-
-class BatchOp(ctypes.Structure):
-    """``el_batch_op_t`` of BATCH_SOURCE."""
-
-    _fields_ = [("step", ctypes.c_void_p), ("state", ctypes.c_void_p), ("inputs", ctypes.c_void_p),
-                ("outputs", ctypes.c_void_p), ("params", ctypes.c_void_p), ("dst", ctypes.c_void_p),
-                ("src", ctypes.c_void_p), ("bytes", ctypes.c_size_t)]
-
-
 @dataclass
 class Plugin:
     """One loaded actor plug-in: the ABI's functions of one specialisation."""
@@ -213,7 +169,7 @@ class Plugin:
 
     @property
     def step_address(self) -> int:
-        """The address of ``el_plugin_step`` (for the batch runner)."""
+        """The address of ``el_plugin_step`` (for the runner's firings)."""
         return ctypes.cast(self.step, ctypes.c_void_p).value
 
 
@@ -265,19 +221,19 @@ class PluginCache:
             return self._loaded.setdefault(digest, plugin)
 
     @functools.cached_property
-    def batch_runner(self) -> ctypes._CFuncPtr:
-        """``el_run_batch`` (see BATCH_SOURCE), built and cached like a
+    def runner(self) -> Runner:
+        """The interpreter's runner (runner.c), built and cached like a
         plug-in but not counted as one."""
-        def open_runner(path: Path):
+        def open_runner(path: Path) -> Runner:
             try:
-                fn = ctypes.CDLL(str(path)).el_run_batch
+                return Runner(ctypes.CDLL(str(path)))
             except (OSError, AttributeError) as err:
-                raise PluginError(f"cannot load the interpreter's batch runner {path}: {err}") from None
-            fn.restype = None
-            fn.argtypes = [ctypes.c_void_p, ctypes.c_size_t]
-            return fn
-        return self._library("the interpreter's batch runner", BATCH_SOURCE, self.digest(BATCH_SOURCE), open_runner,
-                             counted=False)
+                raise PluginError(f"cannot load the interpreter's runner {path}: {err}") from None
+        try:
+            source = RUNNER_SOURCE.read_text(encoding="utf-8")
+        except OSError as err:
+            raise PluginError(f"cannot read the interpreter's runner {RUNNER_SOURCE}: {err.strerror or err}") from None
+        return self._library("the interpreter's runner", source, self.digest(source), open_runner, counted=False)
 
     def _library(self, what: str, source: str, digest: str, open_library, counted: bool = True):
         """``open_library(path)`` of the cached library of ``source``, built

@@ -5,7 +5,6 @@ the report of what did."""
 
 from __future__ import annotations
 
-from collections import deque
 from dataclasses import dataclass, field
 
 from ..ir.program import Item
@@ -33,7 +32,7 @@ class CarriedPublication:
         for name, (old, values) in self.items.items():
             new = items.get(name)
             if new is not None and new.type == old.type and new.count == old.count:
-                state.published[new.id] = list(values)
+                state.published[new.id][:] = values
         for ch_id, ch in enumerate(state.program.channels):
             if ch.name in self.channels and self.channels[ch.name][0] == ch.type:
                 state.channels[ch_id].extend(self.channels[ch.name][1])
@@ -84,7 +83,7 @@ def _transfer_items(old: ProgramState, new: ProgramState, report: Replacement) -
     for item in new.program.items:
         previous = old_items.get(item.name)
         if previous is not None and _same_item(previous, item):
-            new.published[item.id] = list(old.published[previous.id])
+            new.published[item.id][:] = old.published[previous.id][:]
             report.kept_items.append(item.name)
         elif previous is not None:
             report.reset_items.append(item.name)
@@ -156,7 +155,7 @@ def _transfer_channels(old: ProgramState, new: ProgramState) -> None:
     old_channels = {c.name: (c, old.channels[c.id]) for c in old.program.channels}
     for ch in new.program.channels:
         if ch.name in old_channels and old_channels[ch.name][0].type == ch.type:
-            new.channels[ch.id] = deque(old_channels[ch.name][1])
+            new.channels[ch.id].replace(old_channels[ch.name][1].tokens())
 
 
 def carry(old: ProgramState, task_state: TaskState) -> CarriedPublication:
@@ -165,7 +164,7 @@ def carry(old: ProgramState, task_state: TaskState) -> CarriedPublication:
     due = task_state.released_at_us + task.deadline * program.tick_us
     items = {program.items[i].name: (program.items[i], list(task_state.local[i])) for i in task.writes}
     channels = {program.channels[c].name: (program.channels[c].type,
-                                           task_state.staging[c][:program.channels[c].tokens_in])
+                                           task_state.staging[c].values())
                 for c in task.channels_out}
     charts = {}
     for cid in old.charts_of_task[task.id]:

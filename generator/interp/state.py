@@ -1,13 +1,25 @@
 """One program at run time: the published items, each task's local copies,
 channels, actor instances, dataflows and charts (docs/local.md), and what
-a task does at its release, in its body and at its deadline."""
+a task does at its release, in its body and at its deadline.
+
+Everything the dispatcher moves lives in C memory at fixed addresses (items
+and copies as ctypes arrays, channels as rings, each task's staging arrays
+and flags), so that the dispatch table becomes plans of the runner
+(runner.py) once: per instant, the publications, the releases and, where
+no Python is needed, the bodies. :class:`ProgramState` runs an instant's
+parts for the engine's step (with the stimulus, the interfaces, the trace
+and the charts in between) and whole stretches of instants in one call of
+the runner when nothing in Python has to happen (:meth:`run_native`).
+"""
 
 from __future__ import annotations
 
-from collections import deque
+import ctypes
 from typing import Callable
 
+from ..core import expr as I
 from ..ir.program import Instant, Program, Task
+from . import runner as R
 from . import values as V
 from .charts import ChartRunner
 from .dataflow import ActorState, DataflowRunner
@@ -19,55 +31,86 @@ from .plugins import Plugin
 
 
 class TaskState:
-    """A task's local copies (by item id; None for items it does not use),
-    its channel staging arrays and cursors, and whether an activation waits
-    for its deadline."""
+    """A task's local copies (by item id, C arrays; None for items it does
+    not use), its channels' staging arrays, and in C memory whether an
+    activation waits for its deadline, how many it had and when the last
+    was released."""
 
-    def __init__(self, task: Task, program: Program):
+    def __init__(self, task: Task, program: Program, published: list):
         self.task = task
-        self.local: list[list | None] = [None] * len(program.items)
-        self.staging: dict[int, list] = {}
-        self.cursor: dict[int, int] = {}
+        self.local: list[ctypes.Array | None] = [None] * len(program.items)
+        for item in dict.fromkeys(task.reads + task.writes):
+            self.local[item] = type(published[item]).from_buffer_copy(published[item])
+        self.staging: dict[int, R.Stage] = {}
         for ch in task.channels_in:
-            self.staging[ch] = []
+            self.staging[ch] = R.Stage(program.channels[ch].type, program.channels[ch].tokens_out)
         for ch in task.channels_out:
-            channel = program.channels[ch]
-            self.staging[ch] = [V.zero(channel.type)] * channel.tokens_in
-        self.pending = False
-        self.released_at_us = 0
+            self.staging[ch] = R.Stage(program.channels[ch].type, program.channels[ch].tokens_in)
+        self._pending = ctypes.c_uint8(0)
+        self._count = ctypes.c_uint64(0)
+        self._released_at = ctypes.c_uint64(0)
+        # What the runner needs: a flag, a counter, a time.
+        self.pending_flag = ctypes.addressof(self._pending)
+        self.counter = ctypes.addressof(self._count)
+        self.release_time = ctypes.addressof(self._released_at)
 
-    # Moves between the task's copies and dataflow edges (DataflowRunner).
+    @property
+    def pending(self) -> bool:
+        """Released, not yet published."""
+        return bool(self._pending.value)
 
-    def item_to_edge(self, item: int, array, lo: int, hi: int) -> None:
-        array[lo:hi] = self.local[item]
+    @pending.setter
+    def pending(self, value: bool) -> None:
+        self._pending.value = int(value)
 
-    def edge_to_item(self, item: int, array, lo: int, hi: int) -> None:
-        self.local[item] = array[lo:hi]
+    @property
+    def activations(self) -> int:
+        return self._count.value
 
-    def channel_to_edges(self, channel: int, targets: list) -> None:
-        token = self.staging[channel][self.cursor[channel]]
-        for array, at in targets:
-            array[at] = token
-        self.cursor[channel] += 1
+    @property
+    def released_at_us(self) -> int:
+        return self._released_at.value
 
-    def edge_to_channel(self, channel: int, array, at: int) -> None:
-        self.staging[channel][self.cursor[channel]] = array[at]
-        self.cursor[channel] += 1
+
+class InstantPlan:
+    """What one instant of the table does, as spans of the runner: its
+    publications, its releases, and its releases followed by the bodies that
+    need no Python (``inline``, task ids); the tasks whose bodies need Python
+    (``python``, with a chart), the chart tasks it publishes, and whether
+    the runner does all of it (``native``)."""
+
+    def __init__(self, instant: Instant, publish: R.Span, release: R.Span, release_bodies: R.Span,
+                 inline: list[int], chart_tasks: list[int], native: bool):
+        self.tick = instant.tick
+        self.released = instant.release
+        self.publish = publish
+        self.release = release
+        self.release_bodies = release_bodies
+        self.inline = inline
+        self.python = [t for t in instant.release if t not in inline]
+        self.chart_tasks = chart_tasks
+        self.native = native
 
 
 class ProgramState:
     """The run-time state of one program, built from its IR and plug-ins
-    (``plugins[spec id]``, ``run_batch`` the batch runner of
-    plugins.BATCH_SOURCE), as the firmware holds it at boot."""
+    (``plugins[spec id]``; ``runner`` runs the plans), as the firmware holds
+    it at boot."""
 
-    def __init__(self, program: Program, plugins: list[Plugin], run_batch: Callable[[int, int], None],
-                 io: Interfaces | None = None):
+    def __init__(self, program: Program, plugins: list[Plugin], runner: R.Runner, io: Interfaces | None = None):
         self.program = program
         self.plugins = plugins
         self.io = io
-        self.published: list[list] = [[V.literal(i.type, i.initial)] * i.count for i in program.items]
-        self.tasks = [TaskState(t, program) for t in program.tasks]
-        self.channels = [deque(V.literal(c.type, v) for v in c.initial) for c in program.channels]
+        self.runner = runner
+        self.cursor = R.Cursor()  # the next instant of the table (the engine's position)
+        # The published items: with interfaces, the library's own arrays.
+        self.published: list[ctypes.Array] = list(io.items) if io is not None else \
+            [(V.ctype(i.type) * i.count)() for i in program.items]
+        for item, array in zip(program.items, self.published):
+            array[:] = [V.literal(item.type, item.initial)] * item.count
+        self.tasks = [TaskState(t, program, self.published) for t in program.tasks]
+        self.channels = [R.Ring(c.type, c.capacity, [V.literal(c.type, v) for v in c.initial])
+                         for c in program.channels]
         self.actors = [ActorState(inst, program.specs[inst.spec], plugins[inst.spec],
                                   io.actor_states[inst.id] if io is not None else None)
                        for inst in program.instances]
@@ -77,23 +120,125 @@ class ProgramState:
                 self.dataflows.append(None)
                 continue
             actors = {self.actors[i].instance.name: self.actors[i] for i in df.instances}
-            self.dataflows.append(DataflowRunner(program, df, actors, self.tasks[df.task], run_batch))
+            self.dataflows.append(DataflowRunner(program, df, actors, self.tasks[df.task], runner, self.cursor))
         self.charts = [ChartRunner(program, c, self.tasks[c.task] if c.task is not None else None,
                                    self.run_dataflow) for c in program.charts]
-        self.instants = program.instants or [Instant(0, [], [])]  # as the C table: one empty instant
         self.readers = [(d.id, set(d.read_by)) for d in program.devices if d.read_by]
         self.charts_of_task = [[cid for kind, cid in t.runs if kind == "chart"] for t in program.tasks]
         if io is not None and io.has_debug:  # the debugger's probes where the firmware has them
-            for runner in self.dataflows:
-                if runner is not None:
-                    runner.probe_actor = self._probe_actor
-                    runner.armed = lambda: io.armed
+            for runner_ in self.dataflows:
+                if runner_ is not None:
+                    runner_.probe_actor = self._probe_actor
+                    runner_.armed = lambda: io.armed
             for chart in self.charts:
                 chart.probe = self.probe
+        self._inline = self._inline_args()
+        self.table, self.instants = self._table(program.instants or [Instant(0, [], [])])  # as C: one empty instant
+
+    # ------------------------------------------------------------ plans
+
+    def _publish_ops(self, task: TaskState) -> list[R.Op]:
+        """At the deadline, if released: the written items, the channels'
+        tokens (the charts' activity is Python's)."""
+        ops = [R.copy(ctypes.addressof(self.published[i]), self.program.items[i].type,
+                      ctypes.addressof(task.local[i]), self.program.items[i].type, self.program.items[i].count)
+               for i in task.task.writes]
+        ops += [R.push(self.channels[ch], task.staging[ch]) for ch in task.task.channels_out]
+        return [R.publish(task.pending_flag, len(ops))] + ops
+
+    def _release_ops(self, task: TaskState) -> list[R.Op]:
+        """At the release: latch the items, take the channels' tokens."""
+        ops = [R.copy(ctypes.addressof(task.local[i]), self.program.items[i].type,
+                      ctypes.addressof(self.published[i]), self.program.items[i].type, self.program.items[i].count)
+               for i in task.task.reads]
+        ops += [R.take(self.channels[ch], task.staging[ch]) for ch in task.task.channels_in]
+        ops += [R.rewind(task.staging[ch]) for ch in task.task.channels_out]
+        return ops + [R.release(task.counter, task.release_time)]
+
+    def _inline_args(self) -> dict[int, list]:
+        """The tasks whose bodies the runner runs itself (``inline``), with
+        the run-time arguments of their dataflows: tasks that run only
+        dataflows whose arguments read only items no task writes (params).
+        Those change only by inputs (stimulus, interfaces), before the
+        releases that latch them, so the arguments can be evaluated on the
+        published values once the inputs are in: before the releases of an
+        instant, or once for a stretch of instants without inputs."""
+        written = {i for t in self.program.tasks for i in t.writes}
+        constant: dict[int, list] = {}
+        for task in self.program.tasks:
+            evaluators = []
+            for kind, ident in task.runs:
+                runner_ = self.dataflows[ident] if kind == "dataflow" else None
+                if runner_ is None:
+                    break
+                if any(_reads(a, written) for a in runner_.actors.values()):
+                    break
+                evaluators += runner_.param_evaluators
+            else:
+                constant[task.id] = evaluators
+        return constant
+
+    def _table(self, instants: list[Instant]) -> tuple[R.Table, list[InstantPlan]]:
+        publish = [self._publish_ops(t) for t in self.tasks]
+        release = [self._release_ops(t) for t in self.tasks]
+        body = {}
+        for task_id in self._inline:
+            task = self.tasks[task_id]
+            body[task_id] = [R.call(self.dataflows[ident].plan) for _, ident in task.task.runs] + \
+                            [R.pending(task.pending_flag)]
+        rows = []  # per instant: its publications, releases and inline bodies, and the inline tasks
+        for instant in instants:
+            inline = [t for t in instant.release if t in body]
+            rows.append(([op for t in instant.publish for op in publish[t]],
+                         [op for t in instant.release for op in release[t]],
+                         [op for t in inline for op in body[t]], inline))
+        charts = [[t for t in instant.publish if self.charts_of_task[t]] for instant in instants]
+        native = [not c and len(row[3]) == len(i.release) for i, c, row in zip(instants, charts, rows)]
+        table = R.Table([p + r + b for p, r, b, _ in rows], [i.tick for i in instants], native,
+                        self.program.hyperperiod, self.program.tick_us)
+        plans = [InstantPlan(instant, table.span(k, 0, len(p)), table.span(k, len(p), len(r)),
+                             table.span(k, len(p), len(r) + len(b)), inline, charts[k], native[k])
+                 for k, (instant, (p, r, b, inline)) in enumerate(zip(instants, rows))]
+        return table, plans
+
+    # ------------------------------------------------------------ running
+
+    def fault(self, err: R.RunnerFault) -> RuntimeError:
+        """A runner's fault in the program's words."""
+        for ch, ring in zip(self.program.channels, self.channels):
+            if err.at == ring.address:
+                what = "is full" if err.kind == R.RING_FULL else "has too few tokens"
+                return RuntimeError(f"channel '{ch.name}' {what} ({ch.location})")
+        for task in self.tasks:
+            for ch, stage in task.staging.items():
+                if err.at == stage.address:
+                    return RuntimeError(f"channel '{self.program.channels[ch].name}': task '{task.task.name}' "
+                                        f"moves more tokens than an activation has")
+        return RuntimeError(f"the interpreter's runner stopped (fault {err.kind})")
+
+    def run_ops(self, span: R.Span) -> None:
+        try:
+            self.runner.run(span, self.cursor)
+        except R.RunnerFault as err:
+            raise self.fault(err) from None
+
+    def run_native(self, before_us: int, instants: int, ops: int) -> int:
+        """Instants from the cursor on, in one call of the runner, as long
+        as they need no Python (none with a chart), are before ``before_us``
+        and at most ``instants`` (see Runner.run_instants). The run-time
+        arguments, constant over such a stretch, are evaluated first."""
+        published = self.published
+        for evaluators in self._inline.values():
+            for cell, evaluate in evaluators:
+                cell[0] = evaluate(published, None, None)
+        try:
+            return self.runner.run_instants(self.table, self.cursor, before_us, instants, ops)
+        except R.RunnerFault as err:
+            raise self.fault(err) from None
 
     def serve(self, call: Callable, *args) -> None:
         """Call into the interfaces library (which may serve clients): the
-        published items go in before, what clients wrote comes back after."""
+        charts' slots go in before (the items are the library's)."""
         io = self.io
         io.push(self.published, self.charts)
         call(*args)
@@ -111,17 +256,30 @@ class ProgramState:
     def run_dataflow(self, dataflow: int) -> None:
         self.dataflows[dataflow].run()
 
-    def release(self, task_state: TaskState) -> None:
-        """Latch the task's items and take its channel tokens."""
-        local, published = task_state.local, self.published
-        for item in task_state.task.reads:
-            local[item] = list(published[item])
-        for ch in task_state.task.channels_in:
-            ring = self.channels[ch]
-            task_state.staging[ch] = [ring.popleft() for _ in range(self.program.channels[ch].tokens_out)]
-            task_state.cursor[ch] = 0
-        for ch in task_state.task.channels_out:
-            task_state.cursor[ch] = 0
+    def publish(self, plan: InstantPlan) -> None:
+        """The deadlines of an instant: the released tasks' outputs, channel
+        tokens and chart activity become visible (device ``write()`` does
+        nothing on a simulated board)."""
+        charts = [t for t in plan.chart_tasks if self.tasks[t].pending]
+        self.run_ops(plan.publish)
+        for task in charts:
+            for chart in self.charts_of_task[task]:
+                self.charts[chart].publish()
+
+    def release(self, plan: InstantPlan, time_us: int, bodies: bool = False) -> None:
+        """The releases of an instant: latch the tasks' items, take their
+        channel tokens; with ``bodies``, then run the bodies that need no
+        Python (``plan.inline``; their run-time arguments are evaluated on
+        the published params, which the releases latch)."""
+        self.cursor.now_us = time_us
+        if bodies and plan.inline:
+            published = self.published
+            for task in plan.inline:
+                for cell, evaluate in self._inline[task]:
+                    cell[0] = evaluate(published, None, None)
+            self.run_ops(plan.release_bodies)
+        else:
+            self.run_ops(plan.release)
 
     def body(self, task_state: TaskState) -> None:
         io = self.io
@@ -137,17 +295,7 @@ class ProgramState:
                 self.charts[ident].run()
         if io is not None:
             io.task_end()
-
-    def publish(self, task_state: TaskState) -> None:
-        """The task's outputs, channel tokens and chart activity become
-        visible (device ``write()`` does nothing on a simulated board)."""
-        task = task_state.task
-        for item in task.writes:
-            self.published[item] = list(task_state.local[item])
-        for ch in task.channels_out:
-            self.channels[ch].extend(task_state.staging[ch][:self.program.channels[ch].tokens_in])
-        for chart in self.charts_of_task[task.id]:
-            self.charts[chart].publish()
+        task_state.pending = True
 
     def boot(self) -> None:
         for actor in self.actors:
@@ -158,3 +306,8 @@ class ProgramState:
             actor.stop()
 
 
+
+def _reads(actor: ActorState, items: set[int]) -> bool:
+    """Whether an actor's run-time arguments read one of ``items``."""
+    return any(r.kind == "item" and r.target in items
+               for e in actor.instance.runtime_args.values() for r in I.refs(e))

@@ -49,11 +49,8 @@ class Column:
     times: list[int] = field(default_factory=list)
     values: list = field(default_factory=list)
     written: int = 0
+    applied: int = 0  # for a device datum: the rows up to which a read has applied
 
-    def value_at(self, time_us: int):
-        """The latest value whose time is <= time_us (None before the first)."""
-        i = bisect_right(self.times, time_us)
-        return self.values[i - 1] if i else None
 
 
 def parse_strtod(text: str) -> float | None:
@@ -85,16 +82,38 @@ class Stimulus:
         live replacement); columns whose item no longer exists, or changed
         type or size, are listed in ``unbound`` and ignored."""
         by_name = {i.name: i for i in program.items}
+        read = {d.id for d in program.devices if d.read_by}
         self._by_device, self._inputs, self.unbound = {}, [], []
         for col in self.columns:
+            col.applied = 0  # a new program's device data take their values again at their next read
             item = by_name.get(col.item)
             if item is None or item.type != col.type or item.count < col.first + col.count \
                     or item.kind == "dev_in":
                 self.unbound.append(col.name)
             elif item.kind == "dev_out":
-                self._by_device.setdefault(item.device, []).append((col, item.id))
+                if item.device in read:  # a device no task reads is never read
+                    self._by_device.setdefault(item.device, []).append((col, item.id))
             else:
                 self._inputs.append((col, item.id))
+
+    def quiet_until(self, time_us: int) -> int | None:
+        """The first time at or after ``time_us`` at which the stimulus may
+        write something (None: never again): the next param or var value,
+        the next device value, or ``time_us`` itself while a device datum's
+        latest value waits for a read to apply it. Before that time, every
+        write it would make leaves the items as they are."""
+        due = []
+        for col, _ in self._inputs:
+            if col.written < len(col.times):
+                due.append(max(time_us, col.times[col.written]))
+        for columns in self._by_device.values():
+            for col, _ in columns:
+                now = bisect_right(col.times, time_us)
+                if col.applied < now:
+                    return time_us
+                if now < len(col.times):
+                    due.append(col.times[now])
+        return min(due, default=None)
 
     def read_device(self, device: int, time_us: int, published: list[list]) -> None:
         """``el_sim_read``: the device's data with a column take the latest
@@ -112,9 +131,10 @@ class Stimulus:
                 self._store(col, item, col.values[due - 1], published)
 
     def _apply(self, col: Column, item: int, time_us: int, published: list[list]) -> None:
-        value = col.value_at(time_us)
-        if value is not None:
-            self._store(col, item, value, published)
+        rows = bisect_right(col.times, time_us)
+        col.applied = rows
+        if rows:
+            self._store(col, item, col.values[rows - 1], published)
 
     @staticmethod
     def _store(col: Column, item: int, value, published: list[list]) -> None:

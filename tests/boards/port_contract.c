@@ -33,6 +33,7 @@
 #include "el_types.h"
 #include "el_model.h"
 #include "el_port.h"
+#include "el_service.h"
 #include "el_board.h"
 #include "port_contract_hooks.h"
 
@@ -54,6 +55,7 @@ const uint8_t el_chart_count = 0u;
 uint16_t el_overruns[1];
 const uint8_t el_task_count = 0u;
 const char *const el_task_names[1] = {""};
+const uint8_t el_svc_modbus_links = 0u; /* no Modbus interface to serve */
 
 /* ---- what the dispatcher provides ---- */
 

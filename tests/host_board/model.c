@@ -49,6 +49,8 @@ const char el_model_name[] = "fixture";
 const uint32_t el_program_id = 0x12345678u;
 const uint32_t el_tick_us = FIXTURE_TICK_US;
 const uint32_t el_hyperperiod_ticks = 12u;
+/* The fixture declares no Modbus interface (el_service.h). */
+const uint8_t el_svc_modbus_links = 0u;
 
 const el_item_t el_items[] = {
     {"gain", &gain, EL_T_F32, EL_K_PARAM, EL_NO_DEVICE, 1},

@@ -18,7 +18,8 @@ from pathlib import Path
 
 import pytest
 
-from svc_testlib import DATA, EXAMPLES, MCU_NO_TCP, ROOT, SIM_MCUS, Firmware, InterpFirmware, McuFirmware
+from svc_testlib import (DATA, EXAMPLES, MCU_NO_TCP, ROOT, SIM_MCUS, Built, Firmware, InterpFirmware, McuFirmware,
+                         build_interp, build_model, build_sim)
 SANITIZE = "-g -fsanitize=address,undefined -fno-sanitize-recover=all -fno-omit-frame-pointer"
 
 # ---------------------------------------------------------------- packaging shim
@@ -65,79 +66,6 @@ def tool_env(shim) -> dict:
 
 
 # ---------------------------------------------------------------- builds
-
-
-class Built:
-    def __init__(self, out: Path, exe: Path):
-        self.out = out
-        self.exe = exe
-        self.map = out / "service_map.json"
-
-
-_BUILDS: dict = {}
-
-
-def build_model(model: Path, out: Path, cflags: str = "", release: bool = False) -> Built:
-    from easylab.build import build
-    from easylab.pipeline import lower_file
-
-    key = (str(model), cflags, release)
-    if key not in _BUILDS:
-        program, result = lower_file(str(model))
-        assert program is not None, result.report()
-        res = build(program, "host", out, extra_cflags=cflags.split(), release=release)
-        _BUILDS[key] = Built(out, res.executable)
-    return _BUILDS[key]
-
-
-def build_sim(board: str, model: Path, out: Path, env: dict) -> Built:
-    """A simulation build for an MCU board (``easylab build MODEL --board
-    BOARD --mcu MCU --sim``: the ATmega2560, the PIC18F4620; once per
-    session); `exe` is its simulator harness. A model's `modbus tcp` line is
-    left out: the MCU boards have no network (the tests of TCP are
-    host-only); on the PIC18 (one EUSART) the Modbus RTU interface moves to
-    uart0 (firmware_builds.board_model)."""
-    import subprocess
-
-    from firmware_builds import board_model
-
-    key = (board, str(model))
-    if key not in _BUILDS:
-        model = board_model(board, model, "modbus-rtu", out / "model")
-        text = model.read_text()
-        if any(line.lstrip().startswith("modbus tcp") for line in text.splitlines()):
-            out.mkdir(parents=True, exist_ok=True)
-            model = out / model.name
-            model.write_text("".join(line for line in text.splitlines(keepends=True)
-                                     if not line.lstrip().startswith("modbus tcp")))
-        proc = subprocess.run([sys.executable, "-m", "easylab", "build", str(model), "--board", board, "--mcu",
-                               SIM_MCUS[board], "--sim", "-o", str(out / board)], capture_output=True, text=True,
-                              env=env, timeout=600, stdin=subprocess.DEVNULL)
-        assert proc.returncode == 0, f"{board} build of {model} failed:\n{proc.stdout}{proc.stderr}"
-        sim = next(Path(line.split(": ", 1)[1]) for line in proc.stdout.splitlines() if line.startswith("simulator: "))
-        _BUILDS[key] = Built(out / board, sim)
-    return _BUILDS[key]
-
-
-def build_interp(model: Path, out: Path) -> Built:
-    """Local execution needs no build: `exe` is the model file, and the maps
-    are those `easylab run` writes (made here once per session)."""
-    import shutil
-
-    from easylab.pipeline import lower_file
-    from easylab.interp.interfaces import Library
-    from easylab.interp.plugins import PluginCache
-
-    key = ("interp", str(model))
-    if key not in _BUILDS:
-        program, result = lower_file(str(model))
-        assert program is not None, result.report()
-        out.mkdir(parents=True, exist_ok=True)
-        for name, path in Library(program, PluginCache()).files.items():
-            if name.startswith("service_map"):
-                shutil.copyfile(path, out / name)
-        _BUILDS[key] = Built(out, model)
-    return _BUILDS[key]
 
 
 # The boards the Modbus RTU conformance tests run on: the host board's

@@ -10,6 +10,7 @@ import signal
 import socket
 import struct
 import subprocess
+import sys
 import time
 from pathlib import Path
 
@@ -27,19 +28,32 @@ def free_port() -> int:
         return s.getsockname()[1]
 
 
+def declares_modbus_tcp(exe: Path) -> bool:
+    """Whether the model behind a firmware (or a model file, for local
+    execution) declares `modbus tcp`."""
+    if exe.suffix == ".elab":
+        return any(line.lstrip().startswith("modbus tcp") for line in exe.read_text().splitlines())
+    smap = exe.parent / "service_map.json"
+    return smap.is_file() and "tcp" in json.loads(smap.read_text()).get("interfaces", {})
+
+
 class Firmware:
     """A host firmware process serving Modbus (and optionally the HMI)."""
 
     def __init__(self, exe: Path, workdir: Path, tcp: bool = True, rtu: bool = True, hmi: bool = False,
-                 nvram: Path | None = None, extra: list[str] | None = None):
+                 nvram: Path | None = None, extra: list[str] | None = None, port: int | None = None):
         self.exe = exe
-        self.port = free_port() if tcp else None
+        self.port = (port or free_port()) if tcp else None
         self.rtu = workdir / f"rtu{id(self)}" if rtu else None
         self.hmi = workdir / f"hmi{id(self)}" if hmi else None
         self.nvram = nvram
         args = [str(exe), "--duration", "600s"]
         if tcp:
             args += ["--modbus-tcp", str(self.port)]
+        elif declares_modbus_tcp(exe):
+            # not used, but not the model's fixed port either: two runs at
+            # once (other tests, other test processes) must not collide
+            args += ["--modbus-tcp", str(free_port())]
         if rtu:
             args += ["--modbus-rtu", f"pty:{self.rtu}"]
         if hmi:
@@ -114,15 +128,16 @@ class McuFirmware(Firmware):
     """An MCU's firmware in its board's simulator harness (NAME-sim, real
     time: the ATmega2560 in simavr, the PIC18F4620 in gpsim) serving Modbus
     RTU on the model's Modbus UART on a pty: the same `rtu` link and the
-    same life cycle as Firmware. No Modbus TCP (`port` stays None), no HMI."""
+    same life cycle as Firmware. No Modbus TCP (`port` stays None), no HMI;
+    `rtu_link` names the pty's link (a restart may keep it)."""
 
     def __init__(self, exe: Path, workdir: Path, tcp: bool = True, rtu: bool = True, hmi: bool = False,
-                 nvram: Path | None = None, extra: list[str] | None = None):
+                 nvram: Path | None = None, extra: list[str] | None = None, rtu_link: Path | None = None):
         assert not hmi, "the MCU boards have no HMI"
         assert rtu, MCU_NO_TCP
         self.exe = exe
         self.port = None
-        self.rtu = workdir / f"rtu{id(self)}"
+        self.rtu = rtu_link or workdir / f"rtu{id(self)}"
         self.hmi = None
         self.nvram = nvram
         hw = json.loads((Path(exe).parent / "hw_map.json").read_text())
@@ -144,15 +159,100 @@ class InterpFirmware(Firmware):
     options and the same life cycle. No HMI."""
 
     def __init__(self, exe: Path, workdir: Path, tcp: bool = True, rtu: bool = True, hmi: bool = False,
-                 nvram: Path | None = None, extra: list[str] | None = None):
+                 nvram: Path | None = None, extra: list[str] | None = None, port: int | None = None):
         import sys
         assert not hmi, "local execution has no HMI"
-        super().__init__(exe, workdir, tcp, rtu, False, nvram, extra)
+        super().__init__(exe, workdir, tcp, rtu, False, nvram, extra, port)
         self.args = [sys.executable, "-m", "easylab", "run", str(exe), *self.args[1:],
                      "--maps", str(workdir / f"maps{id(self)}")]
 
     def wait_ready(self, timeout: float = 120.0) -> None:
         super().wait_ready(timeout)  # the first run of a model compiles its plug-ins and interfaces library
+
+
+# ---------------------------------------------------------------- builds
+
+
+class Built:
+    def __init__(self, out: Path, exe: Path):
+        self.out = out
+        self.exe = exe
+        self.map = out / "service_map.json"
+
+
+_BUILDS: dict = {}
+
+
+def build_model(model: Path, out: Path, cflags: str = "", release: bool = False) -> Built:
+    from easylab.build import build
+    from easylab.pipeline import lower_file
+
+    key = (str(model), cflags, release)
+    if key not in _BUILDS:
+        program, result = lower_file(str(model))
+        assert program is not None, result.report()
+        res = build(program, "host", out, extra_cflags=cflags.split(), release=release)
+        _BUILDS[key] = Built(out, res.executable)
+    return _BUILDS[key]
+
+
+def build_sim(board: str, model: Path, out: Path, env: dict) -> Built:
+    """A simulation build for an MCU board (``easylab build MODEL --board
+    BOARD --mcu MCU --sim``: the ATmega2560, the PIC18F4620; once per
+    session); `exe` is its simulator harness. A model's `modbus tcp` line is
+    left out: the MCU boards have no network (the tests of TCP are
+    host-only); on the PIC18 (one EUSART) the Modbus RTU interface moves to
+    uart0 (firmware_builds.board_model)."""
+    import subprocess
+
+    from firmware_builds import board_model
+
+    key = (board, str(model))
+    if key not in _BUILDS:
+        model = board_model(board, model, "modbus-rtu", out / "model")
+        text = model.read_text()
+        if any(line.lstrip().startswith("modbus tcp") for line in text.splitlines()):
+            out.mkdir(parents=True, exist_ok=True)
+            model = out / model.name
+            model.write_text("".join(line for line in text.splitlines(keepends=True)
+                                     if not line.lstrip().startswith("modbus tcp")))
+        proc = subprocess.run([sys.executable, "-m", "easylab", "build", str(model), "--board", board, "--mcu",
+                               SIM_MCUS[board], "--sim", "-o", str(out / board)], capture_output=True, text=True,
+                              env=env, timeout=600, stdin=subprocess.DEVNULL)
+        assert proc.returncode == 0, f"{board} build of {model} failed:\n{proc.stdout}{proc.stderr}"
+        sim = next(Path(line.split(": ", 1)[1]) for line in proc.stdout.splitlines() if line.startswith("simulator: "))
+        _BUILDS[key] = Built(out / board, sim)
+    return _BUILDS[key]
+
+
+def build_avr(model: Path, out: Path, env: dict) -> Built:
+    """The ATmega2560 simulation build of ``model`` (build_sim)."""
+    return build_sim("avr", model, out, env)
+
+
+# The AVR's harness is an MCU harness like every other.
+AvrFirmware = McuFirmware
+
+
+def build_interp(model: Path, out: Path) -> Built:
+    """Local execution needs no build: `exe` is the model file, and the maps
+    are those `easylab run` writes (made here once per session)."""
+    import shutil
+
+    from easylab.pipeline import lower_file
+    from easylab.interp.interfaces import Library
+    from easylab.interp.plugins import PluginCache
+
+    key = ("interp", str(model))
+    if key not in _BUILDS:
+        program, result = lower_file(str(model))
+        assert program is not None, result.report()
+        out.mkdir(parents=True, exist_ok=True)
+        for name, path in Library(program, PluginCache()).files.items():
+            if name.startswith("service_map"):
+                shutil.copyfile(path, out / name)
+        _BUILDS[key] = Built(out, model)
+    return _BUILDS[key]
 
 
 # ---------------------------------------------------------------- raw Modbus

@@ -8,6 +8,8 @@ would overflow Python's stack.
 from __future__ import annotations
 
 import heapq
+from collections import Counter
+from itertools import chain
 from typing import Sequence
 
 
@@ -76,26 +78,29 @@ def topological_order(
 ) -> list[int] | None:
     """Kahn's algorithm, always taking the ready node of smallest priority.
 
-    ``priority`` defaults to the node number.  Returns None on a cycle.
+    ``priority`` (integers) defaults to the node number.  Returns None on a
+    cycle.
     """
     members = set(nodes)
-    indegree = {v: 0 for v in nodes}
-    for v in nodes:
-        for w in succ[v]:
-            if w in members:
-                indegree[w] += 1
-    key = priority if priority is not None else range(max(nodes, default=-1) + 1)
-    ready = [(key[v], v) for v in nodes if indegree[v] == 0]
+    inside = members.__contains__
+    # In-degrees inside ``nodes``, counted without a Python loop per edge.
+    indegree = dict.fromkeys(members, 0)
+    indegree.update(Counter(filter(inside, chain.from_iterable(map(succ.__getitem__, members)))))
+    # The heap holds key * scale + node: the order of (key, node) pairs,
+    # without a tuple per entry.
+    scale = max(nodes, default=0) + 1
+    key = priority if priority is not None else range(scale)
+    ready = [key[v] * scale + v for v in nodes if not indegree[v]]
     heapq.heapify(ready)
     order = []
     while ready:
-        _, v = heapq.heappop(ready)
+        v = heapq.heappop(ready) % scale
         order.append(v)
-        for w in succ[v]:
-            if w in members:
-                indegree[w] -= 1
-                if indegree[w] == 0:
-                    heapq.heappush(ready, (key[w], w))
+        for w in filter(inside, succ[v]):
+            left = indegree[w] - 1
+            indegree[w] = left
+            if not left:
+                heapq.heappush(ready, key[w] * scale + w)
     return order if len(order) == len(indegree) else None
 
 
@@ -114,18 +119,17 @@ def depth_first_topological_order(
         if root in visited:
             continue
         visited.add(root)
-        frames = [(root, 0)]
+        # Each frame is a node and the iterator over its successors.
+        frames = [(root, iter(succ[root]))]
         while frames:
-            v, i = frames[-1]
-            successors = succ[v]
-            if i < len(successors):
-                frames[-1] = (v, i + 1)
-                w = successors[i]
+            v, successors = frames[-1]
+            for w in successors:
                 if w in members and w not in visited:
                     visited.add(w)
-                    frames.append((w, 0))
-                continue
-            frames.pop()
-            postorder.append(v)
+                    frames.append((w, iter(succ[w])))
+                    break
+            else:
+                frames.pop()
+                postorder.append(v)
     postorder.reverse()
     return postorder

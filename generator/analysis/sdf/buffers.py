@@ -41,12 +41,19 @@ class _Summary:
         self.change[e] = before + change
 
     def fire(self, ig: IndexedGraph, a: int, count: int) -> None:
+        # _extend for the inputs (taken at the start) and outputs (given at
+        # the end), written out: this is the inner loop of every check.
+        change, low, high = self.change, self.low, self.high
         for e in ig.in_edges[a]:
-            taken = count * ig.cons[e]
-            self._extend(e, -taken, 0, -taken)
+            before = change.get(e, 0)
+            change[e] = after = before - count * ig.cons[e]
+            low[e] = min(low.get(e, 0), after)
+            high[e] = max(high.get(e, 0), before)
         for e in ig.out_edges[a]:
-            given = count * ig.prod[e]
-            self._extend(e, 0, given, given)
+            before = change.get(e, 0)
+            change[e] = after = before + count * ig.prod[e]
+            low[e] = min(low.get(e, 0), before)
+            high[e] = max(high.get(e, 0), after)
         for e in ig.self_loops[a]:
             # Each firing takes ``cons`` first, then returns ``prod``.
             net = ig.prod[e] - ig.cons[e]

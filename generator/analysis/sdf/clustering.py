@@ -26,6 +26,8 @@ from __future__ import annotations
 
 import heapq
 import math
+from itertools import accumulate
+from operator import add, neg
 from typing import Sequence
 
 from ._digraph import depth_first_topological_order, topological_order
@@ -82,76 +84,77 @@ def bisection(dag: LevelDag, order: Sequence[int], reorder: bool) -> tuple[list[
     splits: Splits = {}
     if size < 2:
         return final, splits
-    position = [0] * dag.size   # of a node inside the part being cut
-    part_of = [-1] * dag.size   # stamp: which part a node currently is in
-    pending = [(list(order), 0)]
-    stamp = 0
+    # Parts to cut: the part, its first position, and its candidate orders
+    # when known already.
+    pending: list[tuple[list[int], int, list[list[int]] | None]] = [(list(order), 0, None)]
     while pending:
-        part, lo = pending.pop()
+        part, lo, candidates = pending.pop()
         if len(part) == 1:
             final[lo] = part[0]
             continue
-        stamp += 1
-        for node in part:
-            part_of[node] = stamp
-        candidates = [part]
-        if reorder:
-            candidates = [
-                topological_order(part, dag.succ, dag.priority),
-                depth_first_topological_order(sorted(part, key=dag.priority.__getitem__), dag.succ),
-            ]
+        if not reorder:
+            candidates = [part]
+        elif candidates is None:
+            kahn = topological_order(part, dag.succ, dag.priority)
+            candidates = [kahn]
+            # A part whose order is a path of edges has no other order to try.
+            if not all(b in dag.succ[a] for a, b in zip(kahn, kahn[1:])):
+                candidates.append(
+                    depth_first_topological_order(sorted(part, key=dag.priority.__getitem__), dag.succ))
         best_key, best_sequence, best_cut = None, None, 0
         for sequence in candidates:
-            key, cut = _best_prefix_cut(dag, sequence, position, part_of, stamp)
+            if sequence == best_sequence:
+                continue  # the same order (often, in small parts) has the same cut
+            key, cut = _best_prefix_cut(dag, sequence)
             if best_key is None or key < best_key:
                 best_key, best_sequence, best_cut = key, sequence, cut
         splits[(lo, lo + len(part) - 1)] = lo + best_cut
-        pending.append((best_sequence[best_cut + 1:], lo + best_cut + 1))
-        pending.append((best_sequence[:best_cut + 1], lo))
+        left, right = best_sequence[:best_cut + 1], best_sequence[best_cut + 1:]
+        left_orders = None
+        if reorder:
+            # The left part is a prefix of a topological order of the part: no
+            # edge enters it from the rest of the part, so its Kahn order and
+            # its depth-first order are the part's, restricted to it.
+            inside = set(left).__contains__
+            left_orders = [left if o is best_sequence else list(filter(inside, o)) for o in candidates]
+        pending.append((right, lo + best_cut + 1, None))
+        pending.append((left, lo, left_orders))
     return final, splits
 
 
-def _best_prefix_cut(
-    dag: LevelDag, sequence: list[int], position: list[int], part_of: list[int], stamp: int
-) -> tuple[tuple[int, int, int], int]:
+def _best_prefix_cut(dag: LevelDag, sequence: list[int]) -> tuple[tuple[int, int, int], int]:
     """Best cut after position ``cut`` of ``sequence``: (ranking key, cut)."""
     size = len(sequence)
-    for p, node in enumerate(sequence):
-        position[node] = p
+    if size == 2:  # the only cut, ranked as below (the most frequent part by far)
+        a, b = sequence
+        return (sum(traffic for v, traffic in dag.traffic_out[a] if v == b), -(dag.counts[a] + dag.counts[b]), 0), 0
+    position = dict(zip(sequence, range(size)))  # inside the part
     # Traffic crossing the cut after position t, by a difference array.
     change = [0] * (size + 1)
-    for node in sequence:
-        a = position[node]
-        for v, traffic in dag.traffic_out[node]:
-            if part_of[v] == stamp and position[v] > a:
+    traffic_out = dag.traffic_out
+    for a, node in enumerate(sequence):
+        for v, traffic in traffic_out[node]:
+            b = position.get(v, -1)
+            if b > a:
                 change[a] += traffic
-                change[position[v]] -= traffic
-    prefix_gcd = [0] * size
-    g = 0
-    for p, node in enumerate(sequence):
-        g = math.gcd(g, dag.counts[node])
-        prefix_gcd[p] = g
-    suffix_gcd = [0] * (size + 1)
-    g = 0
-    for p in range(size - 1, -1, -1):
-        g = math.gcd(g, dag.counts[sequence[p]])
-        suffix_gcd[p] = g
+                change[b] -= traffic
+    counts = list(map(dag.counts.__getitem__, sequence))
+    prefix_gcd = list(accumulate(counts, math.gcd))
+    suffix_gcd = list(accumulate(reversed(counts), math.gcd))[::-1]
     # Each side keeps at least a quarter of the nodes: recursion depth stays
-    # logarithmic.
+    # logarithmic. Cuts after lo .. hi - 1 qualify.
     smallest = (size + 3) // 4 if size >= 4 else 1
-    best = None
-    crossing = 0
-    for t in range(size - 1):
-        crossing += change[t]
-        left = t + 1
-        if left < smallest or size - left < smallest:
-            continue
-        # Least traffic; then the larger loop factors inside the two parts;
-        # then the more even split.
-        key = (crossing, -(prefix_gcd[t] + suffix_gcd[t + 1]), abs(size - 2 * left))
-        if best is None or key < best[0]:
-            best = (key, t)
-    return best
+    lo, hi = smallest - 1, size - smallest
+    # Least traffic; then the larger loop factors inside the two parts;
+    # then the more even split; then the first.
+    crossing = list(accumulate(change[:hi]))
+    key = min(zip(
+        crossing[lo:],
+        map(neg, map(add, prefix_gcd[lo:hi], suffix_gcd[lo + 1:hi + 1])),
+        map(abs, range(size - 2 * (lo + 1), size - 2 * (hi + 1), -2)),
+        range(lo, hi),
+    ))
+    return key[:3], key[3]
 
 
 def apgan(dag: LevelDag, search_limit: int) -> tuple[list[int], Splits]:
@@ -162,10 +165,10 @@ def apgan(dag: LevelDag, search_limit: int) -> tuple[list[int], Splits]:
     entries are re-ranked lazily when popped, since merges only ever lower a
     pair's gcd.  A merge keeps the id of the cluster with more neighbours and
     moves the other's adjacency over (small into large), so merging costs
-    the smaller degree.  Whether a merge would close a cycle is a
-    depth-first search for another path; it gives up after ``search_limit``
-    nodes and then conservatively skips the pair (exact on graphs of up to
-    that many nodes).
+    the smaller degree.  Whether a merge would close a cycle is a search
+    for another path; it gives up beyond ``search_limit`` nodes and then
+    conservatively skips the pair (exact on graphs of up to that many
+    nodes).
     """
     if dag.size < 2:
         return list(range(dag.size)), {}
@@ -239,22 +242,24 @@ def apgan(dag: LevelDag, search_limit: int) -> tuple[list[int], Splits]:
 def _other_path(succ: list[set[int]], pred: list[set[int]], u: int, v: int, limit: int) -> bool:
     """Whether ``v`` is reachable from ``u`` other than by the direct edge.
 
-    Answers True (unsafe) when the search exceeds ``limit`` nodes.
+    Answers True (unsafe) when the nodes reachable from ``u``'s other
+    successors are more than ``limit`` (or than those successors): the
+    answer depends on the reachable set only, not on the order of the
+    search, which goes breadth-first with set operations.
     """
     if len(succ[u]) == 1 or len(pred[v]) == 1:
         return False   # any other path would need another edge out of u / into v
-    stack = [x for x in succ[u] if x != v]
-    seen = set(stack)
-    while stack:
-        x = stack.pop()
-        for y in succ[x]:
-            if y == v:
-                return True
-            if y not in seen:
-                if len(seen) >= limit:
-                    return True
-                seen.add(y)
-                stack.append(y)
+    seen = succ[u] - {v}
+    bound = max(limit, len(seen))
+    frontier = seen
+    while frontier:
+        reached = set().union(*map(succ.__getitem__, frontier))
+        if v in reached:
+            return True
+        frontier = reached - seen
+        seen = seen | frontier
+        if len(seen) > bound:
+            return True
     return False
 
 

@@ -17,6 +17,7 @@ dynamic programming over all ranges in O(m^3) time and O(m^2) space.
 from __future__ import annotations
 
 import math
+from itertools import accumulate
 from typing import Callable, Sequence
 
 from .schedule import Node, repeat
@@ -36,9 +37,8 @@ class SparseTable:
         width = 1
         while 2 * width <= len(values):
             previous = self._levels[-1]
-            self._levels.append(
-                [combine(previous[i], previous[i + width]) for i in range(len(values) - 2 * width + 1)]
-            )
+            # combine(previous[i], previous[i + width]) for every i that fits
+            self._levels.append(list(map(combine, previous, previous[width:])))
             width *= 2
 
     def __call__(self, lo: int, hi: int):
@@ -70,35 +70,28 @@ def dppo(counts: Sequence[int], edges: Sequence[tuple[int, int, int]]) -> tuple[
     for a, b, w in edges:
         out_prefix[a][b + 1] += w
         in_prefix[b][a + 1] += w
-    for rows in (out_prefix, in_prefix):
-        for row in rows:
-            for t in range(1, m + 1):
-                row[t] += row[t - 1]
-
-    gcds = [[0] * m for _ in range(m)]
-    for i in range(m):
-        gcds[i][i] = g = counts[i]
-        for j in range(i + 1, m):
-            g = math.gcd(g, counts[j])
-            gcds[i][j] = g
+    out_prefix = [list(accumulate(row)) for row in out_prefix]
+    in_prefix = [list(accumulate(row)) for row in in_prefix]
+    gcds = [list(accumulate(counts[i:], math.gcd)) for i in range(m)]  # gcds[i][j - i]: of i..j
 
     best = [[0] * m for _ in range(m)]
+    column = [[0] * m for _ in range(m)]  # column[j][k] is best[k][j]
     split = [[0] * m for _ in range(m)]
     for length in range(1, m):
         for i in range(m - length):
             j = i + length
-            g = gcds[i][j]
-            row_i = best[i]
+            g = gcds[i][length]
+            row_i, column_j = best[i], column[j]
             crossing = out_prefix[i][j + 1] - out_prefix[i][i + 1]
-            chosen, chosen_cost = i, row_i[i] + best[i + 1][j] + crossing // g
+            chosen, chosen_cost = i, row_i[i] + column_j[i + 1] + crossing // g
             for k in range(i + 1, j):
                 # Node k moves from the right part to the left part.
                 out_k, in_k = out_prefix[k], in_prefix[k]
-                crossing += (out_k[j + 1] - out_k[k + 1]) - (in_k[k] - in_k[i])
-                cost = row_i[k] + best[k + 1][j] + crossing // g
+                crossing += out_k[j + 1] - out_k[k + 1] - in_k[k] + in_k[i]
+                cost = row_i[k] + column_j[k + 1] + crossing // g
                 if cost < chosen_cost:
                     chosen, chosen_cost = k, cost
-            best[i][j] = chosen_cost
+            row_i[j] = column_j[i] = chosen_cost
             split[i][j] = chosen
 
     splits: Splits = {}
@@ -131,6 +124,7 @@ def optimize_nesting(
     edges: Sequence[tuple[int, int, int]],
     hierarchy: Splits,
     window: int,
+    solved: dict | None = None,
 ) -> Splits:
     """DPPO on every maximal range of ``hierarchy`` with at most ``window`` nodes.
 
@@ -138,6 +132,8 @@ def optimize_nesting(
     the hierarchy's split, so the cost is O(m * window^2) instead of O(m^3);
     with ``window >= m`` this is plain DPPO.  Each window is solved
     optimally, so the result never costs more than ``hierarchy``.
+    ``solved`` keeps the nestings found, by window (its counts and edges),
+    for the next call: orders that share windows solve them once.
     """
     m = len(counts)
     if m < 2:
@@ -152,10 +148,15 @@ def optimize_nesting(
         if lo == hi:
             continue
         if hi - lo + 1 <= window:
-            local_edges = [
+            local_counts = tuple(counts[lo:hi + 1])
+            local_edges = tuple(
                 (a - lo, b - lo, w) for a in range(lo, hi + 1) for b, w in outgoing[a] if b <= hi
-            ]
-            _, local = dppo(counts[lo:hi + 1], local_edges)
+            )
+            local = None if solved is None else solved.get((local_counts, local_edges))
+            if local is None:
+                _, local = dppo(local_counts, local_edges)
+                if solved is not None:
+                    solved[(local_counts, local_edges)] = local
             for (i, j), k in local.items():
                 splits[(i + lo, j + lo)] = k + lo
             continue
@@ -196,6 +197,16 @@ def nesting_cost(
         lo, hi = span[shallowest(a, b - 1)]
         total += w // gcd(lo, hi)
     return total
+
+
+def order_lower_bound(counts: Sequence[int], edges: Sequence[tuple[int, int, int]]) -> int:
+    """Least buffer cost of forward ``edges`` (by position) under any nesting
+    of this order: the range whose split separates ``a`` from ``b`` holds
+    ``a..b``, so its gcd divides the gcd of ``a..b``."""
+    if len(counts) < 2:
+        return 0
+    gcd = range_gcd(counts)
+    return sum(w // gcd(a, b) for a, b, w in edges)
 
 
 def nested_items(

@@ -32,7 +32,7 @@ from typing import Sequence
 from ._digraph import strongly_connected_components, topological_order
 from ._indexed import IndexedGraph
 from .clustering import LevelDag, apgan, bisection
-from .dppo import Splits, forward_edges, nested_items, nesting_cost, optimize_nesting
+from .dppo import Splits, forward_edges, nested_items, nesting_cost, optimize_nesting, order_lower_bound
 from .minbuffer import heuristic_schedule
 from .options import SdfOptions
 from .repetitions import weakly_connected_components
@@ -163,18 +163,27 @@ def _plan_dag(dag: LevelDag, options: SdfOptions) -> tuple[list[int], Splits, st
         return [0], {}, None
     traffic = dag.traffic_edges()
     topological = dag.topological_order()
+    # (name, its order when known before its nesting, the order and nesting)
     candidates = [
-        ("apgan", *apgan(dag, options.apgan_search_limit)),
-        ("rpmc", *bisection(dag, topological, reorder=True)),
+        ("apgan", None, lambda: apgan(dag, options.apgan_search_limit)),
+        ("rpmc", None, lambda: bisection(dag, topological, reorder=True)),
         # The flat SAS's own order: keeps the result at or below the flat SAS.
-        ("topological", *bisection(dag, topological, reorder=False)),
+        ("topological", topological, lambda: bisection(dag, topological, reorder=False)),
     ]
     window = dag.size if dag.size <= options.dppo_max_nodes else options.dppo_window
+    solved: dict = {}  # DPPO's nestings by window, shared by the candidates
     best = None
-    for name, order, hierarchy in candidates:
+    for name, order, build in candidates:
+        hierarchy = None
+        if order is None:
+            order, hierarchy = build()
         counts = [dag.counts[node] for node in order]
         edges = forward_edges(order, traffic)
-        splits = optimize_nesting(counts, edges, hierarchy, window)
+        if best is not None and order_lower_bound(counts, edges) >= best[0]:
+            continue  # no nesting of this order beats the best so far: spare building it and DPPO
+        if hierarchy is None:
+            hierarchy = build()[1]
+        splits = optimize_nesting(counts, edges, hierarchy, window, solved)
         cost = nesting_cost(counts, edges, splits)
         if best is None or cost < best[0]:
             best = (cost, order, splits, f"{name}+dppo")

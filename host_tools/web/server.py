@@ -1,0 +1,342 @@
+"""``easylab-service web``: the service panel, one web page built from the
+service map that monitors, plots and tunes a running device
+(docs/service.md, "The web panel").
+
+The server (aiohttp) serves the page and a small JSON API; all Modbus
+traffic goes through one :class:`DeviceSession`. Safety: on a loopback
+address the Host header must name a loopback host (no DNS rebinding);
+anywhere else, or with ``--token``, every request needs the token (a
+cookie set by ``/?token=...``, or ``Authorization: Bearer ...``); every
+request that changes something must be same-origin JSON carrying the
+page's CSRF token.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import errno
+import hmac
+import ipaddress
+import json
+import re
+import secrets
+import signal
+import sys
+import time
+from dataclasses import asdict, dataclass
+from pathlib import Path
+
+from aiohttp import web
+
+from ..modbus_link import EXCEPTIONS, DeviceException, LinkError
+from ..service_cli import (PROG, UsageError, backup_document, device_address, parse_period, plan_restore,
+                           read_values, restore_params, write_value)
+from ..service_map import MapError, ServiceMap, ValueError_
+from .session import Busy, DeviceSession, NotConnected, json_value
+
+STATIC = Path(__file__).resolve().parent / "static"
+DEFAULT_LISTEN = "127.0.0.1:8080"
+CSRF_HEADER = "X-EasyLab-CSRF"
+MAX_BODY = 256 * 1024  # a restore of a few thousand params fits
+TOKEN_RE = re.compile(r"[A-Za-z0-9._~-]{8,128}")
+CSP = ("default-src 'self'; script-src 'self'; style-src 'self'; img-src 'self' data: blob:; connect-src 'self'; "
+       "frame-ancestors 'none'; base-uri 'none'; form-action 'none'")
+
+
+# ====================================================================== addresses and tokens
+
+
+def parse_listen(text: str) -> tuple[str, int]:
+    """ADDR:PORT (``[::1]:8080`` for IPv6; port 0 picks a free one)."""
+    m = re.fullmatch(r"\[([0-9A-Fa-f:.]+)\]:(\d+)|([^:\[\]]+):(\d+)", text.strip())
+    if not m:
+        raise UsageError(f"--listen {text}: give ADDR:PORT, e.g. 127.0.0.1:8080 or 0.0.0.0:8080")
+    host, port = (m.group(1), m.group(2)) if m.group(1) else (m.group(3), m.group(4))
+    if host != "localhost":
+        try:
+            ipaddress.ip_address(host)
+        except ValueError:
+            raise UsageError(f"--listen {text}: {host} is not an IP address (or localhost)") from None
+    if not 0 <= int(port) <= 65535:
+        raise UsageError(f"--listen {text}: port {port} is not 0..65535")
+    return host, int(port)
+
+
+def is_loopback(host: str) -> bool:
+    """True for localhost and the loopback addresses (127.0.0.0/8, ::1)."""
+    host = host.strip("[]").lower()
+    if host in ("localhost", "localhost."):
+        return True
+    try:
+        return ipaddress.ip_address(host).is_loopback
+    except ValueError:
+        return False
+
+
+def _host_name(host_header: str) -> str:
+    """The name in a Host header, without its port ("[::1]:80" -> "::1")."""
+    m = re.fullmatch(r"\[([^\]]*)\](?::\d*)?|([^:]*)(?::\d*)?", host_header)
+    return (m.group(1) or m.group(2) or "") if m else host_header
+
+
+@dataclass
+class Guard:
+    """Who may use the panel: `token` None means no token (loopback only),
+    `loopback` means the Host header must be a loopback name."""
+
+    token: str | None
+    loopback: bool
+    csrf: str
+    cookie: str
+
+    def authorized(self, request: web.Request) -> bool:
+        if self.token is None:
+            return True
+        offered = request.cookies.get(self.cookie)
+        auth = request.headers.get("Authorization", "")
+        if auth.startswith("Bearer "):
+            offered = auth[7:].strip()
+        return offered is not None and hmac.compare_digest(offered.encode(), self.token.encode())
+
+    def cross_site(self, request: web.Request) -> str | None:
+        """Why a request that changes something is refused (None: it is the
+        page's own): it must come from the panel's origin, as JSON, with the
+        CSRF token that only the page can read."""
+        origin = request.headers.get("Origin")
+        if origin is not None and origin != f"{request.scheme}://{request.host}":
+            return f"a request from another origin ({origin})"
+        site = request.headers.get("Sec-Fetch-Site")
+        if origin is None and site not in (None, "same-origin", "none"):
+            return f"a {site} request"
+        if request.content_type != "application/json":
+            return "a request that is not JSON"
+        if not hmac.compare_digest(request.headers.get(CSRF_HEADER, "").encode(), self.csrf.encode()):
+            return f"a request without the panel's {CSRF_HEADER} header"
+        return None
+
+
+def _error(status: int, message: str, **extra) -> web.Response:
+    return web.json_response({"error": message, **extra}, status=status)
+
+
+def _refuse(request: web.Request, status: int, message: str) -> web.Response:
+    """A refusal: JSON for the API, a line of text for a person's browser."""
+    if request.path.startswith("/api/"):
+        return _error(status, message)
+    return web.Response(status=status, text=message + "\n", content_type="text/plain")
+
+
+# ====================================================================== the application
+
+
+class Panel:
+    """The web application of one device session."""
+
+    def __init__(self, smap: ServiceMap, session: DeviceSession, guard: Guard, job_wait: float):
+        self.smap = smap
+        self.session = session
+        self.guard = guard
+        self.job_wait = job_wait
+
+    def app(self) -> web.Application:
+        app = web.Application(middlewares=[self._guard], client_max_size=MAX_BODY)
+        app.router.add_get("/", self.index)
+        app.router.add_get("/api/map", self.api_map)
+        app.router.add_get("/api/samples", self.api_samples)
+        app.router.add_post("/api/write", self.api_write)
+        app.router.add_get("/api/backup", self.api_backup)
+        app.router.add_post("/api/restore", self.api_restore)
+        app.router.add_static("/static/", STATIC, follow_symlinks=False)
+        return app
+
+    @web.middleware
+    async def _guard(self, request: web.Request, handler) -> web.StreamResponse:
+        response = await self._checked(request, handler)
+        response.headers["Content-Security-Policy"] = CSP
+        response.headers["X-Content-Type-Options"] = "nosniff"
+        response.headers["X-Frame-Options"] = "DENY"
+        response.headers["Referrer-Policy"] = "no-referrer"
+        response.headers.setdefault("Cache-Control", "no-store" if request.path.startswith("/api/") else "no-cache")
+        return response
+
+    async def _checked(self, request: web.Request, handler) -> web.StreamResponse:
+        g = self.guard
+        if g.loopback and not is_loopback(_host_name(request.host)):
+            return _refuse(request, 403, f"this panel answers only to a loopback address, not to '{request.host}'")
+        if g.token is not None and request.path == "/" and "token" in request.query:
+            if not hmac.compare_digest(request.query["token"].encode(), g.token.encode()):
+                return _refuse(request, 401, "wrong token: open the address that easylab-service web printed")
+            # The token becomes a cookie and leaves the address bar (and the history).
+            response = web.Response(status=303, headers={"Location": "/"})
+            response.set_cookie(g.cookie, g.token, httponly=True, samesite="Strict", path="/")
+            return response
+        if not g.authorized(request):
+            return _refuse(request, 401, "this panel needs its token: open the address that easylab-service web "
+                                         "printed (http://HOST:PORT/?token=...), or send 'Authorization: Bearer TOKEN'")
+        if request.method not in ("GET", "HEAD"):
+            why = g.cross_site(request)
+            if why is not None:
+                print(f"{PROG}: refused {why} to {request.path}", file=sys.stderr, flush=True)
+                return _refuse(request, 403, f"refused: {why}")
+        try:
+            return await handler(request)
+        except web.HTTPException as exc:  # 404, 405 ...: as plain responses, headers added above
+            return web.Response(status=exc.status, text=exc.text, content_type="text/plain")
+
+    # ------------------------------------------------------------ pages and reads
+
+    async def index(self, request: web.Request) -> web.StreamResponse:
+        return web.FileResponse(STATIC / "index.html")
+
+    async def api_map(self, request: web.Request) -> web.Response:
+        s = self.smap
+        return web.json_response({"model": s.model, "title": s.title, "program_id": s.program_id,
+                                  "where": self.session.address.where, "period": self.session.period,
+                                  "csrf": self.guard.csrf, "csrf_header": CSRF_HEADER,
+                                  "items": [asdict(it) for it in s.items]})
+
+    async def api_samples(self, request: web.Request) -> web.Response:
+        try:
+            after = int(request.query.get("after", "-1"))
+        except ValueError:
+            return _error(400, "after: give a sample number")
+        samples = self.session.samples_after(after)
+        return web.json_response({"now": round(time.time(), 3), "link": self.session.link_state(),
+                                  "samples": [s.as_json() for s in samples]})
+
+    # ------------------------------------------------------------ jobs on the device
+
+    async def _on_device(self, job):
+        """Run `job` in the device session; an error response is raised as
+        _Refusal, so a handler reads as its success path."""
+        try:
+            future = self.session.submit(job)
+        except Busy as err:
+            raise _Refusal(_error(429, f"busy: {err}; try again")) from None
+        except NotConnected as err:
+            raise _Refusal(_error(503, f"the device is not connected: {err}")) from None
+        try:
+            return await asyncio.wait_for(asyncio.wrap_future(future), self.job_wait)
+        except asyncio.TimeoutError:
+            raise _Refusal(_error(504, f"the device did not finish within {self.job_wait:g} s")) from None
+        except DeviceException as err:
+            raise _Refusal(_error(422, str(err), exception=err.code,
+                                  words=EXCEPTIONS.get(err.code, "exception"))) from None
+        except (LinkError, NotConnected) as err:
+            raise _Refusal(_error(503, f"the device is not connected: {err}")) from None
+
+    async def _json_body(self, request: web.Request):
+        try:
+            return await request.json()
+        except (json.JSONDecodeError, UnicodeDecodeError):
+            raise _Refusal(_error(400, "the request is not JSON")) from None
+
+    async def api_write(self, request: web.Request) -> web.Response:
+        try:
+            body = await self._json_body(request)
+            if not isinstance(body, dict) or not isinstance(body.get("name"), str) or "value" not in body:
+                return _error(400, 'give {"name": NAME, "value": VALUE}')
+            try:
+                it = self.smap.item(body["name"])
+                if not it.writable:
+                    return _error(400, f"'{it.name}' is read-only (service ro)")
+                value = it.parse(str(body["value"]))
+            except (MapError, ValueError_) as err:
+                return _error(400, str(err))
+
+            def write_and_read_back(link):
+                # Runs between samples: the samples after this one show the write.
+                before = self.session.last_seq()
+                write_value(link, it, value)
+                return read_values(link, [it])[it.name], before
+            now, before = await self._on_device(write_and_read_back)
+        except _Refusal as refusal:
+            return refusal.response
+        return web.json_response({"name": it.name, "value": json_value(now), "text": it.format(now),
+                                  "seq": before})
+
+    async def api_backup(self, request: web.Request) -> web.Response:
+        try:
+            doc = await self._on_device(lambda link: backup_document(self.smap, read_values(link, self.smap.params())))
+        except _Refusal as refusal:
+            return refusal.response
+        name = re.sub(r"[^A-Za-z0-9_.-]", "_", self.smap.model)
+        return web.Response(text=json.dumps(doc, indent=2) + "\n", content_type="application/json",
+                            headers={"Content-Disposition": f'attachment; filename="{name}-params.json"'})
+
+    async def api_restore(self, request: web.Request) -> web.Response:
+        try:
+            doc = await self._json_body(request)
+            try:
+                todo, skipped = plan_restore(doc, self.smap, "the file")
+            except (UsageError, ValueError_) as err:
+                return _error(400, str(err))
+            refused = await self._on_device(lambda link: restore_params(link, todo))
+        except _Refusal as refusal:
+            return refusal.response
+        return web.json_response({"total": len(todo), "restored": len(todo) - len(refused), "skipped": skipped,
+                                  "refused": [{"name": it.name, "error": why} for it, why in refused]})
+
+
+class _Refusal(Exception):
+    def __init__(self, response: web.Response):
+        super().__init__(response.status)
+        self.response = response
+
+
+# ====================================================================== running it
+
+
+def panel_guard(host: str, token: str | None) -> Guard:
+    """The guard for a listener on host:port: a token is required off
+    loopback (made here when none is given) and whenever one is given."""
+    if token is not None and not TOKEN_RE.fullmatch(token):
+        raise UsageError("--token: give 8 to 128 characters among letters, digits and . _ ~ -")
+    loopback = is_loopback(host)
+    if token is None and not loopback:
+        token = secrets.token_urlsafe(18)
+    return Guard(token, loopback, secrets.token_urlsafe(18), "easylab_panel")
+
+
+def run_panel(args, smap: ServiceMap) -> int:
+    """Serve the panel until SIGINT or SIGTERM (exit status 0)."""
+    address = device_address(args, smap)
+    period = parse_period(args.every)
+    host, port = parse_listen(args.listen)
+    return asyncio.run(_serve(smap, address, period, host, port, args.token))
+
+
+async def _serve(smap: ServiceMap, address, period: float, host: str, port: int, token: str | None) -> int:
+    guard = panel_guard(host, token)
+
+    def log(line: str) -> None:
+        print(f"{PROG}: {line}", file=sys.stderr, flush=True)
+    session = DeviceSession(smap, address, period, log=log)
+    panel = Panel(smap, session, guard, job_wait=max(10.0, 3 * address.timeout))
+    runner = web.AppRunner(panel.app(), access_log=None, handle_signals=False)
+    await runner.setup()
+    site = web.TCPSite(runner, host, port, reuse_address=True)
+    try:
+        await site.start()
+    except OSError as err:
+        await runner.cleanup()
+        why = "the port is in use" if err.errno == errno.EADDRINUSE else (err.strerror or str(err))
+        raise UsageError(f"cannot listen on {host}:{port}: {why}") from None
+    stop = asyncio.Event()
+    loop = asyncio.get_running_loop()
+    for sig in (signal.SIGINT, signal.SIGTERM):
+        loop.add_signal_handler(sig, stop.set)
+    bound = runner.addresses[0][1]
+    guard.cookie = f"easylab_panel_{bound}"  # cookies ignore ports: one name per panel on a host
+    shown = f"[{host}]" if ":" in host else host
+    url = f"http://{shown}:{bound}/" + (f"?token={guard.token}" if guard.token else "")
+    print(f"service panel of model {smap.model} (device {address.where}): {url}", flush=True)
+    if not guard.loopback:
+        print(f"listening on {host}: open it with this machine's address and the token {guard.token}", flush=True)
+    session.start()
+    try:
+        await stop.wait()
+    finally:
+        await runner.cleanup()
+        await asyncio.to_thread(session.stop)
+    return 0
