@@ -29,7 +29,7 @@ class Mcu:
     unavailable: dict[str, str] = field(default_factory=dict)
     # sdcc's software stack (arguments, saved registers, the interrupt
     # handler's context), at the top of RAM below el_pic18_kept.
-    stack: int = 512
+    stack: int = 384
 
     @property
     def device(self) -> str:
@@ -73,5 +73,5 @@ def read_mcus(table: dict) -> dict[str, Mcu]:
                         {int(k): str(v) for k, v in m.get("adc", {}).items()},
                         {str(k): int(v) for k, v in m.get("pwm", {}).items()},
                         {str(k): int(v) for k, v in m.get("int", {}).items()}, list(m.get("change", [])),
-                        dict(m.get("unavailable", {})), int(m.get("stack", 512)))
+                        dict(m.get("unavailable", {})), int(m.get("stack", 384)))
     return out
