@@ -11,13 +11,15 @@ MODEL   ?= examples/pt100_sensor.elab
 # Debian packages the project uses: cross compilers and simulators for the
 # boards, Modbus peers, fuzzing and sanitizer runtimes, Graphviz, tmux, and
 # Chromium with its driver for the service panel's browser tests.
+# (The PIC18 board's sdcc with the pic16 port is built from Debian's source
+# by boards/pic18/toolchain/build.sh: `make setup` runs it once.)
 DEB_PACKAGES := gcc make pkg-config graphviz tmux socat \
 	gcc-avr avr-libc binutils-avr simavr libsimavr-dev libelf-dev avrdude \
-	sdcc sdcc-libraries sdcc-ucsim gputils gpsim \
+	sdcc sdcc-libraries sdcc-ucsim gputils gpsim gpsim-dev libglib2.0-dev g++ dpkg-dev \
 	mbpoll libmodbus-dev clang libclang-rt-14-dev clang-tidy valgrind gtkwave \
 	chromium chromium-driver
 
-.PHONY: setup deps venv test demo bench clean help flash sim
+.PHONY: setup deps venv toolchains test demo bench clean help flash sim
 
 help:
 	@echo "make setup   install Debian packages (when missing) and the virtual environment"
@@ -25,13 +27,19 @@ help:
 	@echo "make demo    build the PT100 smart sensor for the host board and run it"
 	@echo "make bench   run the benchmarks, results in bench/results/ and docs/benchmarks.md"
 	@echo "make flash BOARD=avr MODEL=m.elab PORT=/dev/ttyACM0 [MCU=..] [PROGRAMMER=..] [BUILD_FLAGS=--release]"
-	@echo "             build and burn with the board's programmer (\`make -n flash ...\` shows the commands)"
+	@echo "             build and burn with the board's programmer (\`make -n flash ...\` shows the commands;"
+	@echo "             BOARD=pic18: a PICkit on USB, PORT=usb)"
 	@echo "make sim   BOARD=avr MODEL=m.elab [MCU=..] [STIMULUS=s.csv] [TRACE=t.csv] [DURATION=10s]"
 	@echo "             build and run in the board's simulator, serial links on ptys in the build folder"
 	@echo "make clean   remove build outputs and the virtual environment"
 	@echo "Boards: $(EASYLAB) boards (EASYLAB_BOARD_PATH adds folders of your own)"
 
-setup: deps venv
+setup: deps venv toolchains
+
+# Toolchains built from source once into ~/.cache/easylab/ (a stamp file
+# makes a second run a no-op; the script shows its log only on failure).
+toolchains: deps
+	@boards/pic18/toolchain/build.sh
 
 # Installs only what is missing; costs one dpkg-query when all is there.
 deps:

@@ -36,10 +36,13 @@
 /* The software form: two's complement in two 32-bit words. Its functions
  * (el_wide.c) are compiled on every board, so that the host's tests can
  * check them against native 64-bit arithmetic. */
-typedef struct {
+#ifndef EL_W64_DECLARED /* boards/pic18/el_pic18_w64.h declares the same */
+#define EL_W64_DECLARED
+typedef struct el_w64 {
     uint32_t lo; /* bits 0..31 */
     uint32_t hi; /* bits 32..63; bit 63 is the sign */
 } el_w64_t;
+#endif
 
 enum { EL_W64_ADD = 0, EL_W64_SUB = 1, EL_W64_MUL = 2, EL_W64_DIV = 3 };
 

@@ -8,6 +8,7 @@ from __future__ import annotations
 import fcntl
 import os
 import pickle
+import re
 import subprocess
 import sys
 import threading
@@ -82,6 +83,31 @@ def write_model(folder: Path, text: str, files: dict[str, str] | None = None, na
         target.write_text(content, encoding="utf-8")
     path = folder / name
     path.write_text(text, encoding="utf-8")
+    return path
+
+
+PIC18_MODELS = ROOT / "tests" / "pic18" / "models"
+_INTERFACE = {"debug": re.compile(r"^\s*debug\b"), "modbus-rtu": re.compile(r"^\s*modbus\s+rtu\b")}
+
+
+def board_model(board: str, model: Path, interface: str, out: Path) -> Path:
+    """The model a suite runs on a board: ``model`` itself, but on the PIC18
+    (one EUSART) the PIC18 variant of it (tests/pic18/models/: the part's
+    pins, no interface line) with the one interface the suite tests,
+    ``debug`` or ``modbus-rtu``, as the model declares it but on uart0, and
+    no other (a model without a variant keeps its lines)."""
+    if board != "pic18":
+        return model
+    variant = PIC18_MODELS / model.name
+    base = (variant if variant.is_file() else model).read_text(encoding="utf-8").splitlines(keepends=True)
+    wanted = [line for line in model.read_text(encoding="utf-8").splitlines(keepends=True)
+              if _INTERFACE[interface].match(line)]
+    lines = [line for line in base if not any(p.match(line) for p in _INTERFACE.values())
+             and not line.lstrip().startswith("modbus tcp")]
+    lines += [re.sub(r"\bon\s+uart\d+", "on uart0", line) for line in wanted]
+    out.mkdir(parents=True, exist_ok=True)
+    path = out / model.name
+    path.write_text("".join(lines), encoding="utf-8")
     return path
 
 

@@ -1,8 +1,8 @@
 /* EasyLab host board: what the host board shares with the simulators of
- * other boards (the AVR board's harness, the f16 board's proxy runner, which
- * write traces and read stimuli with the host board's own host_trace.c and
- * host_stimulus.c): messages, the sizes and names of the model's value
- * types, durations on the command line. */
+ * other boards (the simulator harnesses' shared core sim_harness.c, the f16
+ * board's proxy runner, which write traces and read stimuli with the host
+ * board's own host_trace.c and host_stimulus.c): messages, the sizes and
+ * names of the model's value types, durations on the command line. */
 #include "host_internal.h"
 
 #include <stdarg.h>

@@ -49,12 +49,17 @@ class Part:
     no_interrupt: str = "which cannot interrupt"  # why a pin is no encoder pin, in messages
     i2c: dict[int, list[str]] = field(default_factory=dict)  # I2C bus n -> its pins (SDA, SCL)
     spi: dict[int, list[str]] = field(default_factory=dict)  # SPI bus n -> its pins (SCK, MOSI, MISO, SS)
+    aliases: dict[str, str] = field(default_factory=dict)  # another name of a pin -> the part's name for it
     pin_name: str = r"^(.*?)(\d+)$"  # a pin's port and bit, for pin ranges in messages ("P43": r"^(P.)(\d)$")
 
     @property
     def kinds(self) -> list[str]:
         """The resource kinds this part has, for messages."""
         return ["pin", "pwm", "adc", "uart"] + (["i2c"] if self.i2c else []) + (["spi"] if self.spi else [])
+
+    def own_pin(self, name: object) -> object:
+        """The part's own name of a pin a claim names (an alias resolved)."""
+        return self.aliases.get(name, name) if isinstance(name, str) else name
 
 
 @dataclass
@@ -95,20 +100,33 @@ def interface_location(program: Program, kind: str) -> str:
 
 
 def pin_ranges(pins: list[str], pattern: str = _PIN_NAME.pattern) -> str:
-    """PB0..PB5, PC0..PC5, ...: pins grouped by their port (``pattern``'s
-    first group) and numbered by their bit (its second)."""
+    """PB0..PB5, PC0..PC2, PC4, PC5: pins grouped by their port (``pattern``'s
+    first group) and numbered by their bit (its second), each run of three
+    or more consecutive bits as one range."""
     groups: dict[str, list[int]] = {}
     for p in pins:
         m = re.match(pattern, p)
         if m:
             groups.setdefault(m.group(1), []).append(int(m.group(2)))
-    return ", ".join(f"{port}{min(bits)}..{port}{max(bits)}" if len(bits) > 1 else f"{port}{bits[0]}"
-                     for port, bits in groups.items())
+    runs: list[str] = []
+    for port, bits in groups.items():
+        bits = sorted(set(bits))
+        start = prev = bits[0]
+        for bit in bits[1:] + [None]:
+            if bit is not None and bit == prev + 1:
+                prev = bit
+                continue
+            runs.append(f"{port}{start}..{port}{prev}" if prev > start + 1 else
+                        ", ".join(f"{port}{b}" for b in range(start, prev + 1)))
+            if bit is not None:
+                start = prev = bit
+    return ", ".join(runs)
 
 
 def _physical_pins(board: str, part: Part, claim: Claim, problems: list[str]) -> list[str] | None:
     """The pins behind a claim, or None (a problem was recorded)."""
-    kind, idx, name = claim.kind, claim.index, part.name
+    kind, name = claim.kind, part.name
+    idx = part.own_pin(claim.index) if kind in ("pin", "pwm") else claim.index
     lead = f"{claim.where()}error: {claim.owner} claims {claim.text}, but"
     if kind == "pin":
         if not isinstance(idx, str) or idx not in part.pins:
@@ -286,6 +304,7 @@ def _check_driver(program: Program, board: str, part: Part, drivers: dict[str, d
         return
     if spec.get("interrupt_pins"):
         for kind, pin in parsed:
+            pin = part.own_pin(pin)
             if kind == "pin" and pin in part.pins and pin not in part.interrupt_pins:
                 problems.append(f"{dev.location}: error: device '{dev.path}' ({dev.driver}) needs an interrupt on "
                                 f"{pin}, {part.no_interrupt} on the {part.name}; pins that can: "

@@ -71,7 +71,7 @@ def test_stimulus_errors_are_reported_as_on_the_host_board(sim_builds, host_buil
 
 def test_bad_command_lines_exit_2(sim_builds):
     exe = sim_builds["blink"].simulator
-    for args, message in [(["--duration", "10"], "--duration 10: give a number and a unit"),
+    for args, message in [(["--duration", "10"], "--duration 10: a duration needs a unit"),
                           (["--uart7", "x"], "unknown option '--uart7'"),
                           (["--bogus"], "unknown option '--bogus'"),
                           (["--uart0", "serial"], "give pty:LINK, tcp:PORT, file:PATH or null")]:

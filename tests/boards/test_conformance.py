@@ -5,7 +5,9 @@ EASYLAB_BOARD_PATH); a new board gets them by existing.
 
 - the port contract program (port_contract.c) on every MCU of the board;
 - every example that fits the board gives the host board's trace, value
-  by value and instant by instant (boards with a simulator);
+  by value and instant by instant (boards with a simulator); one that
+  board.toml says does not fit ([conformance.does_not_fit]) fails to build
+  saying why;
 - resource claims the board cannot honour are refused, each naming the
   claim, its owner and its line; so is a device whose type brings handler
   files for other boards only (unless the board simulates devices);
@@ -100,6 +102,12 @@ def _host_trace(build_cache, name: str, tmp_path: Path, duration: str) -> bytes:
 def test_every_example_that_fits_gives_the_host_trace(build_cache, board, name, tmp_path):
     if not load(board).has_simulator:
         pytest.fail(f"board '{board}' has no simulator: its traces are checked by its own suite")
+    why = conformance(board).get("does_not_fit", {}).get(name)
+    if why is not None:  # the build must fail, saying so and why
+        err = build(ROOT / "examples" / f"{name}.elab", board, tmp_path / "b", *conformance_mcu(board), ok=False,
+                    env=ENV).proc.stderr
+        assert "does not fit" in err and why in err, err
+        return
     built = build_cache.example(board, name, *conformance_mcu(board), "--sim", env=ENV)
     assert built.simulator is not None and built.simulator.is_file(), built.proc.stdout
     stim = stimulus_of(name)

@@ -110,11 +110,12 @@ class Firmware:
             return list(csv.DictReader(f))
 
 
-class AvrFirmware(Firmware):
-    """The AVR firmware (ATmega2560) in its simavr harness, NAME-sim, with
-    the model's debug UART on a new pty (or TCP port): the same options and
-    the same client side as Firmware. `halt` is the harness's --halt, the
-    host's `--debug ...,halt`."""
+class McuFirmware(Firmware):
+    """An MCU's firmware in its board's simulator harness, NAME-sim (the
+    ATmega2560 in simavr, the PIC18F4620 in gpsim), with the model's debug
+    UART on a new pty (or TCP port): the same options and the same client
+    side as Firmware. `halt` is the harness's --halt, the host's
+    `--debug ...,halt`."""
 
     def command(self, spec: str, halt: bool, args: list[str]) -> list[str]:
         hw = json.loads((self.exe.parent / "hw_map.json").read_text())
@@ -187,33 +188,42 @@ def built(name: str) -> Path:
     return build(model, _BUILD_ROOT / name)
 
 
+# The MCUs of the simulator boards the suite runs on.
+SIM_MCUS = {"avr": "atmega2560", "pic18": "pic18f4620"}
+
+
 @_functools.lru_cache(maxsize=None)
-def built_avr(name: str) -> Path:
-    """An ATmega2560 simulation build (debug) of examples/NAME.elab (or
-    models/NAME.elab), once per test run: its simavr harness, NAME-sim."""
+def built_sim(board: str, name: str) -> Path:
+    """A simulation build (debug) of examples/NAME.elab (or models/NAME.elab)
+    for an MCU board, once per test run (on the PIC18 its variant with the
+    debug interface on uart0: firmware_builds.board_model): its harness,
+    NAME-sim."""
     import subprocess as sp
     import sys
+    from firmware_builds import board_model
     model = EXAMPLES / f"{name}.elab"
     if not model.exists():
         model = MODELS / f"{name}.elab"
-    out = _BUILD_ROOT / "avr" / name
-    proc = sp.run([sys.executable, "-m", "easylab", "build", str(model), "--board", "avr", "--mcu", "atmega2560",
+    out = _BUILD_ROOT / board / name
+    model = board_model(board, model, "debug", out / "model")
+    proc = sp.run([sys.executable, "-m", "easylab", "build", str(model), "--board", board, "--mcu", SIM_MCUS[board],
                    "--sim", "-o", str(out)], capture_output=True, text=True, timeout=300, stdin=sp.DEVNULL)
-    assert proc.returncode == 0, f"avr build of {name} failed:\n{proc.stdout}{proc.stderr}"
+    assert proc.returncode == 0, f"{board} build of {name} failed:\n{proc.stdout}{proc.stderr}"
     return next(Path(line.split(": ", 1)[1]) for line in proc.stdout.splitlines() if line.startswith("simulator: "))
 
 
-# The boards the debug suite runs on: the host board's process, and the AVR
-# firmware (ATmega2560) in simavr with its debug UART on a pty. A test runs
-# on both with @on_boards, on the host only with @host_only(reason).
-BOARDS = ("host", "avr", "interp")
+# The boards the debug suite runs on: the host board's process, the AVR
+# firmware (ATmega2560) in simavr and the PIC18 firmware (PIC18F4620) in
+# gpsim with their debug UART on a pty, local execution. A test runs on all
+# with @on_boards, on the host only with @host_only(reason).
+BOARDS = ("host", "avr", "pic18", "interp")
 on_boards = pytest.mark.parametrize("board", BOARDS, indirect=True)
 
 
 def host_only(reason: str, interp: bool = True):
     """On the host board (and in local execution unless `interp` is False),
-    the AVR board skipped for `reason`."""
-    boards = ["host", pytest.param("avr", marks=pytest.mark.skip(reason=f"host-only: {reason}"))]
+    the MCU boards skipped for `reason`."""
+    boards = ["host"] + [pytest.param(b, marks=pytest.mark.skip(reason=f"host-only: {reason}")) for b in SIM_MCUS]
     if interp:
         boards.append("interp")
     return pytest.mark.parametrize("board", boards, indirect=True)
@@ -233,20 +243,28 @@ def _board_of(request) -> str:
     return cs.params.get("board", "host") if cs is not None else "host"
 
 
+# Models an MCU board cannot run at all, with why (the test is skipped).
+DOES_NOT_FIT = {("pic18", "line_follower"): "line_follower drives three motors, and the PIC18F4620 has two PWM "
+                                            "outputs (CCP1, CCP2); its camera needs a UART besides the debugger's, "
+                                            "and the part has one EUSART"}
+
+
 class _Builds:
     def __init__(self, board: str = "host"):
         self.board = board
 
     def __getitem__(self, name: str) -> Path:
+        if (self.board, name) in DOES_NOT_FIT:
+            pytest.skip(DOES_NOT_FIT[self.board, name])
         if self.board == "interp":  # local execution runs the model itself
             return EXAMPLES / f"{name}.elab" if (EXAMPLES / f"{name}.elab").exists() else MODELS / f"{name}.elab"
-        return built_avr(name) if self.board == "avr" else built(name)
+        return built_sim(self.board, name) if self.board in SIM_MCUS else built(name)
 
 
 @pytest.fixture
 def builds(request):
     """builds[name] -> executable (built on first use, shared by the run):
-    the host program, or for the AVR board the simavr harness."""
+    the host program, or for an MCU board its simulator harness."""
     return _Builds(_board_of(request))
 
 
@@ -258,7 +276,8 @@ def firmware(tmp_path, request):
     board = _board_of(request)
 
     def start(exe, *args, **kw):
-        fw = {"avr": AvrFirmware, "interp": InterpFirmware}.get(board, Firmware)(exe, tmp_path, *args, **kw)
+        kind = McuFirmware if board in SIM_MCUS else (InterpFirmware if board == "interp" else Firmware)
+        fw = kind(exe, tmp_path, *args, **kw)
         started.append(fw)
         return fw
 

@@ -351,8 +351,15 @@ def test_tcp_transport(builds, firmware, tmp_path):
     assert c2.hello().program_id == fw.map.program_id
 
 
+# Round trips a flood makes in a second at the least: every one carries
+# all of cd_to_dat's items over a 115200-baud wire; on the PIC18 (10 MIPS)
+# its debug server's work adds to that, and gpsim keeps real time only
+# while it has a core to itself.
+FLOOD_ROUND_TRIPS = {"pic18": 15}
+
+
 @on_boards
-def test_dispatcher_keeps_time_while_a_client_floods_it(builds, firmware):
+def test_dispatcher_keeps_time_while_a_client_floods_it(builds, firmware, board):
     """Serving the debugger never makes the dispatcher late (bounded work)."""
     fw = firmware(builds["cd_to_dat"], halt=False, fast=False)
     c = fw.client()
@@ -365,5 +372,5 @@ def test_dispatcher_keeps_time_while_a_client_floods_it(builds, firmware):
         c.flags()
         n += 1
     status, _, err = fw.stop()
-    assert n > 50 and status == 0 and "overruns" not in err, err
+    assert n > FLOOD_ROUND_TRIPS.get(board, 50) and status == 0 and "overruns" not in err, (n, err)
 

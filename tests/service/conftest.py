@@ -18,8 +18,8 @@ from pathlib import Path
 
 import pytest
 
-from svc_testlib import (AVR_NO_TCP, DATA, EXAMPLES, ROOT, AvrFirmware, Built, Firmware, InterpFirmware,
-                         build_avr, build_interp, build_model)
+from svc_testlib import (DATA, EXAMPLES, MCU_NO_TCP, ROOT, SIM_MCUS, Built, Firmware, InterpFirmware, McuFirmware,
+                         build_interp, build_model, build_sim)
 SANITIZE = "-g -fsanitize=address,undefined -fno-sanitize-recover=all -fno-omit-frame-pointer"
 
 # ---------------------------------------------------------------- packaging shim
@@ -69,9 +69,10 @@ def tool_env(shim) -> dict:
 
 
 # The boards the Modbus RTU conformance tests run on: the host board's
-# process (RTU on a pty), and the AVR firmware (ATmega2560) in simavr with
-# the model's Modbus UART on a pty. A test runs on both with @on_boards
-# (svc_testlib), on the host only with @host_only(reason).
+# process (RTU on a pty), the AVR firmware (ATmega2560) in simavr and the
+# PIC18 firmware (PIC18F4620) in gpsim with the model's Modbus UART on a
+# pty, local execution. A test runs on all with @on_boards (svc_testlib),
+# on the host only with @host_only(reason).
 @pytest.fixture(scope="session")
 def board(request) -> str:
     """The board of builds, svc_all and firmware (host unless parametrised)."""
@@ -82,8 +83,8 @@ def pytest_collection_modifyitems(items):
     """Modbus TCP (a `tcp` parameter of a client or link fixture) is host-only."""
     for item in items:
         cs = getattr(item, "callspec", None)
-        if cs is not None and cs.params.get("board") == "avr" and "tcp" in cs.params.values():
-            item.add_marker(pytest.mark.skip(reason=AVR_NO_TCP))
+        if cs is not None and cs.params.get("board") in SIM_MCUS and "tcp" in cs.params.values():
+            item.add_marker(pytest.mark.skip(reason=MCU_NO_TCP))
 
 
 @pytest.fixture(scope="session")
@@ -92,8 +93,8 @@ def builds(shim, tool_env, board, tmp_path_factory):
 
     def get(name: str, cflags: str = "", release: bool = False) -> Built:
         model = DATA / f"{name}.elab" if (DATA / f"{name}.elab").exists() else EXAMPLES / f"{name}.elab"
-        if board == "avr":  # sanitizers are the host's; a debug build (release: no debug server, same Modbus)
-            return build_avr(model, d / name, tool_env)
+        if board in SIM_MCUS:  # sanitizers are the host's; a debug build (release: no debug server, same Modbus)
+            return build_sim(board, model, d / name, tool_env)
         if board == "interp":
             return build_interp(model, d / f"{name}_interp")
         tag = name + ("_asan" if cflags else "") + ("_rel" if release else "")
@@ -104,7 +105,7 @@ def builds(shim, tool_env, board, tmp_path_factory):
 @pytest.fixture(scope="session")
 def svc_all(builds) -> Built:
     """tests/service/data/service_all.elab with ASan and UBSan (host), or its
-    AVR simulation build without Modbus TCP."""
+    MCU simulation build without Modbus TCP."""
     return builds("service_all", SANITIZE)
 
 
@@ -112,12 +113,13 @@ def svc_all(builds) -> Built:
 
 @pytest.fixture
 def firmware(tmp_path, board):
-    """Start firmwares (host processes, or AVR harnesses); every one is
+    """Start firmwares (host processes, or MCU harnesses); every one is
     stopped (and checked) at the end."""
     started: list[Firmware] = []
 
     def start(exe, **kw) -> Firmware:
-        fw = {"avr": AvrFirmware, "interp": InterpFirmware}.get(board, Firmware)(exe, tmp_path, **kw).start()
+        kind = McuFirmware if board in SIM_MCUS else (InterpFirmware if board == "interp" else Firmware)
+        fw = kind(exe, tmp_path, **kw).start()
         started.append(fw)
         return fw
     yield start

@@ -117,21 +117,24 @@ class Firmware:
         self.stop()
 
 
-AVR_NO_TCP = ("host-only: Modbus TCP needs a network; the AVR board has none (it refuses `modbus tcp` at "
-              "build time)")
+# The MCU boards the suite runs on, with the MCU of their simulation builds.
+SIM_MCUS = {"avr": "atmega2560", "pic18": "pic18f4620"}
+
+MCU_NO_TCP = ("host-only: Modbus TCP needs a network; the MCU boards (avr, pic18) have none (they refuse "
+              "`modbus tcp` at build time)")
 
 
-class AvrFirmware(Firmware):
-    """The AVR firmware (ATmega2560) in its simavr harness (NAME-sim, real
-    time) serving Modbus RTU on the model's Modbus UART on a pty: the same
-    `rtu` link and the same life cycle as Firmware. No Modbus TCP (`port`
-    stays None), no HMI; `rtu_link` names the pty's link (a restart may
-    keep it)."""
+class McuFirmware(Firmware):
+    """An MCU's firmware in its board's simulator harness (NAME-sim, real
+    time: the ATmega2560 in simavr, the PIC18F4620 in gpsim) serving Modbus
+    RTU on the model's Modbus UART on a pty: the same `rtu` link and the
+    same life cycle as Firmware. No Modbus TCP (`port` stays None), no HMI;
+    `rtu_link` names the pty's link (a restart may keep it)."""
 
     def __init__(self, exe: Path, workdir: Path, tcp: bool = True, rtu: bool = True, hmi: bool = False,
                  nvram: Path | None = None, extra: list[str] | None = None, rtu_link: Path | None = None):
-        assert not hmi, "the AVR board has no HMI"
-        assert rtu, AVR_NO_TCP
+        assert not hmi, "the MCU boards have no HMI"
+        assert rtu, MCU_NO_TCP
         self.exe = exe
         self.port = None
         self.rtu = rtu_link or workdir / f"rtu{id(self)}"
@@ -193,28 +196,42 @@ def build_model(model: Path, out: Path, cflags: str = "", release: bool = False)
     return _BUILDS[key]
 
 
-def build_avr(model: Path, out: Path, env: dict) -> Built:
-    """An ATmega2560 simulation build (``easylab build MODEL --board avr
-    --mcu atmega2560 --sim``, once per session); `exe` is its simavr harness.
-    A model's `modbus tcp` line is left out: the board has no network (the
-    tests of TCP are host-only)."""
+def build_sim(board: str, model: Path, out: Path, env: dict) -> Built:
+    """A simulation build for an MCU board (``easylab build MODEL --board
+    BOARD --mcu MCU --sim``: the ATmega2560, the PIC18F4620; once per
+    session); `exe` is its simulator harness. A model's `modbus tcp` line is
+    left out: the MCU boards have no network (the tests of TCP are
+    host-only); on the PIC18 (one EUSART) the Modbus RTU interface moves to
+    uart0 (firmware_builds.board_model)."""
     import subprocess
 
-    key = ("avr", str(model))
+    from firmware_builds import board_model
+
+    key = (board, str(model))
     if key not in _BUILDS:
+        model = board_model(board, model, "modbus-rtu", out / "model")
         text = model.read_text()
         if any(line.lstrip().startswith("modbus tcp") for line in text.splitlines()):
             out.mkdir(parents=True, exist_ok=True)
             model = out / model.name
             model.write_text("".join(line for line in text.splitlines(keepends=True)
                                      if not line.lstrip().startswith("modbus tcp")))
-        proc = subprocess.run([sys.executable, "-m", "easylab", "build", str(model), "--board", "avr", "--mcu",
-                               "atmega2560", "--sim", "-o", str(out / "avr")], capture_output=True, text=True,
-                              env=env, timeout=300, stdin=subprocess.DEVNULL)
-        assert proc.returncode == 0, f"avr build of {model} failed:\n{proc.stdout}{proc.stderr}"
+        proc = subprocess.run([sys.executable, "-m", "easylab", "build", str(model), "--board", board, "--mcu",
+                               SIM_MCUS[board], "--sim", "-o", str(out / board)], capture_output=True, text=True,
+                              env=env, timeout=600, stdin=subprocess.DEVNULL)
+        assert proc.returncode == 0, f"{board} build of {model} failed:\n{proc.stdout}{proc.stderr}"
         sim = next(Path(line.split(": ", 1)[1]) for line in proc.stdout.splitlines() if line.startswith("simulator: "))
-        _BUILDS[key] = Built(out / "avr", sim)
+        _BUILDS[key] = Built(out / board, sim)
     return _BUILDS[key]
+
+
+def build_avr(model: Path, out: Path, env: dict) -> Built:
+    """The ATmega2560 simulation build of ``model`` (build_sim)."""
+    return build_sim("avr", model, out, env)
+
+
+# The AVR's harness is an MCU harness like every other.
+AvrFirmware = McuFirmware
 
 
 def build_interp(model: Path, out: Path) -> Built:
@@ -337,20 +354,21 @@ def read_regs_pdu(fc: int, address: int, count: int) -> bytes:
     return struct.pack(">BHH", fc, address, count)
 
 
-def _boards_mark(avr_reason: str | None):
+def _boards_mark(mcu_reason: str | None):
     import pytest
-    avr = "avr" if avr_reason is None else pytest.param("avr", marks=pytest.mark.skip(reason=f"host-only: {avr_reason}"))
-    return pytest.mark.parametrize("board", ["host", avr, "interp"], indirect=True)
+    mcus = [b if mcu_reason is None else pytest.param(b, marks=pytest.mark.skip(reason=f"host-only: {mcu_reason}"))
+            for b in SIM_MCUS]
+    return pytest.mark.parametrize("board", ["host", *mcus, "interp"], indirect=True)
 
 
 def host_only(reason: str):
-    """Parametrise a test by board, the AVR board skipped for `reason`
+    """Parametrise a test by board, the MCU boards skipped for `reason`
     (local execution runs it: it is the host's)."""
     return _boards_mark(reason)
 
 
 # Run a test on every board (the fixtures board, builds, svc_all, firmware):
-# the host board, the AVR in simavr, local execution.
+# the host board, the AVR in simavr, the PIC18 in gpsim, local execution.
 on_boards = _boards_mark(None)
 
 

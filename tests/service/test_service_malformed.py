@@ -94,7 +94,7 @@ def test_garbage_between_frames(pty):
 
 
 @host_only("frames back to back, without a t3.5 silence between them, are one (bad) frame on a timed RTU line, "
-           "which the AVR's UART is (EL_MB_PORT_TIMED, as the specification frames); the host's pty has no character "
+           "which the MCUs' UARTs are (EL_MB_PORT_TIMED, as the specification frames); the host's pty has no character "
            "timing, so its receiver ends a frame at the length its function code implies (EL_MB_PORT_UNTIMED)")
 def test_requests_back_to_back_in_one_write(pty):
     pty.send(rtu_frame(UNIT, P_FAR) + rtu_frame(UNIT, read_regs_pdu(0x03, 0, 1)) + rtu_frame(4, P_FAR))
@@ -152,7 +152,7 @@ def test_read_limits_are_served(svc_all, firmware):
 # ---------------------------------------------------------------- TCP
 
 
-@host_only("Modbus TCP needs a network; the AVR board has none")
+@host_only("Modbus TCP needs a network; the MCU boards have none")
 def test_tcp_pipelined_requests_and_sync_after_exceptions(fw_tcp):
     c = RawTcp(fw_tcp.port)
     try:
@@ -187,7 +187,7 @@ def test_tcp_pipelined_requests_and_sync_after_exceptions(fw_tcp):
     struct.pack(">HHHB", 1, 0, 1, 1),       # no PDU
     struct.pack(">HHHB", 1, 0, 256, 1),     # longer than any ADU
 ])
-@host_only("Modbus TCP needs a network; the AVR board has none")
+@host_only("Modbus TCP needs a network; the MCU boards have none")
 def test_tcp_broken_headers_close_the_connection(fw_tcp, head):
     c = RawTcp(fw_tcp.port)
     c.sock.sendall(head + P_FAR)
@@ -202,7 +202,7 @@ def test_tcp_broken_headers_close_the_connection(fw_tcp, head):
     c.close()
 
 
-@host_only("Modbus TCP needs a network; the AVR board has none")
+@host_only("Modbus TCP needs a network; the MCU boards have none")
 def test_tcp_several_clients_at_once(fw_tcp):
     clients = [RawTcp(fw_tcp.port) for _ in range(8)]
     try:
@@ -217,7 +217,7 @@ def test_tcp_several_clients_at_once(fw_tcp):
             c.close()
 
 
-@host_only("Modbus TCP needs a network; the AVR board has none")
+@host_only("Modbus TCP needs a network; the MCU boards have none")
 def test_tcp_connections_beyond_the_limit_are_refused(fw_tcp):
     clients = [RawTcp(fw_tcp.port) for _ in range(10)]
     try:
@@ -240,7 +240,7 @@ def test_tcp_connections_beyond_the_limit_are_refused(fw_tcp):
             c.close()
 
 
-@host_only("Modbus TCP needs a network; the AVR board has none")
+@host_only("Modbus TCP needs a network; the MCU boards have none")
 def test_tcp_garbage_then_a_new_connection(fw_tcp):
     rng = random.Random(7)
     for _ in range(20):

@@ -177,7 +177,7 @@ def test_device_identification(client, svc_all):
     assert r.information == {0x80: m["program_id"].encode()}
 
 
-@host_only("Modbus TCP needs a network; the AVR board has none")
+@host_only("Modbus TCP needs a network; the MCU boards have none")
 def test_tcp_answers_any_unit_id(svc_all, firmware):
     fw = firmware(svc_all.exe, rtu=False)
     c = ModbusTcpClient("127.0.0.1", port=fw.port, timeout=2, retries=0)

@@ -7,39 +7,15 @@
  * instant and hands them to the host board's trace code (host_trace.c), so
  * that traces are the same files byte for byte. sim_item_addr gives each
  * item's address in the MCU's data space; sim_hw says how a device datum
- * reaches the hardware (an ADC channel, a pin, a UART, encoder pins).
+ * reaches the hardware (an ADC channel, a pin, a UART, encoder pins): on
+ * the AVR a pin is its port letter (a) and bit (b), an encoder's pins are
+ * port letter << 8 | bit each. The tables every harness reads are declared
+ * in boards/host/sim_harness.h; the pin table is the AVR's own.
  */
 #ifndef SIM_MODEL_H
 #define SIM_MODEL_H
 
-#include "el_types.h"
-#include "el_model.h"
-
-typedef struct {
-    uint16_t addr;  /* data-space address in the MCU (0xFFFF: not there) */
-    uint16_t size;  /* bytes */
-} sim_addr_t;
-
-enum {
-    SIM_HW_NONE = 0,
-    SIM_HW_ADC,      /* a: channel; the value in ADC counts 0..1023 */
-    SIM_HW_PIN_IN,   /* a: port letter, b: bit; the level the pin is driven to */
-    SIM_HW_PIN_OUT,  /* a: port letter, b: bit (the firmware drives it) */
-    SIM_HW_CAMERA,   /* a: UART; c: baud; line camera frames (drivers/el_drv_line_camera.h) */
-    SIM_HW_ENCODER,  /* a, b: port letter << 8 | bit of pins A and B; quadrature edges */
-    SIM_HW_PWM,      /* the firmware drives a PWM output */
-    SIM_HW_I2C_TEMP  /* a: bus, b: address; the temperature of the sensor there, 1/16 degC (sim_chips.h) */
-};
-
-typedef struct {
-    uint16_t item;   /* index into el_items */
-    uint8_t kind;    /* SIM_HW_... */
-    uint16_t a;
-    uint16_t b;
-    uint32_t c;
-} sim_hw_t;
-
-enum { SIM_PIN_LEVEL = 0, SIM_PIN_PWM = 1 };
+#include "sim_harness.h"
 
 /* A pin traced by --pins: a level, or a PWM output (its duty 0..255 from
  * the timer's compare register while the output is connected, else 0 or
@@ -71,18 +47,6 @@ typedef struct {
 
 extern const sim_chip_t sim_chips[];
 extern const uint16_t sim_chip_count;
-
-extern const sim_addr_t sim_item_addr[];
-extern const sim_addr_t sim_chart_addr[];
-extern const uint16_t sim_tick_addr;
-extern const sim_hw_t sim_hw[];
-extern const uint16_t sim_hw_count;
 extern const sim_pin_t sim_pins[];
-extern const uint16_t sim_pin_count;
-extern const char sim_uarts[];      /* the MCU's UARTs: "0" or "0123" */
-extern const char sim_mcu[];        /* "atmega2560" */
-extern const uint32_t sim_clock_hz;
-extern const char sim_elf_default[];
-extern const uint32_t sim_nv_size;
 
 #endif /* SIM_MODEL_H */

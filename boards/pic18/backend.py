@@ -1,0 +1,254 @@
+"""The PIC18 board's backend (boards/pic18/, docs/boards.md): the board
+contract for the PIC18F4520 and PIC18F4620, driven by board.toml.
+
+- ``configure``: the MCU (its memories, resources);
+- ``check``: every resource claim against the MCU (the shared check of
+  easylab.board.resources, with the port-and-bit pin names as aliases) and
+  the part's own rule (ADCON1's analog pins), all problems in one error;
+- ``produce``: the configuration, the device tables, the linker script;
+- ``compile``: sdcc (sdcc.py: the 64-bit lowering, unreachable functions
+  dropped) and gplink; the .hex, program memory and RAM against the part,
+  failing when it does not fit;
+- ``build_simulator``: the gpsim harness with the build's tables;
+- ``flash_command``: Microchip's programmer command line (shown, not run).
+
+It reads the IR only (and, for the source line of an interface, the model
+file the IR names).
+"""
+
+from __future__ import annotations
+
+import shlex
+import shutil
+import subprocess
+from pathlib import Path
+
+from easylab.board import resources
+from easylab.board.base import BoardBase
+from easylab.board.cbuild import mode_flags, runtime_sources, write_files
+from easylab.board.contract import Compiled, CompileOptions, SizeReport, Simulator
+from easylab.core.errors import BuildError
+from easylab.core.paths import runtime_dir
+from easylab.ir.program import Program
+
+from . import devices, linkmap, sdcc, sdcc_quirks, simulator
+from .parts import Mcu, read_mcus
+
+
+class Pic18Board(BoardBase):
+    has_simulator = True
+
+    def __init__(self, description):
+        super().__init__(description)
+        self.all_mcus = read_mcus(description.table("mcu"))
+        self.drivers: dict[str, dict] = description.table("drivers")
+        self.clock_hz = int(description.raw.get("clock_hz", 40_000_000))
+        self.part: Mcu | None = None
+
+    @property
+    def fcy(self) -> int:
+        """Instruction cycles per second (four clocks each)."""
+        return self.clock_hz // 4
+
+    # ---------------------------------------------------------------- configuration
+
+    def configure(self, mcu: str | None = None, sim: bool = False) -> Pic18Board:
+        board = super().configure(mcu, sim)
+        board.part = self.all_mcus[board.mcu]
+        return board
+
+    @property
+    def nv_size(self) -> int | None:
+        return self.part.eeprom if self.part else None
+
+    # ---------------------------------------------------------------- code
+
+    def check(self, program: Program) -> resources.Resolved:
+        res = resources.resolve(program, self.name, self.part.part(), self.drivers)
+        if not res.problems:
+            res.problems += devices.analog_problems(program, self.part)
+        if res.problems:
+            count = len(res.problems)
+            raise BuildError(f"the model does not fit the {self.name} board with the {self.part.name} "
+                             f"({count} problem{'s' if count != 1 else ''}):\n" + "\n".join(res.problems))
+        return res
+
+    def produce(self, program: Program, checked: resources.Resolved, release: bool) -> dict[str, str]:
+        return devices.files(program, self, checked, release)
+
+    def _build(self, out_dir: Path, release: bool, extra: tuple[str, ...] = ()) -> sdcc.Build:
+        folder = self.description.folder
+        return sdcc.Build(sdcc.find_toolchain(), self.part.device, [*mode_flags(release), *extra],
+                          [out_dir, runtime_dir(), *self.description.include_paths], out_dir / "obj",
+                          folder / "el_pic18_w64.h")
+
+    def _hardware(self) -> list[Path]:
+        return [self.description.folder / s for s in self.description.raw.get("hardware_sources", [])]
+
+    def _objects(self, build: sdcc.Build, portable: list[Path], out_dir: Path) -> tuple[list[Path], Path, int]:
+        """Lower and compile the portable files, compile the hardware files;
+        write the linker script (which knows where the big objects went).
+        Returns the objects, the script and where the big objects begin."""
+        if shutil.which("gplink") is None:
+            raise BuildError("gplink of board 'pic18' is not installed (Debian package: gputils)")
+        hardware = self._hardware()
+        lowered, big_start = build.portable(portable, sdcc.hardware_roots(build, hardware),
+                                            self.part.stack_bottom - 1)
+        lkr, stack = write_files(out_dir, {
+            f"{self.part.name}.lkr": devices.linker_script(self.part, big_start=big_start),
+            "el_pic18_stack.c": devices.stack_source(self.part)})
+        return build.compile(lowered + hardware + [stack]), lkr, big_start
+
+    def compile(self, program: Program, checked: object, out_dir: Path, generated: list[Path],
+                options: CompileOptions) -> Compiled:
+        """Compile and link for the MCU; write NAME.hex (and NAME.cod for
+        gpsim, NAME.map); check that it fits."""
+        if options.cc is not None:
+            raise BuildError("board 'pic18' compiles with its sdcc only (--cc is for gcc-style boards)")
+        mcu = self.part
+        build = self._build(out_dir, options.release, options.extra_cflags)
+        portable = [p for p in generated if p.suffix == ".c"] + runtime_sources(options.release) \
+            + self.description.source_paths
+        hexfile = out_dir / f"{program.name}.hex"
+        try:
+            objects, lkr, big_start = self._objects(build, portable, out_dir)
+        except sdcc_quirks.BigObjectsDoNotFit as err:
+            self._remove(hexfile)
+            bigger = [m.name for m in self.all_mcus.values() if m.ram > mcu.ram]
+            raise BuildError(f"the program does not fit the {mcu.name}'s {mcu.ram} bytes of RAM: {err}"
+                             + ("; dataflow buffers shrink with --schedule min-buffer"
+                                if options.schedule != "min-buffer" and any(df.buffers for df in program.dataflows)
+                                else "") + (f"; or build for --mcu {bigger[0]}" if bigger else "")) from None
+        try:
+            lmap = linkmap.read_map(build.link(objects, hexfile, lkr))
+        except BuildError as err:
+            if "No target memory available" not in str(err):
+                raise
+            self._remove(hexfile)
+            raise BuildError(self._not_fit(program, self._measure(build, objects, big_start, out_dir), options)) \
+                from None
+        report = self.size_report(lmap)
+        return Compiled(hexfile, portable + self._hardware(), report, image=hexfile)
+
+    def _measure(self, build: sdcc.Build, objects: list[Path], big_start: int, out_dir: Path) -> linkmap.LinkMap:
+        """A program too big for its part linked into the part's memory map
+        grown to the PIC18's whole 2 MB of program memory and all the RAM
+        below the registers, only to measure by how much (empty when that
+        fails too)."""
+        lkr = out_dir / "measure.lkr"
+        write_files(out_dir, {lkr.name: devices.linker_script(self.part, big_start, measure=True)})
+        try:
+            return linkmap.read_map(build.link(objects, out_dir / "measure.hex", lkr))
+        except BuildError:
+            return linkmap.LinkMap()
+        finally:
+            self._remove(out_dir / "measure.hex")
+            lkr.unlink()
+
+    @staticmethod
+    def _remove(hexfile: Path) -> None:
+        for suffix in (".hex", ".cod", ".map", ".lst"):
+            p = hexfile.with_suffix(suffix)
+            if p.exists():
+                p.unlink()
+
+    # ---------------------------------------------------------------- sizes
+
+    def size_report(self, lmap: linkmap.LinkMap) -> SizeReport:
+        mcu = self.part
+        line = (f"{mcu.name}: program memory {lmap.flash} of {mcu.flash} bytes ({100.0 * lmap.flash / mcu.flash:.1f} %), "
+                f"RAM {lmap.ram} of {mcu.ram} bytes ({100.0 * lmap.ram / mcu.ram:.1f} %, static data and the "
+                f"{lmap.stack}-byte stack)")
+        return SizeReport(lmap.flash, lmap.ram, mcu.flash, mcu.ram, [line])
+
+    def _not_fit(self, program: Program, measured: linkmap.LinkMap, options: CompileOptions) -> str:
+        """The error of a program gplink could not place: its measured size
+        and by how much each memory overflows, with what would help."""
+        mcu = self.part
+        lines = []
+        if not measured.sections:
+            msg = f"the program does not fit the {mcu.name}'s {mcu.flash} bytes of program memory or {mcu.ram} of RAM"
+        else:
+            lines.append(f"{mcu.name}: program memory {measured.flash} of {mcu.flash} bytes, RAM {measured.ram} "
+                         f"of {mcu.ram} bytes (static data and the {mcu.stack}-byte stack)")
+            over = []
+            if measured.flash > mcu.flash:
+                over.append(f"{mcu.flash} bytes of program memory ({measured.flash - mcu.flash} bytes too many)")
+            if measured.ram > mcu.ram:
+                over.append(f"{mcu.ram} bytes of RAM ({measured.ram - mcu.ram} bytes too many: static data plus "
+                            f"the {mcu.stack}-byte stack)")
+            msg = f"error: the program does not fit the {mcu.name}'s " + ", nor its ".join(over)
+        if not options.release and any(i.kind == "debug" for i in program.interfaces):
+            msg += "; the debug server takes about 20 KB of program memory: a --release build has none"
+        if measured.ram > mcu.ram and options.schedule != "min-buffer" and any(df.buffers for df in program.dataflows):
+            msg += "; dataflow buffers shrink with --schedule min-buffer"
+        bigger = [m for m in self.all_mcus.values() if m.flash > mcu.flash]
+        if bigger:
+            msg += f"; or build for --mcu {bigger[0].name}"
+        lines.append(msg)
+        if measured.ram > mcu.ram:
+            lines.append("largest in RAM: " + ", ".join(f"{name} {size} B ({src}.c)"
+                                                        for size, name, src in measured.largest_ram()))
+        return "\n".join(lines)
+
+    # ---------------------------------------------------------------- running, flashing
+
+    def build_simulator(self, program: Program, checked: object, out_dir: Path, compiled: Compiled) -> Simulator:
+        lmap = linkmap.read_map(compiled.executable.with_suffix(".map"))
+        model = simulator.sim_model_source(program, self, compiled.executable, lmap, checked.uarts)
+        exe = simulator.build_harness(self, out_dir, model, out_dir / f"{program.name}-sim")
+        return Simulator(exe, [])
+
+    def simulator_command(self, out_dir: Path, program: Program) -> list[str]:
+        """The harness with the EUSART on a pty in ``out_dir``."""
+        return [str(out_dir / f"{program.name}-sim"), "--uart0", f"pty:{out_dir / 'uart0'}"]
+
+    def flash_command(self, out_dir: Path, program: Program, port: str, programmer: str | None = None,
+                      baud: int | None = None) -> list[str]:
+        """Microchip's MPLAB IPE command line with the programmer on
+        ``port`` (a PICkit is a USB device: the port is not passed)."""
+        spec = self.description.table("flash")
+        template = spec.get("command", "ipecmd.sh -TP{programmer} -P{part} -F{hex} -M -OL")
+        return shlex.split(template.format(programmer=programmer or spec.get("programmer", "PK3"),
+                                           part=self.part.programmer_part, hex=out_dir / f"{program.name}.hex"))
+
+    def build_program(self, sources: list[Path], work_dir: Path, name: str,
+                      runtime: tuple[str, ...] = ()) -> tuple[Path, linkmap.LinkMap]:
+        """A program of our own (the port contract program, a benchmark)
+        built against the port: ``sources`` (portable C defining el_run),
+        the runtime files named in ``runtime``, the port; release flags.
+        The configuration headers must be in ``work_dir`` (config_header,
+        or a generated model's). Returns the .hex and its map."""
+        build = self._build(work_dir, True)
+        ports = [p for p in self.description.source_paths if p.name != "pic18_interfaces.c"]
+        files = [*sources, *(p for p in runtime_sources(True) if p.name in runtime), *ports]
+        hexfile = work_dir / f"{name}.hex"
+        objects, lkr, _ = self._objects(build, files, work_dir)
+        return hexfile, linkmap.read_map(build.link(objects, hexfile, lkr))
+
+    def run_port_program(self, source: Path, work_dir: Path) -> str:
+        """The program on the MCU in gpsim; its report comes on the EUSART."""
+        t = devices.tick_timer(1000, self.fcy)
+        mcu = self.part
+        write_files(work_dir, {
+            "el_pic18_config.h": "\n".join([
+                f"#define EL_PIC18_CONFIG_VERSION {devices.CONFIG_VERSION}",
+                f"#define EL_PIC18_MCU_NAME \"{mcu.name}\"", f"#define EL_PIC18_FCY {self.fcy}UL",
+                f"#define EL_PIC18_RAM_LAST 0x{mcu.ram_last:03X}", f"#define EL_PIC18_RAM_TOP 0x{mcu.ram_last + 1:03X}",
+                f"#define EL_PIC18_NV_SIZE {mcu.eeprom}u", f"#define EL_PIC18_TICK_T2CON 0x{t.t2con:02X}u",
+                f"#define EL_PIC18_TICK_PR2 {t.pr2}u", f"#define EL_PIC18_TICK_ISRS {t.isrs}u",
+                "#define EL_PIC18_ADC_CHANNELS 0u", "#define EL_PIC18_ENCODERS 0u", ""]),
+            "el_pic18_devices.h": "/* no devices */\n"})
+        hexfile, lmap = self.build_program([source], work_dir, source.stem)
+        harness = simulator.build_harness(self, work_dir, simulator.port_program_tables(self, hexfile, lmap),
+                                          work_dir / f"{source.stem}-sim")
+        report = work_dir / "uart0.txt"
+        proc = subprocess.run([str(harness), "--fast", "--uart0", f"file:{report}", "--cycles", "20000000"],
+                              capture_output=True, text=True, timeout=300, stdin=subprocess.DEVNULL)
+        if proc.returncode != 0:
+            raise BuildError(f"the simulation of {source.name} failed: {proc.stderr.strip()}")
+        return report.read_text()
+
+    def symbols(self, compiled: Compiled) -> set[str]:
+        lmap = linkmap.read_map(compiled.executable.with_suffix(".map"))
+        return {name[1:] for name in lmap.symbols if name.startswith("_")}

@@ -1,0 +1,222 @@
+"""The PIC18 board's compiler: sdcc's pic16 port, built once into a cache
+by boards/pic18/toolchain/build.sh (`make setup`), and gputils' linker.
+
+A build goes in two kinds of C files:
+- portable ones (the runtime, the generated files, the port's portable
+  part, the drivers through model.c): preprocessed by sdcc, parsed, their
+  64-bit integers lowered (lower64.py) and unreachable functions dropped
+  across the whole program (prune.py), then compiled;
+- hardware ones (registers, the interrupt handler, configuration bits,
+  inline assembly: compiler keywords behind el_pic18.h's macros), compiled
+  as they are. They never see a 64-bit type.
+gplink then links them with sdcc's start-up code and libraries, and the
+map file gives the sizes and the symbols' addresses.
+"""
+
+from __future__ import annotations
+
+import os
+import re
+import subprocess
+from concurrent.futures import ThreadPoolExecutor
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from pycparser import c_ast, c_generator, c_parser
+
+from easylab.core.errors import BuildError
+
+from . import buildcache, ctypes64, datapointers, inline, lower64, lower64_stmt, prune, sdcc_quirks, strength
+from .ctypes64 import LowerError, Target
+from .lower64_stmt import lower_unit
+
+VERSION_FOLDER = "sdcc-pic16-4.2.0-2"  # boards/pic18/toolchain/build.sh's folder in the cache
+OVERRIDE = "EASYLAB_PIC18_SDCC"  # another folder holding such a build
+STAMP = ".easylab-complete"
+SDCC_TIMEOUT = 300  # seconds: sdcc can hang on huge arrays
+TARGET = Target(int_bits=16, long_bits=32, char_signed=False)
+# sdcc's own library build uses these; about 8 % smaller code.
+# The large stack model: the software stack is larger than a bank
+# (el_pic18_stack.c).
+OPT_FLAGS = ["--pstack-model=large", "--fomit-frame-pointer", "--obanksel=9", "--denable-peeps", "--optimize-cmp", "--optimize-df"]
+# Warnings are errors, but two that say nothing about the C: sdcc 4.2's
+# pic16 port warns "Initializer different levels of indirections" (18) for
+# every address of a RAM object in a static initializer of a generic
+# pointer (`(void *)&x` in el_items) and emits the right pointer (address
+# and the data-space tag 0x80) all the same; "conditional flow changed by
+# optimizer" (110) and "unreachable code" (126) say that a condition's
+# value was known at compile time, as it is where portable code tests a
+# board's configuration macros (PC_EXACT_TICKS || ...). gcc's -Wall -Wextra
+# -Werror on the same C catches real mismatches.
+WARNING_FLAGS = ["--Werror", "--disable-warning", "18", "--disable-warning", "110", "--disable-warning", "126"]
+_WORD = re.compile(r"\b[A-Za-z_]\w*\b")
+
+
+@dataclass
+class Toolchain:
+    root: Path
+
+    @property
+    def sdcc(self) -> Path:
+        return self.root / "bin" / "sdcc"
+
+    @property
+    def lib(self) -> Path:
+        return self.root / "share" / "sdcc" / "lib" / "pic16"
+
+
+def default_root() -> Path:
+    cache = Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache")
+    return cache / "easylab" / VERSION_FOLDER
+
+
+def find_toolchain() -> Toolchain:
+    """The built toolchain, or a BuildError saying how to get it."""
+    root = Path(os.environ[OVERRIDE]) if os.environ.get(OVERRIDE) else default_root()
+    if not (root / STAMP).is_file() or not (root / "bin" / "sdcc").is_file():
+        script = Path(__file__).resolve().parent / "toolchain" / "build.sh"
+        raise BuildError(
+            f"the pic18 board's compiler (sdcc with its pic16 port) is not built in {root}: Debian's sdcc lacks "
+            f"the PIC ports. `make setup` builds it once from Debian's sdcc source (a few minutes, as root), or "
+            f"run {script} yourself; {OVERRIDE} names another folder holding such a build")
+    return Toolchain(root)
+
+
+def _run(cmd: list, what: str, cwd: Path | None = None) -> subprocess.CompletedProcess:
+    try:
+        proc = subprocess.run([str(c) for c in cmd], capture_output=True, text=True, timeout=SDCC_TIMEOUT,
+                              cwd=cwd, stdin=subprocess.DEVNULL)
+    except subprocess.TimeoutExpired:
+        raise BuildError(f"{what}: {Path(str(cmd[0])).name} did not finish in {SDCC_TIMEOUT} s") from None
+    except FileNotFoundError:
+        raise BuildError(f"{what}: {cmd[0]} is not installed (Debian package: gputils)") from None
+    if proc.returncode != 0:
+        text = "\n".join(line for line in (proc.stdout + proc.stderr).splitlines()
+                         if "Message[" not in line and line.strip())
+        raise BuildError(f"{what} failed:\n{text}".rstrip())
+    return proc
+
+
+@dataclass
+class Build:
+    """One program's compile: flags shared by every file."""
+
+    tc: Toolchain
+    part: str  # "18f4520"
+    defines: list[str]  # -D...
+    include_dirs: list[Path]
+    obj_dir: Path
+    w64_header: Path  # el_pic18_w64.h
+    notes: list[str] = field(default_factory=list)
+    in_ram: set[str] = field(default_factory=set)  # the program's RAM objects (sdcc_quirks.ram_pointer_tags)
+
+    def flags(self) -> list[str]:
+        return ["-mpic16", f"-p{self.part}", "--std-c99", "--no-warn-non-free", *WARNING_FLAGS, *OPT_FLAGS,
+                *self.defines, *(f"-I{d}" for d in self.include_dirs)]
+
+    # ---- portable files
+
+    def preprocess(self, source: Path) -> str:
+        """The file as sdcc's preprocessor gives it, with the lowering's
+        view of 64-bit integers (el_pic18_w64.h) and the board's table reads
+        (el_pic18_rom.h) in front."""
+        self.obj_dir.mkdir(parents=True, exist_ok=True)
+        wrapper = self.obj_dir / f"{source.stem}.lower.c"
+        rom = self.w64_header.parent / "el_pic18_rom.h"
+        wrapper.write_text(f'#include "{self.w64_header}"\n#include "{rom}"\n#include "{source.resolve()}"\n',
+                           encoding="utf-8")
+        proc = _run([self.tc.sdcc, *self.flags(), "-DEL_W64_LOWERING=1", "-E", wrapper],
+                    f"preprocessing {source.name}")
+        return proc.stdout
+
+    def portable(self, sources: list[Path], roots: set[str], ram_end: int) -> tuple[list[Path], int]:
+        """Preprocess, lower and prune the portable files, place the objects
+        larger than a bank below ``ram_end``; write the C that sdcc compiles
+        (obj_dir/NAME.sdcc.c). Returns the files and where the placed
+        objects begin (``ram_end`` + 1 when there are none)."""
+        with ThreadPoolExecutor(max_workers=2) as pool:
+            texts = list(pool.map(self.preprocess, sources))
+        units = {src.stem + ("_gen" if src.parent == self.obj_dir.parent else ""): lowered(src, text)
+                 for src, text in zip(sources, texts)}
+        prune.prune(units, roots)
+        for ast in units.values():
+            inline.inline_single_calls(ast)
+            strength.reduce_products(ast, TARGET)
+            datapointers.data_pointers(ast)
+        big_start = sdcc_quirks.place_big_objects(units, TARGET, ram_end)
+        self.in_ram = sdcc_quirks.fix_initializers(units, TARGET)
+        out = []
+        gen = c_generator.CGenerator()
+        for name, ast in units.items():
+            path = self.obj_dir / f"{name}.sdcc.c"
+            text = f"/* {name}: lowered for sdcc (boards/pic18/lower64.py). Do not edit. */\n" + gen.visit(ast)
+            if not path.exists() or path.read_text(encoding="utf-8") != text:
+                path.write_text(text, encoding="utf-8")
+            out.append(path)
+        return out, big_start
+
+    # ---- compiling, linking
+
+    def compile(self, sources: list[Path]) -> list[Path]:
+        """sdcc -c for each file, in parallel; an object compiled before from
+        the same text with the same flags comes from the build cache (a
+        hardware file's text is its preprocessed text)."""
+        ram = " ".join(sorted(self.in_ram))
+
+        def one(src: Path) -> Path:
+            stem = src.name.removesuffix(".sdcc.c").removesuffix(".c")
+            obj, asm = self.obj_dir / f"{stem}.o", self.obj_dir / f"{stem}.asm"
+            text = src.read_bytes() if src.parent == self.obj_dir else \
+                _run([self.tc.sdcc, *self.flags(), "-E", src], f"preprocessing {src.name}").stdout.encode()
+            digest = buildcache.key(str(self.tc.root), *self.flags(), text, ram)
+            if buildcache.fetch_file("sdcc", digest, obj):
+                return obj
+            _run([self.tc.sdcc, *self.flags(), "-S", src, "-o", asm], f"compiling {src.name} with sdcc",
+                 cwd=self.obj_dir)
+            asm.write_text(sdcc_quirks.ram_pointer_tags(asm.read_text(encoding="latin-1"), self.in_ram),
+                           encoding="latin-1")
+            _run(["gpasm", "-D__STACK_MODEL_LARGE", "-o", obj, "-c", asm], f"assembling {asm.name}", cwd=self.obj_dir)
+            buildcache.store_file("sdcc", digest, obj)
+            return obj
+        self.obj_dir.mkdir(parents=True, exist_ok=True)
+        with ThreadPoolExecutor(max_workers=2) as pool:
+            return list(pool.map(one, sources))
+
+    def link(self, objects: list[Path], hexfile: Path, lkr: Path) -> Path:
+        """gplink with sdcc's libraries (the start-up code is the board's
+        own, pic18_startup.c); writes NAME.hex, NAME.cod, NAME.map."""
+        lib = self.tc.lib
+        _run(["gplink", "-m", "-w", "-s", lkr, "-I", lib, "-o", hexfile, *objects,
+              f"libdev{self.part}.lib", "libsdcc.lib", "libc18f.lib", "libm18f.lib"], "linking with gplink")
+        return hexfile.with_suffix(".map")
+
+
+_LOWERING = buildcache.code_version(ctypes64, lower64, lower64_stmt)
+
+
+def lowered(src: Path, text: str) -> c_ast.FileAST:
+    """A preprocessed file parsed and lowered (from the build cache when this
+    text was lowered before by this code)."""
+    digest = buildcache.key(_LOWERING, text)
+    ast = buildcache.fetch_object("lowered", digest)
+    if ast is not None:
+        return ast
+    try:
+        ast = c_parser.CParser().parse(text, str(src))
+        lower_unit(ast, TARGET)
+    except LowerError as err:
+        raise BuildError(f"{src.name}: {err}") from None
+    except Exception as err:  # pycparser's ParseError and the like
+        raise BuildError(f"parsing {src.name} for the 64-bit lowering failed: {err}") from None
+    buildcache.store_object("lowered", digest, ast)
+    return ast
+
+
+def hardware_roots(build: Build, sources: list[Path]) -> set[str]:
+    """Every name the hardware files mention: functions of the portable
+    files they call stay in the program."""
+    names: set[str] = {"main"}
+    for src in sources:
+        text = _run([build.tc.sdcc, *build.flags(), "-E", src], f"preprocessing {src.name}").stdout
+        names |= set(_WORD.findall(text))
+    return names

@@ -1,0 +1,536 @@
+/* EasyLab PIC18 board: the gpsim harness (docs/boards.md, "The PIC18
+ * board", "Simulation").
+ *
+ * Runs a firmware built with `easylab build --board pic18 --sim` in gpsim
+ * (Debian's libgpsim) with the host board's command line where it makes
+ * sense, so that one stimulus gives one trace on every board (what every
+ * harness shares is boards/host/sim_harness.c):
+ *
+ *   NAME-sim [--fast] [--duration T] [--cycles N] [--stimulus S.csv]
+ *            [--trace T.csv|T.vcd] [--pins P.csv|P.vcd] [--nvram FILE]
+ *            [--uart0 pty:LINK|tcp:PORT|file:PATH|null] [--wait] [--halt]
+ *            [--cod FILE] [--report] [--help]
+ *
+ * How it watches the firmware: gpsim keeps a register object per data
+ * address; the harness puts its own object in front of a few of them
+ * (HookRegister), which passes every access on and tells the harness of
+ * writes, in the middle of the instruction, the CPU stopped:
+ * - el_pic18_sim_mark (RAM, found in the link map): the firmware's
+ *   instants (pic18_port.c). At the inputs mark the stimulus due is applied
+ *   (params and vars into RAM, device data onto the pins and the ADC);
+ *   while encoder edges are on their way el_pic18_sim_busy stays nonzero and
+ *   the firmware waits. At the instant mark the items are read from RAM and
+ *   traced with the host board's own trace code.
+ *   At each inputs mark the guard at the bottom of sdcc's software stack
+ *   is checked: a stack that ran out ends the run with an error.
+ * - TXREG: each byte the EUSART is given goes to the link of uart0.
+ * - EECON1 (the PIC18F4620): gpsim's data EEPROM reads ignore EEADRH; the
+ *   harness completes them (map_eeadrh, eeprom_read_fix).
+ * - LATA..LATE, TRISA..TRISE, CCPR1L, CCP1CON, CCPR2L, CCP2CON, PR2: the
+ *   traced pins' levels and PWM duties (--pins), stamped with the cycle
+ *   (a duty PWM_SETTLE_CYCLES after a CCP write: it spans two registers).
+ * Bytes from the link enter the EUSART's receive FIFO one frame time apart
+ * (the baud rate the firmware set), when reception is on.
+ *
+ * Time: gpsim counts instruction cycles exactly (10 MHz at 40 MHz).
+ * --fast runs flat out; otherwise the harness keeps the simulated time in
+ * step with the wall clock. Exit status: 0 the run ended, 1 an error during
+ * it, 2 a bad command line or input file.
+ */
+#include <gpsim/interface.h>
+#include <gpsim/sim_context.h>
+#include <gpsim/processor.h>
+#include <gpsim/pic-processor.h>
+#include <gpsim/gpsim_time.h>
+#include <gpsim/breakpoints.h>
+#include <gpsim/trigger.h>
+#include <gpsim/registers.h>
+#include <gpsim/ioports.h>
+#include <gpsim/stimuli.h>
+#include <gpsim/uart.h>
+#include <gpsim/eeprom.h>
+
+#include <fcntl.h>
+#include <unistd.h>
+
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <vector>
+
+#include <stdbool.h> /* C++'s bool for the runtime's C headers (__bool_true_false_are_defined) */
+
+#include "gpsim_hooks.h"
+
+extern "C" {
+#include "sim_model.h"
+
+/* No chips on buses are modelled here: --chips is refused. */
+extern const char sim_chips_help[];
+const char sim_chips_help[] = "";
+}
+
+namespace {
+
+/* The firmware's marks (boards/pic18/pic18_hw.h). */
+const unsigned MARK_INPUTS = 1u;
+const unsigned MARK_INSTANT = 2u;
+const unsigned KEPT_SIM_HALT = 0xA5u;
+
+/* Special function registers (the same on both parts). */
+const unsigned PORTA = 0xF80u, LATA = 0xF89u, TRISA = 0xF92u;
+const unsigned TXREG = 0xFADu, RCREG = 0xFAEu, RCSTA = 0xFABu, TXSTA = 0xFACu;
+const unsigned SPBRG = 0xFAFu, SPBRGH = 0xFB0u, BAUDCON = 0xFB8u;
+const unsigned CCPR1L = 0xFBEu, CCP1CON = 0xFBDu, CCPR2L = 0xFBBu, CCP2CON = 0xFBAu, PR2 = 0xFCBu;
+const unsigned EEADRH_ADDR = 0xFAAu, EECON1_ADDR = 0xFA6u;
+const unsigned EE_RD = 0x01u, EE_CFGS = 0x40u, EE_EEPGD = 0x80u; /* EECON1 bits */
+
+/* Quadrature edges of one encoder are this many cycles apart (125 us):
+ * room for the interrupts of several encoders stepping at once. */
+const guint64 ENCODER_EDGE_CYCLES = 1250u;
+/* The cycles from a write of a CCP register until its duty is recorded. */
+const guint64 PWM_SETTLE_CYCLES = 8u;
+/* The harness serves the links and the wall clock every slice of cycles. */
+const guint64 SLICE_CYCLES = 1000u;
+
+Processor *cpu;
+pic_processor *pic;
+unsigned busy_count;
+
+void on_write(unsigned address, unsigned value);
+void eeprom_read_fix(unsigned eecon1);
+
+void hook(unsigned address)
+{
+    cpu->registers[address] = new HookRegister(cpu, cpu->registers[address], on_write);
+}
+
+unsigned reg(unsigned address)
+{
+    return cpu->registers[address]->get_value() & 0xFFu;
+}
+
+IOPIN *iopin(unsigned pin)
+{
+    PortModule *port = dynamic_cast<PortModule *>(cpu->registers[PORTA + (pin >> 3)]->getReg());
+    return port != nullptr ? port->getPin(pin & 7u) : nullptr;
+}
+
+std::vector<int> pin_driven; /* the level the harness drives an input pin to, by pin number */
+
+/* Drive an input pin to a voltage (an analog input) or a level. */
+void drive_pin(unsigned pin, double volts)
+{
+    IOPIN *p = iopin(pin);
+    if (p != nullptr)
+        p->set_nodeVoltage(volts);
+}
+
+void drive_level(unsigned pin, bool level)
+{
+    IOPIN *p = iopin(pin);
+    pin_driven[pin] = level ? 1 : 0;
+    if (p != nullptr) {
+        /* With no stimulus node attached, gpsim takes a pin's digital level
+           from its forced state (setDrivenState alone does not reach PORTx). */
+        p->set_nodeVoltage(level ? cpu->get_Vdd() : 0.0);
+        p->forceDrivenState(level ? '1' : '0');
+    }
+}
+
+void set_busy()
+{
+    if (sim_busy_addr != 0xFFFFu)
+        cpu->registers[sim_busy_addr]->put_value(busy_count != 0u ? 1u : 0u);
+}
+
+/* ---- pins (--pins) ---- */
+
+
+int pwm_duty(uint8_t ccp)
+{
+    unsigned con = reg(ccp == 1u ? CCP1CON : CCP2CON);
+    unsigned full = 4u * (reg(PR2) + 1u);
+    unsigned dc = reg(ccp == 1u ? CCPR1L : CCPR2L) << 2 | ((con >> 4) & 3u);
+    if ((con & 0x0Cu) != 0x0Cu)
+        return 0;
+    if (dc >= full)
+        return 255;
+    return (int)((dc * 255u + full / 2u) / full);
+}
+
+int pin_level(uint8_t pin)
+{
+    unsigned bit = 1u << (pin & 7u);
+    if ((reg(TRISA + (pin >> 3)) & bit) == 0u)
+        return (reg(LATA + (pin >> 3)) & bit) != 0u;
+    return pin_driven[pin] > 0;
+}
+
+void record_pins()
+{
+    guint64 now = get_cycles().get();
+    for (uint16_t k = 0; k < sim_pin_count; k++) {
+        const sim_pin_t *p = &sim_pins[k];
+        sim_pin_record(k, p->kind == SIM_PIN_PWM ? pwm_duty(p->ccp) : pin_level(p->pin), now);
+    }
+}
+
+/* A duty is written in two registers (CCPRxL, then CCPxCON's low bits),
+ * and the CCP module takes it at its next period: the pins are recorded a
+ * few cycles after a CCP write, once both are written, not in between. */
+class PwmSettle : public TriggerObject {
+public:
+    bool pending = false;
+    void callback() override
+    {
+        pending = false;
+        record_pins();
+    }
+    void after_write()
+    {
+        if (!pending) {
+            pending = true;
+            get_cycles().set_break(get_cycles().get() + PWM_SETTLE_CYCLES, this);
+        }
+    }
+};
+
+PwmSettle pwm_settle;
+
+/* ---- encoders: quadrature edges from the last count to the new one ---- */
+
+class EncoderEdges : public TriggerObject {
+public:
+    uint16_t k = 0;
+    void callback() override
+    {
+        sim_hw_state_t *s = &sim_hw_state[k];
+        const sim_hw_t *h = &sim_hw[k];
+        uint8_t ab, changed;
+        if (s->position == s->target) {
+            s->busy = false;
+            busy_count--;
+            set_busy();
+            return;
+        }
+        s->position += s->target > s->position ? 1 : -1;
+        ab = sim_quadrature(s->position);
+        changed = (uint8_t)(ab ^ s->ab);
+        s->ab = ab;
+        if (changed & 2u)
+            drive_level(h->a, (ab & 2u) != 0u);
+        if (changed & 1u)
+            drive_level(h->b, (ab & 1u) != 0u);
+        record_pins();
+        get_cycles().set_break(get_cycles().get() + ENCODER_EDGE_CYCLES, this);
+    }
+};
+
+std::vector<EncoderEdges> encoders;
+
+/* ---- the EUSART's receiver: one byte per frame time ---- */
+
+guint64 bit_cycles()
+{
+    unsigned n = reg(SPBRG) | reg(SPBRGH) << 8;
+    bool brg16 = (reg(BAUDCON) & 0x08u) != 0u, brgh = (reg(TXSTA) & 0x04u) != 0u;
+    unsigned div = brg16 ? (brgh ? 1u : 4u) : (brgh ? 4u : 16u);
+    return (guint64)div * (n + 1u);
+}
+
+class RxPump : public TriggerObject {
+public:
+    bool scheduled = false;
+    void callback() override
+    {
+        scheduled = false;
+        pump();
+    }
+    void pump()
+    {
+        sim_link_t *u = &sim_links[0];
+        _RCREG *rc = dynamic_cast<_RCREG *>(cpu->registers[RCREG]->getReg());
+        unsigned rcsta = reg(RCSTA);
+        if (scheduled || u->in_len == 0u || rc == nullptr || (rcsta & 0x90u) != 0x90u) /* SPEN, CREN */
+            return;
+        guint64 frame = bit_cycles() * ((rcsta & 0x40u) ? 11u : 10u);
+        if (rc->fifo_sp < 2u) {
+            unsigned byte = u->in[0];
+            if (rcsta & 0x40u) /* RX9: the 9th bit carries the parity the model's interface uses */
+                byte |= (unsigned)ninth_bit(u->in[0]) << 8;
+            sim_link_consume(u, 1u);
+            rc->push(byte);
+        }
+        scheduled = true;
+        get_cycles().set_break(get_cycles().get() + frame, this);
+    }
+
+private:
+    static unsigned ninth_bit(uint8_t v)
+    {
+        unsigned ones = 0;
+        for (; v != 0u; v = (uint8_t)(v & (v - 1u)))
+            ones++;
+        return (ones & 1u) ^ (sim_uart_parity == 2u ? 1u : 0u);
+    }
+};
+
+RxPump rx_pump;
+
+/* ---- instants ---- */
+
+uint64_t read_tick()
+{
+    uint8_t b[8];
+    uint64_t t = 0;
+    sim_ram_read(sim_tick_addr, b, sizeof b);
+    for (int i = 7; i >= 0; i--)
+        t = t << 8 | b[i];
+    return t;
+}
+
+/* ---- the software stack's guard ---- */
+
+/* The lowest bytes of sdcc's software stack hold a pattern from the first
+ * instant on (start-up clears RAM before): a stack grown into them has run
+ * out (the registers it saves then overwrite the RAM below). */
+const unsigned STACK_GUARD_BYTES = 4u, STACK_GUARD = 0xA5u;
+bool stack_guarded;
+
+bool stack_guard_intact()
+{
+    for (unsigned i = 0; i < STACK_GUARD_BYTES; i++) {
+        if (!stack_guarded) {
+            cpu->registers[sim_stack_addr + i]->put_value(STACK_GUARD);
+        } else if (reg(sim_stack_addr + i) != STACK_GUARD) {
+            el_host_error("the %s's software stack (%u bytes, board.toml's stack) ran out at cycle %llu",
+                          sim_mcu, (unsigned)sim_stack_size, (unsigned long long)get_cycles().get());
+            return false;
+        }
+    }
+    stack_guarded = true;
+    return true;
+}
+
+void on_write(unsigned address, unsigned value)
+{
+    if (address == sim_mark_addr) {
+        if (value == MARK_INPUTS) {
+            if (!stack_guard_intact()) {
+                sim_exit_status = SIM_EXIT_RUN;
+                sim_stop = true;
+                get_bp().halt();
+                return;
+            }
+            sim_instant_inputs(read_tick());
+            set_busy();
+            if (sim_stop)
+                get_bp().halt();
+        } else if (value == MARK_INSTANT) {
+            sim_instant_record(read_tick());
+        }
+    } else if (address == TXREG) {
+        sim_link_output(&sim_links[0], (uint8_t)value);
+    } else if (address == EECON1_ADDR) {
+        eeprom_read_fix(value);
+    } else if (address == CCPR1L || address == CCP1CON || address == CCPR2L || address == CCP2CON) {
+        pwm_settle.after_write();
+    } else {
+        record_pins();
+    }
+}
+
+/* The end of a slice of cycles. */
+class Stopper : public TriggerObject {
+public:
+    void callback() override { get_bp().halt(); }
+};
+
+/* The EEPROM's bytes at the end of the run. */
+uint8_t *eeprom_image()
+{
+    static std::vector<uint8_t> image;
+    image.assign(sim_nv_size, 0xFFu);
+    if (pic != nullptr && pic->eeprom != nullptr) {
+        Register **rom = pic->eeprom->get_rom();
+        for (uint32_t i = 0; i < sim_nv_size && i < pic->eeprom->get_rom_size(); i++)
+            image[i] = (uint8_t)rom[i]->get_value();
+    }
+    return image.data();
+}
+
+/* gpsim 0.31 gives the PIC18F4620 its 1024 bytes of data EEPROM but no
+ * EEADRH (the address's high byte), and its data EEPROM read ignores
+ * EEADRH even where it has one: only the first 256 bytes could be reached.
+ * The harness makes the EEPROM one with EEADRH (its initialize does), puts
+ * the register at its address and completes each read (eeprom_read_fix,
+ * called after gpsim's own read on a write of EECON1). */
+EEPROM_EXTND *long_eeprom; /* the EEPROM when it has more than 256 bytes */
+
+void map_eeadrh()
+{
+    EEPROM_EXTND *ee = pic != nullptr ? dynamic_cast<EEPROM_EXTND *>(pic->eeprom) : nullptr;
+    if (ee == nullptr || ee->get_rom_size() <= 256u)
+        return;
+    long_eeprom = ee;
+    if (ee->get_reg_eeadrh() != nullptr)
+        return;
+    ee->initialize(ee->get_rom_size(), 64, 64, 0x300000u, true);
+    pic->add_sfr_register(ee->get_reg_eeadrh(), EEADRH_ADDR, RegisterValue(0, 0), "eeadrh");
+}
+
+void eeprom_read_fix(unsigned eecon1)
+{
+    if (long_eeprom == nullptr || (eecon1 & (EE_RD | EE_CFGS | EE_EEPGD)) != EE_RD)
+        return;
+    unsigned a = long_eeprom->get_reg_eeadrh()->get_value() << 8 | long_eeprom->get_reg_eeadr()->get_value();
+    if (a < long_eeprom->get_rom_size())
+        long_eeprom->get_reg_eedata()->put_value(long_eeprom->get_rom()[a]->get_value());
+}
+
+void eeprom_store(const uint8_t *image)
+{
+    if (pic == nullptr || pic->eeprom == nullptr)
+        return;
+    for (uint32_t i = 0; i < sim_nv_size && i < pic->eeprom->get_rom_size(); i++)
+        pic->eeprom->change_rom(i, image[i]);
+}
+
+} // namespace
+
+/* ---- what sim_harness.c needs of the simulator ---- */
+
+extern "C" void sim_ram_read(uint16_t addr, void *dst, size_t n)
+{
+    uint8_t *d = static_cast<uint8_t *>(dst);
+    for (size_t i = 0; i < n; i++)
+        d[i] = (uint8_t)cpu->registers[addr + i]->get_value();
+}
+
+extern "C" void sim_ram_write(uint16_t addr, const void *src, size_t n)
+{
+    const uint8_t *s = static_cast<const uint8_t *>(src);
+    for (size_t i = 0; i < n; i++)
+        cpu->registers[addr + i]->put_value(s[i]);
+}
+
+extern "C" bool sim_drive_hardware(uint16_t k)
+{
+    const sim_hw_t *h = &sim_hw[k];
+    sim_hw_state_t *s = &sim_hw_state[k];
+    const el_item_t *it = &el_items[h->item];
+    switch (h->kind) {
+    case SIM_HW_ADC: {
+        uint16_t v;
+        memcpy(&v, s->value, sizeof v);
+        if (v > 1023u) {
+            el_host_error("%s = %u at %llu us: the %s's ADC gives 0..1023 (10 bits)", it->name, (unsigned)v,
+                          (unsigned long long)el_sim_now_us, sim_mcu);
+            return false;
+        }
+        /* gpsim converts round(1023 V / Vdd): the count v exactly. */
+        static const uint8_t pins[13] = {0x00, 0x01, 0x02, 0x03, 0x05, 0x20, 0x21, 0x22, 0x0A, 0x0B, 0x09, 0x0C, 0x08};
+        drive_pin(pins[h->a], v * (cpu->get_Vdd() / 1023.0));
+        return true;
+    }
+    case SIM_HW_PIN_IN: {
+        bool level;
+        memcpy(&level, s->value, sizeof level);
+        drive_level(h->a, level);
+        record_pins();
+        return true;
+    }
+    case SIM_HW_ENCODER: {
+        int32_t v;
+        memcpy(&v, s->value, sizeof v);
+        s->target = v;
+        if (s->target != s->position && !s->busy) {
+            s->busy = true;
+            busy_count++;
+            encoders[k].k = k;
+            get_cycles().set_break(get_cycles().get() + ENCODER_EDGE_CYCLES, &encoders[k]);
+        }
+        return true;
+    }
+    default:
+        return true;
+    }
+}
+
+extern "C" const char *sim_pin_name(uint16_t k, bool *pwm)
+{
+    *pwm = sim_pins[k].kind == SIM_PIN_PWM;
+    return sim_pins[k].name;
+}
+
+int main(int argc, char **argv)
+{
+    int r = sim_parse_args(argc, argv, "--cod", "gpsim");
+    if (r != SIM_EXIT_OK)
+        return r == SIM_EXIT_HELP ? SIM_EXIT_OK : r;
+
+    int loaded;
+    {
+        QuietStdout quiet;
+        initialize_gpsim_core();
+        loaded = CSimulationContext::GetContext()->LoadProgram(sim_opt.firmware, sim_processor, &cpu);
+        initialization_is_complete();
+        pic = dynamic_cast<pic_processor *>(cpu);
+        if (loaded && cpu != nullptr)
+            map_eeadrh();
+    }
+    if (!loaded || cpu == nullptr) {
+        el_host_error("cannot load the firmware %s into gpsim's %s", sim_opt.firmware, sim_processor);
+        return SIM_EXIT_USAGE;
+    }
+    cpu->set_frequency(4.0 * sim_clock_hz);
+    pin_driven.assign(64, -1);
+    encoders.resize(sim_hw_count ? sim_hw_count : 1u);
+
+    std::vector<uint8_t> erased(sim_nv_size, 0xFFu); /* gpsim starts the EEPROM at 0; a chip's erased bytes are 0xFF */
+    if (!sim_start(erased.data()))
+        return SIM_EXIT_USAGE;
+    eeprom_store(erased.data());
+
+    if (sim_mark_addr != 0xFFFFu)
+        hook(sim_mark_addr);
+    hook(TXREG);
+    if (long_eeprom != nullptr)
+        hook(EECON1_ADDR);
+    for (unsigned p = 0; p < 5u; p++) {
+        hook(LATA + p);
+        hook(TRISA + p);
+    }
+    hook(CCPR1L);
+    hook(CCP1CON);
+    hook(CCPR2L);
+    hook(CCP2CON);
+    hook(PR2);
+    if (sim_opt.halt && sim_kept_addr != 0xFFFFu) /* read by el_port_init of a debug build */
+        cpu->registers[sim_kept_addr]->put_value(KEPT_SIM_HALT);
+
+    Stopper stopper;
+    while (!sim_stop && !sim_stop_signal) {
+        guint64 now = get_cycles().get();
+        guint64 until = now + SLICE_CYCLES;
+        if (sim_opt.has_cycles && until > sim_opt.cycles)
+            until = sim_opt.cycles;
+        if (until <= now)
+            break;
+        get_cycles().set_break(until, &stopper);
+        cpu->run(false);
+        if (get_cycles().get() == now) {
+            el_host_error("gpsim stopped the %s at cycle %llu (pc 0x%05x)", sim_mcu, (unsigned long long)now,
+                          cpu->pc->get_value());
+            sim_exit_status = SIM_EXIT_RUN;
+            break;
+        }
+        if (sim_opt.has_cycles && get_cycles().get() >= sim_opt.cycles)
+            break;
+        if (!sim_service(get_cycles().get()))
+            break;
+        rx_pump.pump();
+    }
+    return sim_finish(get_cycles().get(), 0u, eeprom_image());
+}

@@ -1,0 +1,214 @@
+"""The PIC18 board's builds: sizes against the part and the builds that do
+not fit, the claims and the part's own rules with their messages, the
+toolchain's absence, the tick timer, the compiler keywords behind the
+board's header, the make targets."""
+
+from __future__ import annotations
+
+import re
+import shutil
+import subprocess
+from pathlib import Path
+
+import pytest
+
+from pic18_testlib import ROOT, cli, pic18_build, run, sizes, write_model
+
+BOARD = ROOT / "boards" / "pic18"
+
+
+# ---------------------------------------------------------------- sizes
+
+def test_blink_in_release_fits_the_pic18f4520(build_cache):
+    built = build_cache.get(("pic18-blink-release",),
+                            lambda out: pic18_build(ROOT / "examples" / "blink.elab", out, "--release"))
+    s = sizes(built)
+    assert s["mcu"] == "pic18f4520" and s["flash_max"] == 32768 and s["ram_max"] == 1536
+    assert 0 < s["flash"] < s["flash_max"] and 384 < s["ram"] < s["ram_max"]  # the RAM counts the 384-byte stack
+    assert built.lines[-2].startswith("pic18f4520: program memory") and built.lines[-1] == str(built.elf)
+    records = [line for line in built.elf.read_text().splitlines() if line.startswith(":")]
+    assert records[-1] == ":00000001FF"
+    assert built.elf.with_suffix(".cod").is_file()  # gpsim's symbolic image
+
+
+def test_a_debug_build_fits_the_pic18f4620(blink_4620, build_cache):
+    debug = sizes(blink_4620)
+    release = sizes(build_cache.get(("pic18-blink-release",),
+                                    lambda out: pic18_build(ROOT / "examples" / "blink.elab", out, "--release")))
+    assert debug["mcu"] == "pic18f4620" and debug["flash_max"] == 65536 and debug["ram_max"] == 3968
+    assert debug["flash"] < debug["flash_max"] and debug["ram"] < debug["ram_max"]
+    assert debug["flash"] > release["flash"] + 10000  # the debug server
+
+
+def test_a_debug_build_too_big_for_the_pic18f4520_says_by_how_much(tmp_path):
+    built = pic18_build(ROOT / "examples" / "blink.elab", tmp_path / "b", ok=False)
+    err = built.proc.stderr
+    m = re.search(r"pic18f4520: program memory (\d+) of 32768 bytes, RAM (\d+) of 1536 bytes", err)
+    assert m and int(m.group(1)) > 32768, err
+    assert (f"error: the program does not fit the pic18f4520's 32768 bytes of program memory "
+            f"({int(m.group(1)) - 32768} bytes too many)") in err
+    assert "a --release build has none" in err and "or build for --mcu pic18f4620" in err
+    assert not (tmp_path / "b" / "blink.hex").exists()
+
+
+def test_a_program_too_big_for_the_ram_names_the_largest_objects(tmp_path):
+    """Objects larger than a 256-byte bank sit between the banks and the
+    stack (sdcc_quirks.place_big_objects): too many are refused before
+    anything is compiled, naming them."""
+    model = write_model(tmp_path, "big", "var a: int16\nchannel c: int16 delay 300\n"
+                                         "dataflow P { s = Const<int16>(value = 1)  s.y -> c }\n"
+                                         "dataflow Q { w = WindowStats<int16>(n = 300)  c -> w.x  w.max -> a }\n"
+                                         "task p period 1 ms { run P }\ntask q period 300 ms { run Q }\n")
+    err = pic18_build(model, tmp_path / "b", "--release", ok=False).proc.stderr
+    assert ("the program does not fit the pic18f4520's 1536 bytes of RAM: the RAM objects larger than a bank "
+            "take 1804 bytes, more than the 1023 bytes of RAM between the access bank and the stack: el_t1 604 B, "
+            "el_ch0_ring 600 B, el_df1_b0 600 B; dataflow buffers shrink with --schedule min-buffer; or build for "
+            "--mcu pic18f4620") in err, err
+
+
+def test_pt100_sensor_on_the_pic18f4520_names_the_missing_second_uart(tmp_path):
+    err = pic18_build(ROOT / "examples" / "pt100_sensor.elab", tmp_path / "p", ok=False).proc.stderr
+    assert re.search(r"examples/pt100_sensor\.elab:\d+: error: interface 'modbus rtu' claims uart\[1\], but the "
+                     r"pic18f4520 has no UART 1 \(it has uart0 only\)", err), err
+    assert err.startswith("easylab: error: the model does not fit the pic18 board with the pic18f4520"), err
+
+
+# ---------------------------------------------------------------- claims and the part's rules
+
+LOOP = "dataflow D { %s }\ntask t period 10 ms { run D }\n"
+
+
+@pytest.mark.parametrize("body, message", [
+    # PWM on a pin without a CCP module (CCP2 is on RC1: CCP2MX = PORTC)
+    ('device v: PwmOut(pin = "RB3")\nparam d: int16 = 1\n' + LOOP % "c = Const<int16>(value = d)  c.y -> v.duty",
+     "claims pwm[\"RB3\"], but RB3 has no CCP output; PWM pins of the pic18f4520: RC1, RC2"),
+    # one pin through two resources
+    ('device led: DigitalOut(pin = "RC2")\ndevice valve: PwmOut(pin = "RC2")\nparam d: int16 = 1\n'
+     + LOOP % "c = Const<int16>(value = d)  w = SquareWave(half_period = 5)  c.y -> valve.duty  w.y -> led.level",
+     "pin RC2 is claimed twice on the pic18f4520: as pwm[\"RC2\"] by device 'valve' and as pin[\"RC2\"] by "
+     "device 'led'"),
+    # a UART's pin as a digital input
+    ('device b: DigitalIn(pin = "RC7")\nvar y: bool\n' + LOOP % "b.level -> y" + "debug on uart0 baud 115200\n",
+     "pin RC7 is claimed twice on the pic18f4520: as uart[0] by interface 'debug' and as pin[\"RC7\"]"),
+    # the port-and-bit alias names the same pin
+    ('device a: DigitalOut(pin = "PB5")\ndevice b: DigitalIn(pin = "RB5")\nvar y: bool\n'
+     + LOOP % "b.level -> y  b.level -> a.level",
+     "pin RB5 is claimed twice on the pic18f4520"),
+    # an ADC channel the part lacks
+    ('device a: AnalogIn(channel = 13)\nvar x: uint16\n' + LOOP % "a.value -> x",
+     "claims adc[13], but the pic18f4520 has no ADC channel 13 (channels 0..12)"),
+    # ADCON1: adc[3] makes AN0..AN3 analog, RA1 (AN1) is no digital input then
+    ('device a: AnalogIn(channel = 3)\ndevice b: DigitalIn(pin = "RA1")\nvar x: uint16\nvar y: bool\n'
+     + LOOP % "a.value -> x  b.level -> y",
+     "device 'b' reads RA1 as a digital input, but on the pic18f4520 adc[3] (device 'a') makes AN0..AN3 analog "
+     "together (ADCON1) and RA1 is AN1, which then reads 0"),
+    # a second UART
+    ('var x: uint8 service ro\nmodbus rtu on uart1 baud 19200\n',
+     "interface 'modbus rtu' claims uart[1], but the pic18f4520 has no UART 1 (it has uart0 only)"),
+    # Modbus TCP
+    ('var x: uint8 service ro\nmodbus tcp port 1502\n',
+     "the Modbus TCP interface needs a network, and the pic18 board has none"),
+    # an encoder on pins without interrupts
+    ('device e: Encoder(pin_a = "RD0", pin_b = "RB3")\nvar x: int32\n' + LOOP % "e.count -> x",
+     "device 'e' (encoder) needs an interrupt on RD0, which has neither an external interrupt (INT0..INT2 on "
+     "RB0..RB2) nor PORTB's interrupt on change (RB4..RB7) on the pic18f4520; pins that can: RB0..RB2, RB4..RB7"),
+    # a crystal pin
+    ('device l: DigitalOut(pin = "RA6")\nparam p: int16 = 1\n'
+     + LOOP % "c = Const<int16>(value = p)  k = Compare<int16>(op = \">\", threshold = 0)  c.y -> k.x  k.y -> l.level",
+     "the pic18f4520's RA6 is OSC2 (the 10 MHz crystal)"),
+])
+def test_resources_the_part_lacks_are_refused_with_the_claim_and_its_line(tmp_path, body, message):
+    model = write_model(tmp_path, "bad", body)
+    err = pic18_build(model, tmp_path / "o", ok=False).proc.stderr
+    assert message in err, err
+    assert re.search(rf"{re.escape(str(model))}:\d+: error: ", err), err
+
+
+def test_unknown_mcu(tmp_path):
+    proc = cli("build", ROOT / "examples/blink.elab", "--board", "pic18", "--mcu", "pic18f452", "-o", tmp_path / "x")
+    assert proc.returncode == 1
+    assert "board 'pic18' has no MCU 'pic18f452' (MCUs: pic18f4520, pic18f4620)" in proc.stderr
+
+
+def test_a_missing_toolchain_says_how_to_get_it(tmp_path):
+    proc = cli("build", ROOT / "examples/blink.elab", "--board", "pic18", "--release", "-o", tmp_path / "x",
+               env={"EASYLAB_PIC18_SDCC": str(tmp_path / "nothing")})
+    assert proc.returncode == 1
+    assert (f"the pic18 board's compiler (sdcc with its pic16 port) is not built in {tmp_path / 'nothing'}"
+            in proc.stderr)
+    assert "`make setup` builds it" in proc.stderr and "boards/pic18/toolchain/build.sh" in proc.stderr
+    assert "EASYLAB_PIC18_SDCC names another folder" in proc.stderr
+
+
+def test_a_stack_that_runs_out_stops_the_simulation(tmp_path):
+    """The harness's guard at the bottom of sdcc's software stack: the board
+    with a 64-byte stack (a copy of boards/pic18 whose board.toml says so,
+    found first through --board-path) runs blink into it."""
+    board = tmp_path / "boards" / "pic18"
+    shutil.copytree(BOARD, board, ignore=shutil.ignore_patterns("__pycache__"))
+    toml = board / "board.toml"
+    toml.write_text(toml.read_text().replace("stack = 384", "stack = 64"))
+    built = pic18_build(ROOT / "examples" / "blink.elab", tmp_path / "b", "--release", "--sim", "--board-path",
+                        tmp_path / "boards")
+    assert "64-byte stack" in built.proc.stdout
+    proc = run(built.simulator, "--fast", "--duration", "100ms", ok=False)
+    assert proc.returncode == 1
+    assert "the pic18f4520's software stack (64 bytes, board.toml's stack) ran out at cycle" in proc.stderr
+
+
+# ---------------------------------------------------------------- the tick
+
+@pytest.mark.parametrize("tick_us", [100, 250, 500, 1000, 1500, 5000, 10000, 20000, 100000, 1000000])
+def test_the_tick_timer_divides_common_ticks_exactly(tick_us):
+    from easylab.board.registry import board_module
+    tick_timer = board_module("pic18", "devices").tick_timer
+
+    t = tick_timer(tick_us, 10_000_000)
+    assert t.exact and t.drift_ppm == 0
+    assert t.prescale * (t.pr2 + 1) * t.postscale * t.isrs == tick_us * 10
+    assert 500 <= t.prescale * (t.pr2 + 1) * t.postscale <= 10000  # interrupts 50 us .. 1 ms apart
+    if tick_us % 100 == 0:
+        assert t.prescale * (t.pr2 + 1) == 1000  # the PWM's period: 10 kHz with 10-bit duty
+
+
+def test_a_tick_no_setting_divides_drifts_by_a_stated_amount():
+    from easylab.board.registry import board_module
+    tick_timer = board_module("pic18", "devices").tick_timer
+
+    t = tick_timer(4093, 10_000_000)  # a prime number of us
+    assert not t.exact and abs(t.drift_ppm - 24.4) < 0.1
+
+
+# ---------------------------------------------------------------- the sources
+
+SDCC_KEYWORDS = re.compile(r"__(interrupt|at|sfr|sbit|asm|endasm|naked|code|data|critical|wparam|reentrant|shadowregs)"
+                           r"\b")
+
+
+def test_compiler_keywords_stay_behind_the_boards_header():
+    """Only el_pic18.h (and the sdcc-only start-up file) name sdcc's
+    keywords: MPLAB XC8 needs the header's other branch only."""
+    sources = sorted(BOARD.glob("*.[ch]")) + sorted((BOARD / "drivers").glob("*.h"))
+    offenders = {p.name: m.group(0) for p in sources if p.name not in ("el_pic18.h", "pic18_startup.c")
+                 for m in [SDCC_KEYWORDS.search(re.sub(r"/\*.*?\*/", "", p.read_text(), flags=re.S))] if m}
+    assert offenders == {}
+    assert "__XC8" in (BOARD / "el_pic18.h").read_text()
+
+
+# ---------------------------------------------------------------- make
+
+def test_make_flash_shows_the_programmers_command():
+    proc = subprocess.run(["make", "-n", "flash", "BOARD=pic18", "MODEL=examples/blink.elab", "PORT=usb",
+                           "BUILD_FLAGS=--release"], cwd=ROOT, capture_output=True, text=True)
+    assert proc.returncode == 0, proc.stderr
+    assert "build examples/blink.elab --board pic18 --mcu pic18f4520 -o build/flash/blink-pic18f4520" in proc.stdout
+    assert "ipecmd.sh -TPPK3 -PPIC18F4520 -Fbuild/flash/blink-pic18f4520/blink.hex -M -OL" in proc.stdout
+
+
+def test_make_sim_runs_the_harness():
+    proc = subprocess.run(["make", "-n", "sim", "BOARD=pic18", "MODEL=examples/blink.elab", "MCU=pic18f4620"],
+                          cwd=ROOT, capture_output=True, text=True)
+    assert proc.returncode == 0, proc.stderr
+    assert "--board pic18 --mcu pic18f4620 --sim" in proc.stdout
+    assert ("build/sim/blink-pic18f4620/blink-sim --uart0 pty:build/sim/blink-pic18f4620/uart0"
+            in proc.stdout)
