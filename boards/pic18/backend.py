@@ -19,13 +19,12 @@ file the IR names).
 from __future__ import annotations
 
 import shlex
-import shutil
 import subprocess
 from pathlib import Path
 
 from easylab.board import resources
 from easylab.board.base import BoardBase
-from easylab.board.cbuild import mode_flags, runtime_sources, write_files
+from easylab.board.cbuild import mode_flags, require_tool, runtime_sources, write_files
 from easylab.board.contract import Compiled, CompileOptions, SizeReport, Simulator
 from easylab.core.errors import BuildError
 from easylab.core.paths import runtime_dir
@@ -89,8 +88,7 @@ class Pic18Board(BoardBase):
         """Lower and compile the portable files, compile the hardware files;
         write the linker script (which knows where the big objects went).
         Returns the objects, the script and where the big objects begin."""
-        if shutil.which("gplink") is None:
-            raise BuildError("gplink of board 'pic18' is not installed (Debian package: gputils)")
+        require_tool("gplink", self.name, "gputils", "linker")
         hardware = self._hardware()
         lowered, big_start = build.portable(portable, sdcc.hardware_roots(build, hardware),
                                             self.part.stack_bottom - 1)
