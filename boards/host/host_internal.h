@@ -145,6 +145,7 @@ bool el_host_opt_modbus_rtu(const char *arg);
 bool el_host_modbus_handover(void);
 /* --hmi pty:LINK: the example HMI, a line protocol over el_service.h. */
 bool el_host_opt_hmi(const char *arg);
+bool el_host_opt_link(const char *arg); /* host_remote.c: a remote-execution proxy's link */
 /* A pseudo-terminal with a symlink `link` to it (removed at exit): returns
  * its master and keeps our own slave descriptor in *slave_out (so the master
  * never sees a hangup between clients), or -1 after reporting the error

@@ -1,0 +1,59 @@
+"""Acceptance: for every example and its stimulus, the host-board proxy with
+`easylab remote --fast` (lock-step virtual time) writes the host-native
+firmware's trace, byte for byte."""
+
+from __future__ import annotations
+
+import pytest
+
+from remote_testlib import EXAMPLES, Proxy, device_columns, proxy_of, remote
+
+CASES = {  # example: duration
+    "blink": "3s",
+    "cd_to_dat": "200ms",
+    "line_follower": "3s",
+    "pneumatic_cylinder": "3600ms",
+    "pt100_sensor": "3500ms",
+}
+
+
+def run_native(exe, trace, duration, stimulus):
+    import subprocess
+
+    cmd = [str(exe), "--fast", "--duration", duration, "--trace", str(trace)]
+    if stimulus is not None:
+        cmd += ["--stimulus", str(stimulus)]
+    proc = subprocess.run(cmd, capture_output=True, text=True, timeout=120, stdin=subprocess.DEVNULL)
+    assert proc.returncode == 0, proc.stderr
+
+
+# CSV for every example, VCD for the two with charts (the trace writer is the
+# interpreter's, tested on every example in tests/interp).
+RUNS = [(name, "csv") for name in CASES] + [("line_follower", "vcd"), ("pneumatic_cylinder", "vcd")]
+
+
+@pytest.mark.parametrize("name,ext", RUNS)
+def test_remote_trace_equals_native(name, ext, build_cache, tmp_path):
+    model = EXAMPLES / f"{name}.elab"
+    stimulus = EXAMPLES / f"{name}.stimulus.csv"
+    stimulus = stimulus if stimulus.is_file() else None
+    duration = CASES[name]
+    native = tmp_path / f"native.{ext}"
+    run_native(build_cache.example("host", name).executable, native, duration, stimulus)
+
+    devices = device_columns(stimulus, model, tmp_path / "devices.csv") if stimulus else None
+    proxy = Proxy(proxy_of(build_cache, model), tmp_path / "link", "--fast",
+                  *(["--stimulus", str(devices)] if devices else []))
+    try:
+        traced = tmp_path / f"remote.{ext}"
+        args = ["--fast", "--duration", duration, "--trace", str(traced)]
+        proc = remote(model, proxy.link, *args, *(["--stimulus", str(stimulus)] if stimulus else []))
+        assert proc.returncode == 0, proc.stderr
+        status, err = proxy.finish()  # STOP ends a host-board proxy
+        assert status == 0, err
+    finally:
+        proxy.kill()
+    expected = native.read_bytes()
+    assert traced.read_bytes() == expected
+    if ext == "csv" and name != "cd_to_dat":
+        assert expected.count(b"\n") > 20, "the stimulus should make the model move"
