@@ -40,6 +40,9 @@ def add_parsers(sub) -> None:
     r.add_argument("--target", metavar="URL", required=True,
                    help="the proxy's link: a serial device, a pty, socket://HOST:PORT (as pyserial opens them)")
     r.add_argument("--baud", type=int, default=115200, help="the link's baud rate (default 115200)")
+    r.add_argument("--connect-timeout", metavar="S", type=float, default=5.0,
+                   help="seconds to repeat HELLO until the proxy answers (default 5: opening a serial port "
+                        "resets many boards)")
     r.add_argument("--stimulus", metavar="FILE.csv",
                    help="params and vars from a CSV file (the host board's format; device columns are the "
                         "proxy's and are ignored here)")
@@ -112,7 +115,7 @@ def cmd_remote(args) -> int:
         return EXIT_USAGE
     try:
         link = Link(args.target, model, args.baud)
-        link.connect()
+        link.connect(args.connect_timeout)
     except RemoteError as err:
         _say(f"easylab remote: {err}")
         return EXIT_ERROR

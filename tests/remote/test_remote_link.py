@@ -1,0 +1,147 @@
+"""The link between `easylab remote` and a proxy: frames and their CRC,
+the device-model id, the two connect errors, corrupted frames, overruns."""
+
+from __future__ import annotations
+
+import os
+import struct
+import time
+
+import pytest
+
+from easylab.core.crc import crc16
+from easylab.pipeline import lower_file
+from easylab.remote import protocol as P
+from easylab.remote.device_model import device_model
+from easylab.remote.link import Link, NoAnswer
+from easylab.remote.protocol import K
+from remote_testlib import EXAMPLES, Proxy, proxy_of, remote
+
+BLINK = EXAMPLES / "blink.elab"
+PT100 = EXAMPLES / "pt100_sensor.elab"
+
+
+def until(condition, timeout: float = 10.0) -> None:
+    deadline = time.monotonic() + timeout
+    while not condition():
+        assert time.monotonic() < deadline, "the condition did not come true in time"
+        time.sleep(0.01)
+
+
+def lower_text(tmp_path, text: str, name: str = "edited.elab"):
+    path = tmp_path / name
+    path.write_text(text)
+    program, result = lower_file(path)
+    assert program is not None, result.report()
+    return path, program
+
+
+def test_frames_carry_their_instant_and_a_crc():
+    wire = P.encode(K.CMD_DOWN, 123456, b"\x00\x01\x02")
+    assert wire.endswith(b"\x00") and b"\x00" not in wire[:-1]
+    assert P.decode(wire[:-1]) == (K.CMD_DOWN, 123456, b"\x00\x01\x02")
+    damaged = bytearray(wire[:-1])
+    damaged[3] ^= 0x40 if damaged[3] != 0x40 else 0x01
+    assert P.decode(bytes(damaged)) is None
+
+
+def test_the_device_model_id_ignores_the_application(tmp_path):
+    program, _ = lower_file(BLINK)
+    text = BLINK.read_text()
+    _, slower = lower_text(tmp_path, text.replace("= 500", "= 250").replace("SquareWave(half_period = half_period)",
+                                                                           "SquareWave(half_period = half_period + 1)"))
+    assert slower.program_id != program.program_id
+    assert device_model(slower).id == device_model(program).id
+    _, moved = lower_text(tmp_path, text.replace('"PB5"', '"PB4"'), "moved.elab")
+    assert device_model(moved).id != device_model(program).id
+    assert device_model(moved).device_ids != device_model(program).device_ids
+    _, faster = lower_text(tmp_path, text.replace("period 1 ms", "period 2 ms"), "faster.elab")
+    assert device_model(faster).id != device_model(program).id  # the instants of the writes moved
+    assert device_model(faster).device_ids == device_model(program).device_ids
+
+
+def test_a_proxy_of_another_device_model_is_refused_by_name(build_cache, tmp_path):
+    moved, _ = lower_text(tmp_path, BLINK.read_text().replace('"PB5"', '"PB4"'), "blink.elab")
+    proxy = Proxy(proxy_of(build_cache, BLINK), tmp_path / "link", "--fast")
+    try:
+        proc = remote(moved, proxy.link, "--fast", "--duration", "10ms")
+        assert proc.returncode == 1
+        assert "runs another device model" in proc.stderr
+        assert "different: led" in proc.stderr
+        assert "rebuild and flash the proxy" in proc.stderr
+        assert proxy.proc.poll() is None  # still waiting for a host of its own model
+    finally:
+        proxy.kill()
+
+
+def test_nothing_answering_is_another_error(tmp_path):
+    master, slave = os.openpty()
+    try:
+        started = time.monotonic()
+        proc = remote(BLINK, os.ttyname(slave), "--fast", "--connect-timeout", "0.6")
+        assert proc.returncode == 1
+        assert "no proxy answers" in proc.stderr and "another device model" not in proc.stderr
+        assert time.monotonic() - started < 30
+        hellos = os.read(master, 4096)  # HELLO was repeated
+        assert hellos.count(b"\x00") >= 2
+    finally:
+        os.close(master)
+        os.close(slave)
+
+
+def test_the_proxy_drops_a_corrupted_frame(build_cache, tmp_path):
+    program, _ = lower_file(PT100)
+    model = device_model(program)
+    proxy = Proxy(proxy_of(build_cache, PT100), tmp_path / "link", "--fast")
+    link = None
+    try:
+        link = Link(str(proxy.link), model)
+        link.connect()
+        link.start(lock_step=True)
+        first = link.up(0, 5.0)
+        assert len(first) == model.frame_bytes(model.up_items([0]))
+        # A DOWN for instant 0 whose CRC does not match: dropped, the proxy still waits.
+        body = struct.pack("<BI", K.CMD_DOWN, 0) + struct.pack("<I", 1) + b"\x01"
+        crc = crc16(body) ^ 0x0101
+        link.transport.send(P.cobs_encode(body + bytes([crc & 0xFF, crc >> 8])) + b"\x00")
+        link.down(0, 1, b"\x01")
+        link.up(1, 5.0)  # the good frame let the proxy go on
+        counters = link.counters()
+        assert counters["bad_crc"] == 1
+        assert counters["malformed"] == 0 and counters["overruns"] == 0
+        link.stop()
+        status, err = proxy.finish()
+        assert status == 0, err
+    finally:
+        if link:
+            link.close()
+        proxy.kill()
+
+
+def test_late_values_are_overruns_and_the_previous_value_stays(build_cache, tmp_path):
+    """In real time, a DOWN that does not come by its deadline is counted,
+    and the device `in` datum keeps its value; one that comes after it is
+    stale (never applied)."""
+    program, _ = lower_file(PT100)
+    model = device_model(program)
+    trace = tmp_path / "proxy.csv"
+    proxy = Proxy(proxy_of(build_cache, PT100), tmp_path / "link", "--trace", str(trace))
+    link = None
+    try:
+        link = Link(str(proxy.link), model)
+        link.connect()
+        link.start(lock_step=False)
+        until(lambda: link.counters()["overruns"] >= 10)  # activations of `acquire` (10 ms), none answered
+        link.down(0, 1, b"\x01")  # instant 0's value, long after its deadline
+        until(lambda: link.counters()["stale"] == 1)
+        link.stop()
+        status, err = proxy.finish()
+        assert status == 0, err
+        assert "overruns: acquire" in err
+    finally:
+        if link:
+            link.close()
+        proxy.kill()
+    rows = trace.read_text().splitlines()
+    column = rows[0].split(",").index("alarm_led.level")
+    assert {row.split(",")[column] for row in rows[1:]} == {"0"}  # the safe value, held
