@@ -15,6 +15,8 @@
 static uint8_t state = EL_RMT_STATE_SAFE;
 static uint8_t mode = EL_RMT_MODE_REAL_TIME;
 static uint16_t counters[EL_RMT_COUNTER_COUNT];
+static uint32_t last_frame_tick; /* the instant of the last valid frame (real time) */
+static uint8_t overruns_in_a_row;
 
 /* The current activation of each proxy task. */
 static uint32_t release_tick[MAX_TASKS];
@@ -152,6 +154,7 @@ static void on_frame(uint16_t n)
         return;
     }
     count(EL_RMT_COUNTER_FRAMES);
+    last_frame_tick = (uint32_t)el_now_tick();
     cmd = rx_buf[0];
     instant = get_u32(&rx_buf[1]);
     payload = (uint16_t)(n - EL_RMT_HEADER - EL_RMT_TRAILER);
@@ -187,6 +190,7 @@ static void on_frame(uint16_t n)
         }
         mode = p[0];
         state = EL_RMT_STATE_RUNNING;
+        overruns_in_a_row = 0u;
         send((uint8_t)(cmd | EL_RMT_RESPONSE), instant, 0u);
         break;
     case EL_RMT_CMD_STOP:
@@ -238,9 +242,22 @@ void el_remote_boot(void)
     }
 }
 
+/* Real time: no valid frame for the watchdog time means the host is gone.
+ * (In lock-step the proxy's clock waits for the host instead.) */
+static void watchdog(void)
+{
+    uint32_t now = (uint32_t)el_now_tick();
+    if (state == EL_RMT_STATE_RUNNING && mode == EL_RMT_MODE_REAL_TIME &&
+        (uint32_t)(now - last_frame_tick) >= el_rmt_watchdog_ticks) {
+        count(EL_RMT_COUNTER_WATCHDOG);
+        enter_safe_state();
+    }
+}
+
 void el_remote_release(uint8_t task)
 {
     uint32_t now = (uint32_t)el_now_tick();
+    watchdog();
     if (released_now == 0u || released_tick != now) {
         released_now = 0u;
         released_tick = now;
@@ -278,6 +295,7 @@ void el_remote_publish(uint8_t task)
 {
     uint16_t i, at = 0u;
     bool got = arrived[task];
+    watchdog();
     pending[task] = false;
     arrived[task] = false;
     if (state != EL_RMT_STATE_RUNNING) {
@@ -288,8 +306,12 @@ void el_remote_publish(uint8_t task)
         if (el_overruns[task] < UINT16_MAX) {
             el_overruns[task]++;
         }
+        if (++overruns_in_a_row >= el_rmt_overrun_limit) {
+            enter_safe_state();
+        }
         return;
     }
+    overruns_in_a_row = 0u;
     for (i = 0u; i < el_rmt_in_count; i++) {
         const el_rmt_field_t *f = &el_rmt_in_fields[i];
         if (f->owner == task) {

@@ -30,6 +30,8 @@ typedef struct {
 
 /* ---- tables generated in proxy.c ---------------------------------------- */
 extern const uint32_t el_rmt_device_model_id;
+extern const uint32_t el_rmt_watchdog_ticks;       /* no valid frame for this long: safe values */
+extern const uint8_t el_rmt_overrun_limit;          /* this many overruns in a row: safe values */
 extern const uint8_t el_rmt_device_count_;          /* devices */
 extern const uint32_t el_rmt_device_ids[];          /* per device: hash of its description */
 extern const char *const el_rmt_device_paths[];

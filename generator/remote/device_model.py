@@ -20,6 +20,21 @@ from ..ir.program import Device, Instant, Item, Program, Task, to_json
 from .protocol import K
 
 
+# The proxy applies the safe values after this many consecutive overruns, and
+# when no valid frame came for twice the longest gap between two release
+# instants, but never sooner than WATCHDOG_MIN_US (docs/remote.md).
+OVERRUN_LIMIT = 3
+WATCHDOG_MIN_US = 100_000
+
+
+def watchdog_ticks(tick_us: int, hyperperiod: int, release_ticks: list[int]) -> int:
+    """The proxy's watchdog time in ticks: twice the longest gap between two
+    release instants (frames come at each), at least WATCHDOG_MIN_US."""
+    ticks = sorted(set(release_ticks))
+    gaps = [b - a for a, b in zip(ticks, ticks[1:])] + ([ticks[0] + hyperperiod - ticks[-1]] if ticks else [])
+    return max(2 * max(gaps, default=hyperperiod), -(-WATCHDOG_MIN_US // tick_us))
+
+
 def value_size(t: T.ValueType) -> int:
     """Bytes of one value on the link (the C type's size; bool is 1 byte)."""
     return max(1, t.bits // 8)
@@ -55,6 +70,8 @@ class DeviceModel:
     items: list[Item]  # every device datum, in the application's item order
     tasks: list[ProxyTask]
     instants: list[Instant]
+    watchdog_ticks: int = 0  # no valid frame for this long: the safe values
+    overrun_limit: int = OVERRUN_LIMIT  # this many overruns in a row: the safe values
     device_ids: list[int] = field(default_factory=list)  # per device: a 32-bit hash of its description
     id: int = 0
 
@@ -130,9 +147,11 @@ def device_model(program: Program) -> DeviceModel:
             instants.append(Instant(instant.tick, publish, release))
     model = DeviceModel(program.name, program.tick_us, program.hyperperiod, list(program.devices), device_items,
                         tasks, instants)
+    model.watchdog_ticks = watchdog_ticks(program.tick_us, program.hyperperiod, [i.tick for i in instants if i.release])
     model.device_ids = [_hash32(_device_json(program, d)) for d in program.devices]
     model.id = _hash32({
         "version": K.PROTOCOL_VERSION, "tick_us": program.tick_us, "hyperperiod": program.hyperperiod,
+        "watchdog_ticks": model.watchdog_ticks, "overrun_limit": model.overrun_limit,
         "devices": [_device_json(program, d) for d in program.devices],
         "tasks": [{"period": t.period, "offset": t.offset, "deadline": t.deadline, "reads": t.reads,
                    "writes": [program.items[i].name for i in t.writes]} for t in tasks],

@@ -38,6 +38,8 @@ class _View:
 
     name: str
     id: int
+    watchdog_ticks: int
+    overrun_limit: int
     tick_us: int
     hyperperiod: int
     items: list
@@ -82,7 +84,7 @@ def view(program: Program, model: DeviceModel, board) -> _View:
     instants = [dict(tick=i.tick, publish=_mask(i.publish), release=_mask(i.release)) for i in proxy.instants]
     if not instants:  # no task uses a device: one empty instant per hyperperiod keeps the clock
         instants = [dict(tick=0, publish=0, release=0)]
-    return _View(proxy.name, model.id, model.tick_us, model.hyperperiod, items, devices, out_fields, in_fields, safe,
+    return _View(proxy.name, model.id, model.watchdog_ticks, model.overrun_limit, model.tick_us, model.hyperperiod, items, devices, out_fields, in_fields, safe,
                  tasks, instants)
 
 

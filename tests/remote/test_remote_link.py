@@ -118,10 +118,25 @@ def test_the_proxy_drops_a_corrupted_frame(build_cache, tmp_path):
         proxy.kill()
 
 
-def test_late_values_are_overruns_and_the_previous_value_stays(build_cache, tmp_path):
-    """In real time, a DOWN that does not come by its deadline is counted,
-    and the device `in` datum keeps its value; one that comes after it is
-    stale (never applied)."""
+def answer(link: Link, model, instants: int, value: bytes) -> None:
+    """Answer the proxy's next ``instants`` UP frames of the single device
+    task with its written data = ``value``."""
+    for _ in range(instants):
+        frame = link._receive(K.CMD_UP, 5.0)
+        assert frame is not None, "no UP frame"
+        link.down(frame[0], 1, value)
+
+
+def trace_column(trace, name: str) -> list[tuple[int, str]]:
+    rows = trace.read_text().splitlines()
+    column = rows[0].split(",").index(name)
+    return [(int(r.split(",")[0]), r.split(",")[column]) for r in rows[1:]]
+
+
+def test_overruns_in_a_row_apply_the_safe_values(build_cache, tmp_path):
+    """In real time, a DOWN that does not come by its deadline is an
+    overrun (counted, the value stays); after K in a row the proxy applies
+    the safe values; a DOWN after its deadline is stale, never applied."""
     program, _ = lower_file(PT100)
     model = device_model(program)
     trace = tmp_path / "proxy.csv"
@@ -131,9 +146,13 @@ def test_late_values_are_overruns_and_the_previous_value_stays(build_cache, tmp_
         link = Link(str(proxy.link), model)
         link.connect()
         link.start(lock_step=False)
-        until(lambda: link.counters()["overruns"] >= 10)  # activations of `acquire` (10 ms), none answered
+        answer(link, model, 20, b"\x01")  # alarm_led.level = 1 for 20 activations of `acquire` (10 ms)
+        until(lambda: link.counters()["watchdog"] + link.counters()["overruns"] > 0)
         link.down(0, 1, b"\x01")  # instant 0's value, long after its deadline
-        until(lambda: link.counters()["stale"] == 1)
+        until(lambda: link._request(K.CMD_COUNTERS)[0] == K.STATE_SAFE)
+        counters = link.counters()
+        assert counters["overruns"] >= model.overrun_limit
+        assert counters["watchdog"] == 0  # K overruns come first (10 ms deadlines, watchdog 100 ms)
         link.stop()
         status, err = proxy.finish()
         assert status == 0, err
@@ -142,6 +161,44 @@ def test_late_values_are_overruns_and_the_previous_value_stays(build_cache, tmp_
         if link:
             link.close()
         proxy.kill()
-    rows = trace.read_text().splitlines()
-    column = rows[0].split(",").index("alarm_led.level")
-    assert {row.split(",")[column] for row in rows[1:]} == {"0"}  # the safe value, held
+    values = trace_column(trace, "alarm_led.level")
+    assert values[0][1] == "0"  # the safe value until the host's first value is due
+    assert "1" in {v for _, v in values}  # then the host's values, applied at their deadlines
+    assert values[-1][1] == "0"  # and the safe value again
+
+
+def test_the_watchdog_applies_the_safe_values_when_the_host_is_gone(tmp_path):
+    """A task with a 500 ms period: the watchdog (twice the longest gap
+    between frames, 1 s, measured from the instant stamped on the last frame:
+    the one awaited when it came) fires before K overruns would."""
+    from easylab.remote.proxy import build_proxy
+
+    path, program = lower_text(tmp_path, BLINK.read_text().replace("period 1 ms", "period 500 ms"), "slow.elab")
+    model = device_model(program)
+    assert model.watchdog_ticks * model.tick_us == 1_000_000
+    exe = build_proxy(program, "host", tmp_path / "proxy").executable
+    trace = tmp_path / "proxy.csv"
+    proxy = Proxy(exe, tmp_path / "link", "--trace", str(trace))
+    link = None
+    try:
+        link = Link(str(proxy.link), model)
+        link.connect()
+        link.start(lock_step=False)
+        answer(link, model, 1, b"\x01")  # led on at 500 ms; then the host says nothing more
+        # Silence is the stimulus here (any frame, even a question, feeds the
+        # watchdog): the watchdog time and a margin pass before we ask.
+        time.sleep(1.8)
+        counters = link.counters()
+        assert link._request(K.CMD_COUNTERS)[0] == K.STATE_SAFE
+        assert counters["watchdog"] == 1
+        assert counters["overruns"] == 1 < model.overrun_limit  # the activation due at 1 s
+        link.stop()
+        assert proxy.finish()[0] == 0
+    finally:
+        if link:
+            link.close()
+        proxy.kill()
+    # The led goes on at the first deadline and back to its safe value one
+    # watchdog time after the instant stamped on the last frame (it came
+    # while the proxy awaited instant 1, at 500 ms).
+    assert trace_column(trace, "led.level")[:3] == [(0, "0"), (500000, "1"), (1500000, "0")]
