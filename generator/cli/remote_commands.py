@@ -49,7 +49,8 @@ def add_parsers(sub) -> None:
     r.add_argument("--trace", metavar="FILE", help="record every item and chart at each instant (.csv or .vcd)")
     r.add_argument("--duration", metavar="T", help="stop before logical time T (10s, 500ms, ...); default: endless")
     r.add_argument("--fast", action="store_true",
-                   help="lock-step virtual time: the proxy waits for each answer (simulated devices only)")
+                   help="lock-step virtual time: the proxy waits for each answer (simulated devices only); "
+                        "default: real time, paced by the proxy's clock")
     r.set_defaults(func=cmd_remote)
 
 
@@ -80,14 +81,12 @@ def cmd_remote(args) -> int:
     from ..interp.stimulus import StimulusError
     from ..interp.stimulus import load as load_stimulus
     from ..interp.trace import TraceError, TraceWriter, columns_of
+    from ..remote.budget import refusal
     from ..remote.device_model import device_model
     from ..remote.host import RemoteEngine
     from ..remote.link import Link, RemoteError
     from .run_command import _on_signals, _restore, parse_duration
 
-    if not args.fast:
-        _say("easylab remote: only lock-step virtual time (--fast) is available in this version")
-        return EXIT_USAGE
     duration = None
     if args.duration is not None:
         try:
@@ -97,6 +96,11 @@ def cmd_remote(args) -> int:
             return EXIT_USAGE
     program = lower_model(args.file)
     model = device_model(program)
+    if not args.fast:  # real time: the proxy's clock paces, the link must keep up
+        why = refusal(program, model, args.baud)
+        if why is not None:
+            _say(f"easylab remote: {why}")
+            return EXIT_ERROR
     cache = PluginCache()
     try:
         cache.load_all(program.specs)
@@ -133,8 +137,12 @@ def cmd_remote(args) -> int:
     engine.clock = clock
     status = EXIT_OK
     try:
-        link.start(lock_step=True)
+        link.start(lock_step=args.fast)
         engine.run(duration, clock)
+        counters = link.counters()
+        if counters["overruns"] or counters["watchdog"]:
+            _say(f"easylab remote: the proxy counted {counters['overruns']} overruns (values held) and "
+                 f"{counters['watchdog']} watchdog expiries")
     except RemoteError as err:
         _say(f"easylab remote: {err}")
         status = EXIT_ERROR

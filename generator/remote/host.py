@@ -92,12 +92,13 @@ class RemoteEngine(Engine):
     awaited before the instant and the DOWN frame sent after its bodies."""
 
     def __init__(self, program: Program, model: DeviceModel, link: Link, stimulus: Stimulus | None = None,
-                 up_timeout: float = 5.0, **kwargs):
+                 up_timeout: float | None = None, **kwargs):
         self.devices = ProxyDevices(model, stimulus)
         super().__init__(program, stimulus=self.devices, **kwargs)
         self.model = model
         self.link = link
-        self.up_timeout = up_timeout
+        # In real time UP frames come at the proxy's pace: wait for the longest gap, and more.
+        self.up_timeout = up_timeout or max(5.0, 2 * model.hyperperiod * model.tick_us / 1e6)
         self.frames = 0
 
     def step(self) -> None:

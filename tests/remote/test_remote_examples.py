@@ -57,3 +57,34 @@ def test_remote_trace_equals_native(name, ext, build_cache, tmp_path):
     assert traced.read_bytes() == expected
     if ext == "csv" and name != "cd_to_dat":
         assert expected.count(b"\n") > 20, "the stimulus should make the model move"
+
+
+def test_real_time_paced_by_the_proxy(build_cache, tmp_path):
+    """Without --fast the proxy's clock paces the run (the proxy does not
+    wait for the host); the trace is the same."""
+    import time
+
+    name, duration = "pt100_sensor", "1s"
+    model, stimulus = EXAMPLES / f"{name}.elab", EXAMPLES / f"{name}.stimulus.csv"
+    native = tmp_path / "native.csv"
+    run_native(build_cache.example("host", name).executable, native, duration, stimulus)
+    devices = device_columns(stimulus, model, tmp_path / "devices.csv")
+    proxy = Proxy(proxy_of(build_cache, model), tmp_path / "link", "--stimulus", str(devices))
+    try:
+        traced = tmp_path / "remote.csv"
+        started = time.monotonic()
+        proc = remote(model, proxy.link, "--duration", duration, "--trace", str(traced), "--stimulus", str(stimulus))
+        assert proc.returncode == 0, proc.stderr
+        assert time.monotonic() - started >= 1.0  # real time: a second of it
+        assert proxy.finish()[0] == 0
+    finally:
+        proxy.kill()
+    assert traced.read_bytes() == native.read_bytes()
+
+
+def test_a_run_that_the_link_cannot_carry_is_refused_with_its_numbers(tmp_path):
+    proc = remote(EXAMPLES / "blink.elab", tmp_path / "nothing-there", "--baud", "115200")
+    assert proc.returncode == 1
+    assert ("the link cannot carry the device data in time: main at tick 0: 23 bytes per instant (UP 9, DOWN 14) "
+            "take 1.997 ms at 115200 baud; the deadline is 1 ms") in proc.stderr
+    assert not (tmp_path / "nothing-there").exists()
