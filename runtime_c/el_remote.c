@@ -13,6 +13,7 @@
 #define TX_CAP (EL_COBS_MAX_ENCODED(EL_RMT_MAX_FRAME) + 1u)
 
 static uint8_t state = EL_RMT_STATE_SAFE;
+static bool started; /* START came: UP frames flow (in the safe state too, telling the host) */
 static uint8_t mode = EL_RMT_MODE_REAL_TIME;
 static uint16_t counters[EL_RMT_COUNTER_COUNT];
 static uint32_t last_frame_tick; /* the instant of the last valid frame (real time) */
@@ -190,6 +191,7 @@ static void on_frame(uint16_t n)
         }
         mode = p[0];
         state = EL_RMT_STATE_RUNNING;
+        started = true;
         overruns_in_a_row = 0u;
         send((uint8_t)(cmd | EL_RMT_RESPONSE), instant, 0u);
         break;
@@ -274,10 +276,12 @@ void el_remote_body(uint8_t task)
 {
     uint16_t i, at = 0u;
     (void)task;
-    if (up_sent || state != EL_RMT_STATE_RUNNING) {
+    if (up_sent || !started) {
         return;
     }
     up_sent = true;
+    frame[EL_RMT_HEADER] = state; /* the host learns at once that the safe values hold */
+    at = 1u;
     for (i = 0u; i < el_rmt_out_count; i++) {
         const el_rmt_field_t *f = &el_rmt_out_fields[i];
         if ((el_rmt_device_readers[f->owner] & released_now) != 0u) {

@@ -51,6 +51,9 @@ def add_parsers(sub) -> None:
     r.add_argument("--fast", action="store_true",
                    help="lock-step virtual time: the proxy waits for each answer (simulated devices only); "
                         "default: real time, paced by the proxy's clock")
+    r.add_argument("--watch", action="store_true",
+                   help="replace the running application when its files change (an edit of the device model is "
+                        "refused: the proxy would have to be rebuilt)")
     r.set_defaults(func=cmd_remote)
 
 
@@ -133,10 +136,20 @@ def cmd_remote(args) -> int:
         return EXIT_USAGE
     clock = Clock(None)
     handlers = _on_signals(clock)
-    engine = RemoteEngine(program, model, link, stimulus, plugin_cache=cache, trace=trace, say=_say)
+    def replaced(report) -> None:
+        _say(f"easylab remote: at {report.time_us / 1e6:.6f} s the program id changed from 0x{report.old_id:08x} "
+             f"to 0x{report.new_id:08x} (the proxy runs on)")
+
+    engine = RemoteEngine(program, model, link, stimulus, plugin_cache=cache, trace=trace, say=_say,
+                          on_replace=replaced)
     engine.clock = clock
+    from ..interp.watch import ModelWatcher
+
+    watcher = ModelWatcher(args.file, engine, _say) if args.watch else None
     status = EXIT_OK
     try:
+        if watcher:
+            watcher.start()
         link.start(lock_step=args.fast)
         engine.run(duration, clock)
         counters = link.counters()
@@ -150,6 +163,8 @@ def cmd_remote(args) -> int:
         _say(f"easylab remote: {err}")
         status = EXIT_ERROR
     finally:
+        if watcher:
+            watcher.stop()
         _restore(handlers)
         try:
             engine.shutdown()

@@ -12,8 +12,10 @@ import sys
 from ..interp.engine import Engine
 from ..interp.stimulus import Stimulus
 from ..ir.program import Program
-from .device_model import DeviceModel, item_bytes
-from .link import Link
+from ..interp.plugins import PluginError
+from .device_model import DeviceModel, device_model, item_bytes
+from .link import Link, RemoteError
+from .protocol import K
 
 if sys.byteorder != "little":  # device data travel in the C layout of every board, little-endian
     raise ImportError("remote execution needs a little-endian host")
@@ -27,7 +29,7 @@ class ProxyDevices:
     def __init__(self, model: DeviceModel, stimulus: Stimulus | None):
         self.model = model
         self.inner = stimulus
-        self.payload: dict[int, bytes] = {}  # item id -> bytes read at the current instant
+        self.payload: dict[str, bytes] = {}  # item name -> bytes read at the current instant (names survive a swap)
         # release instants within the hyperperiod: tick -> proxy tasks released
         self.releases = {i.tick: i.release for i in model.instants if i.release}
 
@@ -36,6 +38,10 @@ class ProxyDevices:
         return self.inner.unbound if self.inner is not None else []
 
     def bind(self, program: Program) -> None:
+        """A replaced program (same device model, RemoteEngine.replace_model
+        checked it): its item and task ids may differ."""
+        self.model = device_model(program)
+        self.releases = {i.tick: i.release for i in self.model.instants if i.release}
         if self.inner is not None:
             self.inner.bind(program)
 
@@ -72,12 +78,12 @@ class ProxyDevices:
         at = 0
         for item in items:
             size = item_bytes(self.model.item(item))
-            self.payload[item] = payload[at:at + size]
+            self.payload[self.model.item(item).name] = payload[at:at + size]
             at += size
 
     def read_device(self, device: int, time_us: int, published: list) -> None:
         for item in self.model.devices[device].items:
-            data = self.payload.get(item)
+            data = self.payload.get(self.model.item(item).name)
             if data is not None:
                 ctypes.memmove(published[item], data, len(data))
 
@@ -95,23 +101,41 @@ class RemoteEngine(Engine):
                  up_timeout: float | None = None, **kwargs):
         self.devices = ProxyDevices(model, stimulus)
         super().__init__(program, stimulus=self.devices, **kwargs)
-        self.model = model
         self.link = link
         # In real time UP frames come at the proxy's pace: wait for the longest gap, and more.
         self.up_timeout = up_timeout or max(5.0, 2 * model.hyperperiod * model.tick_us / 1e6)
         self.frames = 0
 
+    def replace_model(self, new_program: Program) -> None:
+        """Swap in an edited application; an edit of the device model is
+        refused (PluginError): the proxy would have to be rebuilt."""
+        old, new = self.devices.model, device_model(new_program)
+        if new.id != old.id:
+            ours = dict(zip((d.path for d in old.devices), old.device_ids))
+            theirs = dict(zip((d.path for d in new.devices), new.device_ids))
+            changed = sorted(p for p in ours.keys() | theirs.keys() if ours.get(p) != theirs.get(p))
+            what = f"devices {', '.join(changed)}" if changed else "the instants at which tasks read or write devices"
+            raise PluginError(f"the edit changes the device model ({what}): the proxy must be rebuilt and flashed "
+                              f"(easylab proxy); the running program stays")
+        super().replace_model(new_program)
+
     def step(self) -> None:
         t = self.next_time_us()
         released = self.devices.released_at(t)
-        tick = t // self.model.tick_us
+        tick = t // self.devices.model.tick_us
         if released:
-            self.devices.take(released, self.link.up(tick, self.up_timeout))
+            up = self.link.up(tick, self.up_timeout)
+            if not up or up[0] != K.STATE_RUNNING:
+                raise RemoteError(f"{self.link.url}: at {t / 1e6:.6f} s the proxy applied its safe values (the "
+                                  f"host's values came late {self.devices.model.overrun_limit} times in a row, or "
+                                  "its watchdog expired); the run ends")
+            self.devices.take(released, up[1:])
         super().step()
+        model = self.devices.model  # the program's (a swap in this step rebinds it)
         if released:
             parts, mask = [], 0
-            for k, items in self.model.down_items(released):
-                local = self.state.tasks[self.model.tasks[k].task].local
+            for k, items in model.down_items(released):
+                local = self.state.tasks[model.tasks[k].task].local
                 parts += [bytes(local[i]) for i in items]
                 mask |= 1 << k
             self.link.down(tick, mask, b"".join(parts))

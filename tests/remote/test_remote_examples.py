@@ -85,6 +85,6 @@ def test_real_time_paced_by_the_proxy(build_cache, tmp_path):
 def test_a_run_that_the_link_cannot_carry_is_refused_with_its_numbers(tmp_path):
     proc = remote(EXAMPLES / "blink.elab", tmp_path / "nothing-there", "--baud", "115200")
     assert proc.returncode == 1
-    assert ("the link cannot carry the device data in time: main at tick 0: 23 bytes per instant (UP 9, DOWN 14) "
-            "take 1.997 ms at 115200 baud; the deadline is 1 ms") in proc.stderr
+    assert ("the link cannot carry the device data in time: main at tick 0: 24 bytes per instant (UP 10, DOWN 14) "
+            "take 2.083 ms at 115200 baud; the deadline is 1 ms") in proc.stderr
     assert not (tmp_path / "nothing-there").exists()

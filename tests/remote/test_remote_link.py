@@ -99,7 +99,7 @@ def test_the_proxy_drops_a_corrupted_frame(build_cache, tmp_path):
         link.connect()
         link.start(lock_step=True)
         first = link.up(0, 5.0)
-        assert len(first) == model.frame_bytes(model.up_items([0]))
+        assert first[0] == K.STATE_RUNNING and len(first) == 1 + model.frame_bytes(model.up_items([0]))
         # A DOWN for instant 0 whose CRC does not match: dropped, the proxy still waits.
         body = struct.pack("<BI", K.CMD_DOWN, 0) + struct.pack("<I", 1) + b"\x01"
         crc = crc16(body) ^ 0x0101
