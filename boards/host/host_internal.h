@@ -39,6 +39,10 @@ void el_host_unwatch_fd(int fd);
 void el_host_serve_fds(int timeout_ms);
 /* Whether any descriptor is watched. */
 bool el_host_watching(void);
+/* Before a pty's master closes (it drops unread input then): wait, at most
+ * 300 ms, until the reader has taken what we wrote; `slave` is our own
+ * slave descriptor (-1: nothing to wait for). */
+void el_host_drain_pty(int slave);
 
 /* ---- messages (host_port.c) ---- */
 

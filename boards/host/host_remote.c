@@ -22,8 +22,6 @@
 #include <errno.h>
 #include <signal.h>
 #include <string.h>
-#include <sys/ioctl.h>
-#include <time.h>
 #include <unistd.h>
 
 static int conn_fd = -1;   /* pty master */
@@ -70,16 +68,7 @@ bool el_remote_port_write(const uint8_t *frame, uint16_t len)
 
 void el_remote_port_end(void)
 {
-    /* A pty drops unread input when its master closes: let the host read
-     * STOP's answer first (at most 300 ms). */
-    int i, pending = 0, idle = 0;
-    for (i = 0; i < 60 && keep_fd >= 0 && idle < 3; i++) {
-        struct timespec ts = {0, 5000000L};
-        (void)nanosleep(&ts, NULL); /* the kernel moves written bytes to the reader's queue meanwhile */
-        if (ioctl(keep_fd, FIONREAD, &pending) != 0)
-            break;
-        idle = pending == 0 ? idle + 1 : 0;
-    }
+    el_host_drain_pty(keep_fd); /* the host reads STOP's answer before the pty goes */
     (void)raise(SIGTERM); /* the port ends the run at the next tick */
 }
 

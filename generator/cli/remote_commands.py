@@ -11,7 +11,7 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
-from .common import EXIT_OK, EXIT_USAGE, CliError, add_board_options, default_out_dir, lower_model
+from .common import EXIT_OK, EXIT_USAGE, CliError, add_board_options, default_out_dir, lower_model, report_built
 
 EXIT_ERROR = 1
 
@@ -71,55 +71,33 @@ def cmd_proxy(args) -> int:
         built = build_proxy(program, args.board, out, mcu=args.mcu, sim=args.sim, board_path=args.board_path)
     except BuildError as err:
         raise CliError(str(err)) from None
-    for note in built.notes:
-        print(note)
-    print(built.executable)
-    return EXIT_OK
+    return report_built(built)
 
 
 def cmd_remote(args) -> int:
     """Run the application against a proxy until the duration or a signal."""
     from ..interp.clock import Clock
-    from ..interp.plugins import PluginCache, PluginError
-    from ..interp.stimulus import StimulusError
-    from ..interp.stimulus import load as load_stimulus
     from ..interp.trace import TraceError, TraceWriter, columns_of
     from ..remote.budget import refusal
     from ..remote.device_model import device_model
     from ..remote.host import RemoteEngine
     from ..remote.link import Link, RemoteError
-    from .run_command import _on_signals, _restore, parse_duration
+    from ..interp.watch import ModelWatcher
+    from .run_command import SetupError, _on_signals, duration_arg, finish_run, plugins_of, stimulus_arg
 
-    duration = None
-    if args.duration is not None:
-        try:
-            duration = parse_duration(args.duration)
-        except ValueError as err:
-            _say(f"easylab remote: --duration {args.duration}: {err}")
-            return EXIT_USAGE
-    program = lower_model(args.file)
-    model = device_model(program)
-    if not args.fast:  # real time: the proxy's clock paces, the link must keep up
-        why = refusal(program, model, args.baud)
-        if why is not None:
-            _say(f"easylab remote: {why}")
-            return EXIT_ERROR
-    cache = PluginCache()
     try:
-        cache.load_all(program.specs)
-    except PluginError as err:
-        _say(f"easylab: error: {err}")
-        return EXIT_ERROR
-    stimulus = None
-    try:
-        if args.stimulus is not None:
-            stimulus = load_stimulus(args.stimulus, program)
-    except OSError as err:
-        _say(f"easylab remote: cannot read stimulus {args.stimulus}: {err.strerror or err}")
-        return EXIT_USAGE
-    except StimulusError as err:
+        duration = duration_arg(args, "remote")
+        program = lower_model(args.file)
+        model = device_model(program)
+        if not args.fast:  # real time: the proxy's clock paces, the link must keep up
+            why = refusal(program, model, args.baud)
+            if why is not None:
+                raise SetupError(f"easylab remote: {why}", EXIT_ERROR)
+        cache = plugins_of(program)
+        stimulus = stimulus_arg(args, program, "remote")
+    except SetupError as err:
         _say(str(err))
-        return EXIT_USAGE
+        return err.status
     try:
         link = Link(args.target, model, args.baud)
         link.connect(args.connect_timeout)
@@ -134,17 +112,15 @@ def cmd_remote(args) -> int:
         _say(f"easylab remote: {err}")
         link.close()
         return EXIT_USAGE
-    clock = Clock(None)
-    handlers = _on_signals(clock)
     def replaced(report) -> None:
         _say(f"easylab remote: at {report.time_us / 1e6:.6f} s the program id changed from 0x{report.old_id:08x} "
              f"to 0x{report.new_id:08x} (the proxy runs on)")
 
     engine = RemoteEngine(program, model, link, stimulus, plugin_cache=cache, trace=trace, say=_say,
                           on_replace=replaced)
+    clock = Clock(None)  # virtual: the proxy's frames pace the run
     engine.clock = clock
-    from ..interp.watch import ModelWatcher
-
+    handlers = _on_signals(clock)
     watcher = ModelWatcher(args.file, engine, _say) if args.watch else None
     status = EXIT_OK
     try:
@@ -156,20 +132,11 @@ def cmd_remote(args) -> int:
         if counters["overruns"] or counters["watchdog"]:
             _say(f"easylab remote: the proxy counted {counters['overruns']} overruns (values held) and "
                  f"{counters['watchdog']} watchdog expiries")
-    except RemoteError as err:
-        _say(f"easylab remote: {err}")
-        status = EXIT_ERROR
-    except (OSError, ValueError) as err:
+    except (RemoteError, OSError, ValueError) as err:  # the link, the trace, a frame not of this model
         _say(f"easylab remote: {err}")
         status = EXIT_ERROR
     finally:
-        if watcher:
-            watcher.stop()
-        _restore(handlers)
-        try:
-            engine.shutdown()
-        except TraceError as err:
-            _say(f"easylab remote: {err}")
+        if not finish_run(engine, watcher, handlers, "remote"):
             status = EXIT_ERROR
         try:
             link.stop()
