@@ -185,7 +185,7 @@ static void on_frame(uint16_t n)
         break;
     }
     case EL_RMT_CMD_START:
-        if (payload != 1u) {
+        if (payload != 1u || (p[0] != EL_RMT_MODE_REAL_TIME && p[0] != EL_RMT_MODE_LOCK_STEP)) {
             count(EL_RMT_COUNTER_MALFORMED);
             break;
         }
@@ -284,7 +284,8 @@ void el_remote_body(uint8_t task)
     at = 1u;
     for (i = 0u; i < el_rmt_out_count; i++) {
         const el_rmt_field_t *f = &el_rmt_out_fields[i];
-        if ((el_rmt_device_readers[f->owner] & released_now) != 0u) {
+        if ((el_rmt_device_readers[f->owner] & released_now) != 0u &&
+            (uint16_t)(at + f->size) <= EL_RMT_MAX_PAYLOAD) { /* easylab proxy checked that it fits */
             copy_bytes(&frame[EL_RMT_HEADER + at], (const uint8_t *)f->addr, f->size);
             at = (uint16_t)(at + f->size);
         }

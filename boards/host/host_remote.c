@@ -20,6 +20,7 @@
 #include "el_remote.h"
 
 #include <errno.h>
+#include <poll.h>
 #include <signal.h>
 #include <string.h>
 #include <unistd.h>
@@ -56,12 +57,22 @@ uint16_t el_remote_port_read(uint8_t *buf, uint16_t max)
 bool el_remote_port_write(const uint8_t *frame, uint16_t len)
 {
     size_t done = 0u;
+    int tries = 0;
     while (conn_fd >= 0 && done < len) {
         ssize_t w = write(conn_fd, frame + done, len - done);
-        if (w > 0)
+        if (w > 0) {
             done += (size_t)w;
-        else if (w < 0 && errno != EAGAIN && errno != EWOULDBLOCK && errno != EINTR)
-            return false;
+            continue;
+        }
+        if ((w < 0 && errno != EAGAIN && errno != EWOULDBLOCK && errno != EINTR) || ++tries > 10)
+            return false; /* a host that does not read: the frame is dropped (its CRC guards the rest) */
+        {
+            struct pollfd p;
+            p.fd = conn_fd;
+            p.events = POLLOUT;
+            p.revents = 0;
+            (void)poll(&p, 1, 10);
+        }
     }
     return done == len;
 }

@@ -8,6 +8,7 @@ import struct
 from dataclasses import dataclass
 from pathlib import Path
 
+from ..core.errors import BuildError
 from ..board.cbuild import write_files
 from ..board.contract import CompileOptions
 from ..board.registry import load_board
@@ -16,6 +17,7 @@ from ..codegen.c_syntax import C_KIND_ENUM, C_TYPE_ENUM, c_literal, ident
 from ..codegen.render import environment
 from ..ir.program import Program
 from .device_model import DeviceModel, device_model, item_bytes, proxy_program, safe_value
+from .protocol import K
 
 # The flag every C file of a proxy build sees (runtime_c/el_remote.c, the
 # board's link).
@@ -88,6 +90,20 @@ def view(program: Program, model: DeviceModel, board) -> _View:
                  tasks, instants)
 
 
+def check_frames(program: Program, model: DeviceModel) -> None:
+    """Every UP and DOWN payload of the device model within MAX_PAYLOAD."""
+    for instant in model.instants:
+        if not instant.release:
+            continue
+        up = 1 + model.frame_bytes(model.up_items(instant.release))
+        down = 4 + sum(model.frame_bytes(items) for _, items in model.down_items(instant.release))
+        if max(up, down) > K.MAX_PAYLOAD:
+            tasks = ", ".join(program.tasks[model.tasks[k].task].name for k in instant.release)
+            raise BuildError(f"{program.name}: the device data of the tasks released at tick {instant.tick} "
+                             f"({tasks}) take {max(up, down)} bytes in one frame, more than the link's "
+                             f"{K.MAX_PAYLOAD}: release those tasks at different instants, or read fewer data")
+
+
 def render_proxy(program: Program, board, model: DeviceModel | None = None) -> dict[str, str]:
     """The proxy's generated files: {file name: text}."""
     model = model or device_model(program)
@@ -99,17 +115,19 @@ def render_proxy(program: Program, board, model: DeviceModel | None = None) -> d
 
 
 def build_proxy(program: Program, board_name: str, out_dir: Path, mcu: str | None = None, sim: bool = False,
-                board_path: list[str] | tuple[str, ...] = ()) -> BuildResult:
+                board_path: list[str] | tuple[str, ...] = (), extra_cflags: tuple[str, ...] = ()) -> BuildResult:
     """Generate and compile the proxy of ``program`` for a board (as
-    build.build does for firmware)."""
+    build.build does for firmware). BuildError when a frame of its device
+    model would not fit the protocol's largest frame."""
     model = device_model(program)
+    check_frames(program, model)
     proxy = proxy_program(program, model)
     board = load_board(board_name, board_path).configure(mcu, sim)
     checked = board.check(proxy)
     files = render_proxy(program, board, model)
     files.update(board.produce(proxy, checked, False))
     generated = write_files(out_dir, files)
-    compiled = board.compile(proxy, checked, out_dir, generated, CompileOptions(False, PROXY_CFLAGS))
+    compiled = board.compile(proxy, checked, out_dir, generated, CompileOptions(False, PROXY_CFLAGS + tuple(extra_cflags)))
     result = BuildResult(out_dir, board, compiled, generated, list(compiled.size.lines if compiled.size else []))
     result.notes += compiled.notes + [f"device model 0x{model.id:08x}"]
     if sim:

@@ -1,6 +1,7 @@
-"""Acceptance: for every example and its stimulus, the host-board proxy with
-`easylab remote --fast` (lock-step virtual time) writes the host-native
-firmware's trace, byte for byte."""
+"""Acceptance: for every example and its stimulus (and the interpreter's
+dataflow test model, for device ports with rates and float32 device data),
+the host-board proxy with `easylab remote --fast` (lock-step virtual time)
+writes the host-native firmware's trace, byte for byte."""
 
 from __future__ import annotations
 
@@ -8,13 +9,21 @@ import pytest
 
 from remote_testlib import EXAMPLES, Proxy, device_columns, proxy_of, remote
 
-CASES = {  # example: duration
-    "blink": "3s",
-    "cd_to_dat": "200ms",
-    "line_follower": "3s",
-    "pneumatic_cylinder": "3600ms",
-    "pt100_sensor": "3500ms",
+DATA = EXAMPLES.parent / "tests" / "interp" / "data"
+CASES = {  # name: (model, stimulus or None, duration)
+    **{name: (EXAMPLES / f"{name}.elab", EXAMPLES / f"{name}.stimulus.csv", duration)
+       for name, duration in (("blink", "3s"), ("line_follower", "3s"), ("pneumatic_cylinder", "3600ms"),
+                              ("pt100_sensor", "3500ms"))},
+    "cd_to_dat": (EXAMPLES / "cd_to_dat.elab", None, "200ms"),
+    # device ports with rates, float32 device data, tasks of several periods
+    "multirate": (DATA / "multirate.elab", DATA / "multirate.stimulus.csv", "1500ms"),
 }
+
+
+def native_of(build_cache, model):
+    from firmware_builds import build
+
+    return build_cache.get(("host", str(model)), lambda out: build(model, "host", out)).executable
 
 
 def run_native(exe, trace, duration, stimulus):
@@ -34,12 +43,9 @@ RUNS = [(name, "csv") for name in CASES] + [("line_follower", "vcd"), ("pneumati
 
 @pytest.mark.parametrize("name,ext", RUNS)
 def test_remote_trace_equals_native(name, ext, build_cache, tmp_path):
-    model = EXAMPLES / f"{name}.elab"
-    stimulus = EXAMPLES / f"{name}.stimulus.csv"
-    stimulus = stimulus if stimulus.is_file() else None
-    duration = CASES[name]
+    model, stimulus, duration = CASES[name]
     native = tmp_path / f"native.{ext}"
-    run_native(build_cache.example("host", name).executable, native, duration, stimulus)
+    run_native(native_of(build_cache, model), native, duration, stimulus)
 
     devices = device_columns(stimulus, model, tmp_path / "devices.csv") if stimulus else None
     proxy = Proxy(proxy_of(build_cache, model), tmp_path / "link", "--fast",
@@ -55,7 +61,7 @@ def test_remote_trace_equals_native(name, ext, build_cache, tmp_path):
         proxy.kill()
     expected = native.read_bytes()
     assert traced.read_bytes() == expected
-    if ext == "csv" and name != "cd_to_dat":
+    if ext == "csv" and stimulus is not None:
         assert expected.count(b"\n") > 20, "the stimulus should make the model move"
 
 
@@ -67,7 +73,7 @@ def test_real_time_paced_by_the_proxy(build_cache, tmp_path):
     name, duration = "pt100_sensor", "1s"
     model, stimulus = EXAMPLES / f"{name}.elab", EXAMPLES / f"{name}.stimulus.csv"
     native = tmp_path / "native.csv"
-    run_native(build_cache.example("host", name).executable, native, duration, stimulus)
+    run_native(native_of(build_cache, model), native, duration, stimulus)
     devices = device_columns(stimulus, model, tmp_path / "devices.csv")
     proxy = Proxy(proxy_of(build_cache, model), tmp_path / "link", "--stimulus", str(devices))
     try:
