@@ -3,8 +3,6 @@ session, run on a pty, and `easylab remote` against them."""
 
 from __future__ import annotations
 
-import csv
-import io
 import subprocess
 import sys
 import time
@@ -12,6 +10,7 @@ from pathlib import Path
 
 from easylab.pipeline import lower_file
 from easylab.remote.proxy import build_proxy
+from easylab.remote.stimulus import device_columns as split_devices
 
 ROOT = Path(__file__).resolve().parents[2]
 EXAMPLES = ROOT / "examples"
@@ -29,17 +28,12 @@ def proxy_of(build_cache, model: Path) -> Path:
 
 def device_columns(stimulus: Path, model: Path, out: Path) -> Path | None:
     """The device `out` columns of a stimulus (what a host-board proxy
-    reads); None when it has none."""
+    reads) in ``out``; None when it has none."""
     program, _ = lower_file(model)
-    names = {i.name for i in program.items if i.kind == "dev_out"}
-    rows = list(csv.reader(io.StringIO(stimulus.read_text())))
-    keep = [0] + [k for k, name in enumerate(rows[0]) if k and name.split("[")[0] in names]
-    if len(keep) == 1:
+    text = split_devices(stimulus.read_text(), program)
+    if text is None:
         return None
-    with out.open("w", newline="") as f:
-        w = csv.writer(f, lineterminator="\n")
-        for row in rows:
-            w.writerow([row[k] if k < len(row) else "" for k in keep])
+    out.write_text(text)
     return out
 
 

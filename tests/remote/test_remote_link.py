@@ -275,3 +275,33 @@ def test_random_frames_neither_crash_nor_confuse_the_proxy(tmp_path):
         if link:
             link.close()
         proxy.kill()
+
+
+def test_easylab_proxy_builds_and_names_the_device_model(tmp_path):
+    import subprocess
+    import sys
+
+    proc = subprocess.run([sys.executable, "-m", "easylab", "proxy", str(BLINK), "-o", str(tmp_path / "p")],
+                          capture_output=True, text=True, timeout=300, stdin=subprocess.DEVNULL)
+    assert proc.returncode == 0, proc.stderr
+    program, _ = lower_file(BLINK)
+    lines = proc.stdout.splitlines()
+    assert f"device model 0x{device_model(program).id:08x}" in lines
+    assert lines[-1] == str(tmp_path / "p" / "blink_proxy")
+    wrong = subprocess.run([sys.executable, "-m", "easylab", "proxy", str(BLINK), "--board", "nosuch"],
+                           capture_output=True, text=True, timeout=300, stdin=subprocess.DEVNULL)
+    assert wrong.returncode == 1 and "unknown board 'nosuch'" in wrong.stderr
+    not_a_proxy = subprocess.run([str(tmp_path / "p" / "blink_proxy"), "--help"], capture_output=True, text=True,
+                                 timeout=30, stdin=subprocess.DEVNULL)
+    assert "--link pty:LINK" in not_a_proxy.stdout
+
+
+def test_firmware_that_is_not_a_proxy_says_so(build_cache, tmp_path):
+    import subprocess
+
+    exe = build_cache.example("host", "blink").executable
+    proc = subprocess.run([str(exe), "--fast", "--link", f"pty:{tmp_path / 'link'}"], capture_output=True, text=True,
+                          timeout=60, stdin=subprocess.DEVNULL)
+    assert proc.returncode == 2
+    assert "--link: this program is not a remote-execution proxy (easylab proxy builds one)" in proc.stderr
+    assert not (tmp_path / "link").exists()
