@@ -16,7 +16,7 @@ PACKAGE = ROOT / "generator"
 MAX_LINES = 600
 
 # The stages in pipeline order; a stage may import the ones before it.
-STAGES = ["core", "frontend", "analysis", "ir", "pipeline", "codegen", "board", "build", "interp", "cli"]
+STAGES = ["core", "frontend", "analysis", "ir", "pipeline", "codegen", "board", "build", "interp", "remote", "cli"]
 # What each backend may see of the stages before the IR, and why.
 ALLOWED = {
     ("ir", "analysis"): "the IR carries the schedule notation of the SDF analysis (ir/program.py re-exports it) "

@@ -47,7 +47,6 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <sys/ioctl.h>
 #include <sys/socket.h>
 #include <sys/stat.h>
 #include <termios.h>
@@ -92,26 +91,12 @@ static void chain_signals(void)
         (void)sigaction(SIGTERM, &sa, NULL);
 }
 
-/* At exit: let the debugger read what we answered last (a pty drops unread
- * input when its master closes), for at most 300 ms. */
-static void drain_pty(void)
-{
-    int i, pending = 0, idle = 0;
-    for (i = 0; i < 60 && keep_fd >= 0 && idle < 3; i++) {
-        struct timespec ts = {0, 5000000L};
-        (void)nanosleep(&ts, NULL); /* the kernel moves written bytes to the reader's queue meanwhile */
-        if (ioctl(keep_fd, FIONREAD, &pending) != 0)
-            break;
-        idle = pending == 0 ? idle + 1 : 0;
-    }
-}
-
 static void remove_link(void)
 {
     char target[256];
     ssize_t n;
     const char *ours;
-    drain_pty();
+    el_host_drain_pty(keep_fd); /* let the debugger read what we answered last */
     if (link_made) {
         /* Only if it still leads to our pty (another run may have taken the name). */
         n = readlink(link_path, target, sizeof target - 1u);

@@ -39,6 +39,10 @@ void el_host_unwatch_fd(int fd);
 void el_host_serve_fds(int timeout_ms);
 /* Whether any descriptor is watched. */
 bool el_host_watching(void);
+/* Before a pty's master closes (it drops unread input then): wait, at most
+ * 300 ms, until the reader has taken what we wrote; `slave` is our own
+ * slave descriptor (-1: nothing to wait for). */
+void el_host_drain_pty(int slave);
 
 /* ---- messages (host_port.c) ---- */
 
@@ -150,6 +154,7 @@ bool el_host_opt_modbus_rtu(const char *arg);
 bool el_host_modbus_handover(void);
 /* --hmi pty:LINK: the example HMI, a line protocol over el_service.h. */
 bool el_host_opt_hmi(const char *arg);
+bool el_host_opt_link(const char *arg); /* host_remote.c: a remote-execution proxy's link */
 /* A pseudo-terminal with a symlink `link` to it (removed at exit): returns
  * its master and keeps our own slave descriptor in *slave_out (so the master
  * never sees a hangup between clients), or -1 after reporting the error

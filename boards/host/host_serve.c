@@ -13,6 +13,7 @@
 #include "el_dispatch.h"
 
 #include <poll.h>
+#include <sys/ioctl.h>
 #include <time.h>
 
 /* ---- file descriptors served between instants ---- */
@@ -93,4 +94,16 @@ bool el_host_watching(void)
 void el_port_idle(uint16_t max_ms)
 {
     el_host_serve_fds((int)max_ms);
+}
+
+void el_host_drain_pty(int slave)
+{
+    int i, pending = 0, idle = 0;
+    for (i = 0; i < 60 && slave >= 0 && idle < 3; i++) {
+        struct timespec ts = {0, 5000000L};
+        (void)nanosleep(&ts, NULL); /* the kernel moves written bytes to the reader's queue meanwhile */
+        if (ioctl(slave, FIONREAD, &pending) != 0)
+            break;
+        idle = pending == 0 ? idle + 1 : 0;
+    }
 }

@@ -61,3 +61,12 @@ def add_board_options(p: argparse.ArgumentParser,
     p.add_argument("--board-path", metavar="DIR", action="append", default=[],
                    help="a folder of further boards (searched before EASYLAB_BOARD_PATH and the installed "
                         "boards; may be repeated)")
+
+
+def report_built(built) -> int:
+    """What a build prints: its notes, then the path of the program built
+    on the last line."""
+    for note in built.notes:
+        print(note)
+    print(built.executable)
+    return EXIT_OK

@@ -7,7 +7,7 @@ import sys
 from pathlib import Path
 
 from ..analysis import sdf
-from .common import EXIT_MODEL_ERROR, EXIT_OK, CliError, check_model, default_out_dir, lower_model
+from .common import EXIT_MODEL_ERROR, EXIT_OK, CliError, check_model, default_out_dir, lower_model, report_built
 
 
 def cmd_check(args) -> int:
@@ -112,7 +112,4 @@ def cmd_build(args) -> int:
                       board_path=args.board_path, check=args.check)
     except BuildError as err:
         raise CliError(str(err)) from None
-    for note in built.notes:
-        print(note)
-    print(built.executable)
-    return EXIT_OK
+    return report_built(built)

@@ -99,6 +99,54 @@ def _say(text: str) -> None:
     print(text, file=sys.stderr, flush=True)
 
 
+class SetupError(Exception):
+    """What stops a run before it starts: the message and the exit status."""
+
+    def __init__(self, message: str, status: int):
+        super().__init__(message)
+        self.status = status
+
+
+def duration_arg(args, command: str) -> int | None:
+    """``--duration`` in µs (None: endless); SetupError for a bad one."""
+    if args.duration is None:
+        return None
+    try:
+        return parse_duration(args.duration)
+    except ValueError as err:
+        raise SetupError(f"easylab {command}: --duration {args.duration}: {err}", EXIT_USAGE) from None
+
+
+def plugins_of(program):
+    """The plug-in cache with every actor of ``program`` built and loaded;
+    SetupError when one does not build."""
+    from ..interp.plugins import PluginCache, PluginError
+
+    cache = PluginCache()
+    try:
+        cache.load_all(program.specs)
+    except PluginError as err:
+        raise SetupError(f"easylab: error: {err}", EXIT_ERROR) from None
+    return cache
+
+
+def stimulus_arg(args, program, command: str):
+    """The ``--stimulus`` file read and checked for ``program`` (None
+    without one); SetupError for one that cannot be read or is wrong."""
+    from ..interp.stimulus import StimulusError
+    from ..interp.stimulus import load as load_stimulus
+
+    if args.stimulus is None:
+        return None
+    try:
+        return load_stimulus(args.stimulus, program)
+    except OSError as err:
+        raise SetupError(f"easylab {command}: cannot read stimulus {args.stimulus}: {err.strerror or err}",
+                         EXIT_USAGE) from None
+    except StimulusError as err:
+        raise SetupError(str(err), EXIT_USAGE) from None
+
+
 def cmd_run(args) -> int:
     """Run a model until its duration, a signal, or forever."""
     from ..pipeline import lower_file
@@ -106,19 +154,15 @@ def cmd_run(args) -> int:
 
     from ..interp.clock import Clock
     from ..interp.engine import Engine, InterfaceError, InterfaceOptions
-    from ..interp.plugins import PluginCache, PluginError
-    from ..interp.stimulus import StimulusError
-    from ..interp.stimulus import load as load_stimulus
+    from ..interp.plugins import PluginError
     from ..interp.trace import TraceError, TraceWriter, columns_of
     from ..interp.watch import ModelWatcher
 
-    duration = None
-    if args.duration is not None:
-        try:
-            duration = parse_duration(args.duration)
-        except ValueError as err:
-            _say(f"easylab run: --duration {args.duration}: {err}")
-            return EXIT_USAGE
+    try:
+        duration = duration_arg(args, "run")
+    except SetupError as err:
+        _say(str(err))
+        return err.status
     try:
         program, result = lower_file(args.file, schedule=args.schedule)
     except FileNotFoundError:
@@ -130,23 +174,17 @@ def cmd_run(args) -> int:
     if program is None:
         _say(result.report())
         return EXIT_ERROR
-    cache = PluginCache()
+    trace = None
     try:
-        cache.load_all(program.specs)
-    except PluginError as err:
-        _say(f"easylab: error: {err}")
-        return EXIT_ERROR
-    stimulus = trace = None
-    try:
-        if args.stimulus is not None:
-            stimulus = load_stimulus(args.stimulus, program)
+        cache = plugins_of(program)
+        stimulus = stimulus_arg(args, program, "run")
         if args.trace is not None:
             trace = TraceWriter(args.trace, program, columns_of(program))
-    except OSError as err:
-        _say(f"easylab run: cannot read stimulus {args.stimulus}: {err.strerror or err}")
-        return EXIT_USAGE
-    except (StimulusError, TraceError) as err:
-        _say(str(err) if isinstance(err, StimulusError) else f"easylab run: {err}")
+    except SetupError as err:
+        _say(str(err))
+        return err.status
+    except TraceError as err:
+        _say(f"easylab run: {err}")
         return EXIT_USAGE
 
     def replaced(report) -> None:
@@ -192,17 +230,28 @@ def cmd_run(args) -> int:
         _say(f"easylab run: error writing trace {args.trace}: {err.strerror or err}")
         status = EXIT_ERROR
     finally:
-        if watcher:
-            watcher.stop()
-        _restore(previous_handlers)
-        try:
-            engine.shutdown()
-        except TraceError as err:
-            _say(f"easylab run: {err}")
+        if not finish_run(engine, watcher, previous_handlers, "run"):
             status = EXIT_ERROR
     if engine.overruns:
         _say("easylab run: overruns: " + " ".join(f"{name} {n}" for name, n in engine.overruns.items()))
     return status
+
+
+def finish_run(engine, watcher, handlers: dict, command: str) -> bool:
+    """The end of a run, however it ended: the watcher stops, the signal
+    handlers are restored, the engine shuts down (the trace is closed);
+    False when the trace could not be completed (said on stderr)."""
+    from ..interp.trace import TraceError
+
+    if watcher:
+        watcher.stop()
+    _restore(handlers)
+    try:
+        engine.shutdown()
+    except TraceError as err:
+        _say(f"easylab {command}: {err}")
+        return False
+    return True
 
 
 def _restore(handlers: dict) -> None:

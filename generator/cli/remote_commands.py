@@ -1,0 +1,146 @@
+"""``easylab proxy`` and ``easylab remote``: remote execution (docs/remote.md).
+
+``proxy`` builds the firmware that runs on the target: the devices of a
+model and the instants at which its tasks read and write them, nothing of
+the application. ``remote`` runs the application in the interpreter on
+this machine with its devices on a running proxy.
+"""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+from .common import EXIT_OK, EXIT_USAGE, CliError, add_board_options, default_out_dir, lower_model, report_built
+
+EXIT_ERROR = 1
+
+
+def add_parsers(sub) -> None:
+    """Add ``proxy`` and ``remote`` to the ``easylab`` command line."""
+    p = sub.add_parser(
+        "proxy", help="build the proxy firmware of remote execution",
+        description="Generate and compile the proxy of a model for a board: its devices, their data and the "
+                    "instants at which its tasks read and write them (the device model), with the link to "
+                    "`easylab remote`. The application is not in it: editing it needs no new proxy; editing "
+                    "the devices or the tasks' timing does. The path of the program built is printed on the "
+                    "last line.")
+    p.add_argument("file", metavar="MODEL", help="model file (.elab)")
+    add_board_options(p)
+    p.add_argument("-o", "--output", metavar="DIR", help="output folder (default: build/<model>/<board>-proxy/)")
+    p.add_argument("--sim", action="store_true", help="a simulation build and the board's simulator")
+    p.set_defaults(func=cmd_proxy)
+
+    r = sub.add_parser(
+        "remote", help="run a model on this machine with its devices on a proxy",
+        description="Interpret the application of a model on this machine (as `easylab run`) while a proxy "
+                    "built by `easylab proxy` reads and drives its devices: per instant, one frame each way. "
+                    "The trace equals the host firmware's.")
+    r.add_argument("file", metavar="MODEL", help="model file (.elab)")
+    r.add_argument("--target", metavar="URL", required=True,
+                   help="the proxy's link: a serial device, a pty, socket://HOST:PORT (as pyserial opens them)")
+    r.add_argument("--baud", type=int, default=115200, help="the link's baud rate (default 115200)")
+    r.add_argument("--connect-timeout", metavar="S", type=float, default=5.0,
+                   help="seconds to repeat HELLO until the proxy answers (default 5: opening a serial port "
+                        "resets many boards)")
+    r.add_argument("--stimulus", metavar="FILE.csv",
+                   help="params and vars from a CSV file (the host board's format; device columns are the "
+                        "proxy's and are ignored here)")
+    r.add_argument("--trace", metavar="FILE", help="record every item and chart at each instant (.csv or .vcd)")
+    r.add_argument("--duration", metavar="T", help="stop before logical time T (10s, 500ms, ...); default: endless")
+    r.add_argument("--fast", action="store_true",
+                   help="lock-step virtual time: the proxy waits for each answer (simulated devices only); "
+                        "default: real time, paced by the proxy's clock")
+    r.add_argument("--watch", action="store_true",
+                   help="replace the running application when its files change (an edit of the device model is "
+                        "refused: the proxy would have to be rebuilt)")
+    r.set_defaults(func=cmd_remote)
+
+
+def _say(text: str) -> None:
+    print(text, file=sys.stderr, flush=True)
+
+
+def cmd_proxy(args) -> int:
+    from ..core.errors import BuildError
+    from ..remote.proxy import build_proxy
+
+    program = lower_model(args.file)
+    out = Path(args.output) if args.output else default_out_dir(program, f"{args.board}-proxy")
+    try:
+        built = build_proxy(program, args.board, out, mcu=args.mcu, sim=args.sim, board_path=args.board_path)
+    except BuildError as err:
+        raise CliError(str(err)) from None
+    return report_built(built)
+
+
+def cmd_remote(args) -> int:
+    """Run the application against a proxy until the duration or a signal."""
+    from ..interp.clock import Clock
+    from ..interp.trace import TraceError, TraceWriter, columns_of
+    from ..remote.budget import refusal
+    from ..remote.device_model import device_model
+    from ..remote.host import RemoteEngine
+    from ..remote.link import Link, RemoteError
+    from ..interp.watch import ModelWatcher
+    from .run_command import SetupError, _on_signals, duration_arg, finish_run, plugins_of, stimulus_arg
+
+    try:
+        duration = duration_arg(args, "remote")
+        program = lower_model(args.file)
+        model = device_model(program)
+        if not args.fast:  # real time: the proxy's clock paces, the link must keep up
+            why = refusal(program, model, args.baud)
+            if why is not None:
+                raise SetupError(f"easylab remote: {why}", EXIT_ERROR)
+        cache = plugins_of(program)
+        stimulus = stimulus_arg(args, program, "remote")
+    except SetupError as err:
+        _say(str(err))
+        return err.status
+    try:
+        link = Link(args.target, model, args.baud)
+        link.connect(args.connect_timeout)
+    except RemoteError as err:
+        _say(f"easylab remote: {err}")
+        return EXIT_ERROR
+    trace = None
+    try:
+        if args.trace is not None:
+            trace = TraceWriter(args.trace, program, columns_of(program))
+    except TraceError as err:
+        _say(f"easylab remote: {err}")
+        link.close()
+        return EXIT_USAGE
+    def replaced(report) -> None:
+        _say(f"easylab remote: at {report.time_us / 1e6:.6f} s the program id changed from 0x{report.old_id:08x} "
+             f"to 0x{report.new_id:08x} (the proxy runs on)")
+
+    engine = RemoteEngine(program, model, link, stimulus, plugin_cache=cache, trace=trace, say=_say,
+                          on_replace=replaced)
+    clock = Clock(None)  # virtual: the proxy's frames pace the run
+    engine.clock = clock
+    handlers = _on_signals(clock)
+    watcher = ModelWatcher(args.file, engine, _say) if args.watch else None
+    status = EXIT_OK
+    try:
+        if watcher:
+            watcher.start()
+        link.start(lock_step=args.fast)
+        engine.run(duration, clock)
+        counters = link.counters()
+        if counters["overruns"] or counters["watchdog"]:
+            _say(f"easylab remote: the proxy counted {counters['overruns']} overruns (values held) and "
+                 f"{counters['watchdog']} watchdog expiries")
+    except (RemoteError, OSError, ValueError) as err:  # the link, the trace, a frame not of this model
+        _say(f"easylab remote: {err}")
+        status = EXIT_ERROR
+    finally:
+        if not finish_run(engine, watcher, handlers, "remote"):
+            status = EXIT_ERROR
+        try:
+            link.stop()
+        except RemoteError:
+            pass  # the proxy is gone: its watchdog applies the safe values
+        link.close()
+    return status

@@ -1,0 +1,187 @@
+"""The device model: the part of the IR a remote-execution proxy is built
+from (docs/remote.md), its identity and the layout of its frames.
+
+It is computed here, once, from the IR: the devices with their data, the
+LET tick and the instants at which the tasks that use device data are
+released (devices read) and publish (device `in` data written). The proxy
+firmware is generated from it (as an IR ``Program`` of its own,
+:func:`proxy_program`), and the host side of ``easylab remote`` frames its
+device data with the same layouts, so the two cannot disagree.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+from dataclasses import dataclass, field
+
+from ..core import types as T
+from ..ir.program import Device, Instant, Item, Program, Task, to_json
+from .protocol import K
+
+
+# The proxy applies the safe values after this many consecutive overruns, and
+# when no valid frame came for twice the longest gap between two release
+# instants, but never sooner than WATCHDOG_MIN_US (docs/remote.md).
+OVERRUN_LIMIT = 3
+WATCHDOG_MIN_US = 100_000
+
+
+def watchdog_ticks(tick_us: int, hyperperiod: int, release_ticks: list[int]) -> int:
+    """The proxy's watchdog time in ticks: twice the longest gap between two
+    release instants (frames come at each), at least WATCHDOG_MIN_US."""
+    ticks = sorted(set(release_ticks))
+    gaps = [b - a for a, b in zip(ticks, ticks[1:])] + ([ticks[0] + hyperperiod - ticks[-1]] if ticks else [])
+    return max(2 * max(gaps, default=hyperperiod), -(-WATCHDOG_MIN_US // tick_us))
+
+
+def value_size(t: T.ValueType) -> int:
+    """Bytes of one value on the link (the C type's size; bool is 1 byte)."""
+    return max(1, t.bits // 8)
+
+
+def item_bytes(item: Item) -> int:
+    return value_size(item.type) * item.count
+
+
+@dataclass
+class ProxyTask:
+    """A task that uses device data, as the proxy sees it: its timing, the
+    devices read at its release and the device `in` data it publishes at
+    its deadline (item ids of the application's IR, in id order)."""
+
+    task: int  # id in the application's IR
+    period: int
+    offset: int
+    deadline: int
+    reads: list[int]  # device ids
+    writes: list[int]  # item ids (dev_in)
+
+
+@dataclass
+class DeviceModel:
+    """The device part of a program. Proxy task ``k`` is ``tasks[k]``;
+    ``instants`` carry proxy task ids."""
+
+    name: str
+    tick_us: int
+    hyperperiod: int
+    devices: list[Device]
+    items: list[Item]  # every device datum, in the application's item order
+    tasks: list[ProxyTask]
+    instants: list[Instant]
+    watchdog_ticks: int = 0  # no valid frame for this long: the safe values
+    overrun_limit: int = OVERRUN_LIMIT  # this many overruns in a row: the safe values
+    device_ids: list[int] = field(default_factory=list)  # per device: a 32-bit hash of its description
+    id: int = 0
+
+    def proxy_task_of(self, task: int) -> int | None:
+        return next((k for k, t in enumerate(self.tasks) if t.task == task), None)
+
+    def up_items(self, released: list[int]) -> list[int]:
+        """Item ids of an UP frame's payload when the proxy tasks
+        ``released`` are released: the `out` data of every device one of
+        them reads (device order, port order), as the proxy reads them."""
+        read = {d for k in released for d in self.tasks[k].reads}
+        return [i for d in self.devices if d.id in read for i in d.items if self.item_kind(i) == "dev_out"]
+
+    def down_items(self, released: list[int]) -> list[tuple[int, list[int]]]:
+        """(proxy task, item ids) of a DOWN frame's payload for the proxy
+        tasks ``released``: each one's written device data, task order."""
+        return [(k, self.tasks[k].writes) for k in sorted(released) if self.tasks[k].writes]
+
+    def item_kind(self, item_id: int) -> str:
+        return self._by_id[item_id].kind
+
+    def item(self, item_id: int) -> Item:
+        return self._by_id[item_id]
+
+    def frame_bytes(self, item_ids: list[int]) -> int:
+        return sum(item_bytes(self._by_id[i]) for i in item_ids)
+
+    def __post_init__(self) -> None:
+        self._by_id = {i.id: i for i in self.items}
+
+
+def _device_json(program: Program, device: Device) -> dict:
+    dump = to_json(device)
+    for key in ("id", "location", "read_by", "written_by", "claims"):
+        dump.pop(key, None)
+    dump["claims"] = sorted(device.claims)
+    dump["items"] = [{"name": program.items[i].name, "kind": program.items[i].kind,
+                      "type": program.items[i].type.name, "count": program.items[i].count,
+                      "safe": safe_value(program.items[i])} for i in device.items]
+    return dump
+
+
+def safe_value(item: Item):
+    """The value the proxy applies to a device `in` datum when the host is
+    not driving it (boot, stop, watchdog, repeated overruns): zero or false
+    (docs/remote.md, "Safe values")."""
+    return False if item.type.name == "bool" else 0
+
+
+def _hash32(dump) -> int:
+    return int.from_bytes(hashlib.sha256(json.dumps(dump, sort_keys=True).encode()).digest()[:4], "big")
+
+
+def device_model(program: Program) -> DeviceModel:
+    """The device model of ``program``: the one place it is decided."""
+    device_items = [i for i in program.items if i.kind in ("dev_out", "dev_in")]
+    reads_of: dict[int, list[int]] = {}
+    for device in program.devices:
+        for task in device.read_by:
+            reads_of.setdefault(task, []).append(device.id)
+    tasks: list[ProxyTask] = []
+    for task in program.tasks:
+        writes = sorted(i for i in task.writes if program.items[i].kind == "dev_in")
+        reads = sorted(reads_of.get(task.id, []))
+        if reads or writes:
+            tasks.append(ProxyTask(task.id, task.period, task.offset, task.deadline, reads, writes))
+    proxy_of = {t.task: k for k, t in enumerate(tasks)}
+    instants = []
+    for instant in program.instants:
+        publish = [proxy_of[t] for t in instant.publish if t in proxy_of]
+        release = [proxy_of[t] for t in instant.release if t in proxy_of]
+        if publish or release:
+            instants.append(Instant(instant.tick, publish, release))
+    model = DeviceModel(program.name, program.tick_us, program.hyperperiod, list(program.devices), device_items,
+                        tasks, instants)
+    model.watchdog_ticks = watchdog_ticks(program.tick_us, program.hyperperiod, [i.tick for i in instants if i.release])
+    model.device_ids = [_hash32(_device_json(program, d)) for d in program.devices]
+    model.id = _hash32({
+        "version": K.PROTOCOL_VERSION, "tick_us": program.tick_us, "hyperperiod": program.hyperperiod,
+        "watchdog_ticks": model.watchdog_ticks, "overrun_limit": model.overrun_limit,
+        "devices": [_device_json(program, d) for d in program.devices],
+        "tasks": [{"period": t.period, "offset": t.offset, "deadline": t.deadline, "reads": t.reads,
+                   "writes": [program.items[i].name for i in t.writes]} for t in tasks],
+        "instants": [[i.tick, i.publish, i.release] for i in instants],
+    })
+    return model
+
+
+def proxy_program(program: Program, model: DeviceModel | None = None) -> Program:
+    """The proxy as an IR program of its own: the device data as its items
+    (renumbered), the devices, the proxy tasks (no bodies; reading their
+    devices and writing their device data) and the device model's
+    instants; its program id is the device-model id. The board contract
+    checks, and compiles, it as it does any program."""
+    model = model or device_model(program)
+    new_id = {item.id: k for k, item in enumerate(model.items)}
+    items = [Item(new_id[i.id], i.name, i.kind, i.type, i.count, safe_value(i) if i.kind == "dev_in" else i.initial,
+                  i.location, device=i.device, port=i.port) for i in model.items]
+    for task_k, task in enumerate(model.tasks):
+        for i in task.writes:
+            items[new_id[i]].writer_task = task_k
+    devices = [Device(d.id, d.path, d.driver, d.type_name, d.args, [new_id[i] for i in d.items], d.claims,
+                      d.location, [model.proxy_task_of(t) for t in d.read_by],
+                      model.proxy_task_of(d.written_by) if d.written_by is not None else None)
+               for d in model.devices]
+    tasks = []
+    for k, t in enumerate(model.tasks):
+        app = program.tasks[t.task]
+        reads = [new_id[i] for d in t.reads for i in program.devices[d].items if program.items[i].kind == "dev_out"]
+        tasks.append(Task(k, app.name, t.period, t.offset, t.deadline, None, [], reads,
+                          [new_id[i] for i in t.writes], [], [], app.location))
+    return Program(f"{program.name}_proxy", program.title, program.source, model.id, model.tick_us,
+                   model.hyperperiod, items, devices, [], [], [], [], [], tasks, list(model.instants), [])

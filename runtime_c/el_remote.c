@@ -1,0 +1,336 @@
+/* EasyLab remote execution: the proxy's runtime (see el_remote.h). */
+#include "el_remote.h"
+
+#if defined(EL_REMOTE_PROXY) && EL_REMOTE_PROXY
+
+#include "el_crc16.h"
+#include "el_debug_cobs.h"
+#include "el_dispatch.h"
+#include "el_model.h"
+#include "el_port.h"
+
+#define MAX_TASKS 32u
+#define TX_CAP (EL_COBS_MAX_ENCODED(EL_RMT_MAX_FRAME) + 1u)
+
+static uint8_t state = EL_RMT_STATE_SAFE;
+static bool started; /* START came: UP frames flow (in the safe state too, telling the host) */
+static uint8_t mode = EL_RMT_MODE_REAL_TIME;
+static uint16_t counters[EL_RMT_COUNTER_COUNT];
+static uint32_t last_frame_tick; /* the instant of the last valid frame (real time) */
+static uint8_t overruns_in_a_row;
+
+/* The current activation of each proxy task. */
+static uint32_t release_tick[MAX_TASKS];
+static bool pending[MAX_TASKS];  /* released, deadline not reached */
+static bool arrived[MAX_TASKS];  /* its values came (staged) */
+
+/* The tasks released at the instant being processed. */
+static uint32_t released_now;
+static uint32_t released_tick;
+static bool up_sent;
+static bool down_done; /* lock-step: the DOWN of the instant being processed came */
+
+static uint8_t rx_buf[EL_RMT_MAX_FRAME];
+static el_cobs_decoder_t rx;
+static uint8_t frame[EL_RMT_MAX_FRAME];
+static uint8_t tx[TX_CAP];
+
+static void put_u32(uint8_t *p, uint32_t v)
+{
+    p[0] = (uint8_t)v;
+    p[1] = (uint8_t)(v >> 8);
+    p[2] = (uint8_t)(v >> 16);
+    p[3] = (uint8_t)(v >> 24);
+}
+
+static uint32_t get_u32(const uint8_t *p)
+{
+    return (uint32_t)p[0] | ((uint32_t)p[1] << 8) | ((uint32_t)p[2] << 16) | ((uint32_t)p[3] << 24);
+}
+
+static void count(uint8_t counter)
+{
+    if (counters[counter] < UINT16_MAX) {
+        counters[counter]++;
+    }
+}
+
+static void copy_bytes(uint8_t *dst, const uint8_t *src, uint16_t n)
+{
+    uint16_t i;
+    for (i = 0u; i < n; i++) {
+        dst[i] = src[i];
+    }
+}
+
+/* Send frame[0 .. EL_RMT_HEADER + payload) with its CRC. */
+static void send(uint8_t cmd, uint32_t instant, uint16_t payload)
+{
+    uint16_t n = (uint16_t)(EL_RMT_HEADER + payload);
+    uint16_t crc, len;
+    frame[0] = cmd;
+    put_u32(&frame[1], instant);
+    crc = el_crc16(frame, n);
+    frame[n] = (uint8_t)crc;
+    frame[n + 1u] = (uint8_t)(crc >> 8);
+    len = el_cobs_encode(frame, (uint16_t)(n + EL_RMT_TRAILER), tx, (uint16_t)TX_CAP);
+    if (len != 0u) {
+        (void)el_remote_port_write(tx, len);
+    }
+}
+
+static void apply_safe_values(void)
+{
+    uint16_t i, at = 0u;
+    for (i = 0u; i < el_rmt_in_count; i++) {
+        copy_bytes((uint8_t *)el_rmt_in_fields[i].addr, &el_rmt_safe[at], el_rmt_in_fields[i].size);
+        at = (uint16_t)(at + el_rmt_in_fields[i].size);
+    }
+}
+
+static void enter_safe_state(void)
+{
+    uint8_t t;
+    apply_safe_values();
+    state = EL_RMT_STATE_SAFE;
+    for (t = 0u; t < MAX_TASKS; t++) {
+        arrived[t] = false;
+    }
+}
+
+/* DOWN: the mask of the proxy tasks it carries, then their in data. */
+static void on_down(uint32_t instant, const uint8_t *p, uint16_t n)
+{
+    uint32_t mask;
+    uint16_t i, at = 0u, need = 4u, staged_at = 0u;
+    if (n < 4u) {
+        count(EL_RMT_COUNTER_MALFORMED);
+        return;
+    }
+    mask = get_u32(p);
+    for (i = 0u; i < el_rmt_in_count; i++) {
+        if ((mask & ((uint32_t)1u << el_rmt_in_fields[i].owner)) != 0u) {
+            need = (uint16_t)(need + el_rmt_in_fields[i].size);
+        }
+    }
+    if (need != n) {
+        count(EL_RMT_COUNTER_MALFORMED);
+        return;
+    }
+    at = 4u;
+    for (i = 0u; i < el_rmt_in_count; i++) {
+        uint8_t task = el_rmt_in_fields[i].owner;
+        uint16_t size = el_rmt_in_fields[i].size;
+        if ((mask & ((uint32_t)1u << task)) != 0u) {
+            if (pending[task] && release_tick[task] == instant) {
+                copy_bytes(&el_rmt_staged[staged_at], &p[at], size);
+                arrived[task] = true;
+            }
+            at = (uint16_t)(at + size);
+        }
+        staged_at = (uint16_t)(staged_at + size);
+    }
+    for (i = 0u; i < MAX_TASKS; i++) { /* tasks whose activation is over: too late */
+        if ((mask & ((uint32_t)1u << i)) != 0u && !(pending[i] && release_tick[i] == instant)) {
+            count(EL_RMT_COUNTER_STALE);
+        }
+    }
+    if (instant == released_tick) {
+        down_done = true;
+    }
+}
+
+static void on_frame(uint16_t n)
+{
+    uint8_t cmd;
+    uint32_t instant;
+    uint16_t payload, i;
+    const uint8_t *p = rx_buf + EL_RMT_HEADER;
+    if (n < EL_RMT_HEADER + EL_RMT_TRAILER) {
+        count(EL_RMT_COUNTER_MALFORMED);
+        return;
+    }
+    if (el_crc16(rx_buf, n) != 0u) {
+        count(EL_RMT_COUNTER_BAD_CRC);
+        return;
+    }
+    count(EL_RMT_COUNTER_FRAMES);
+    last_frame_tick = (uint32_t)el_now_tick();
+    cmd = rx_buf[0];
+    instant = get_u32(&rx_buf[1]);
+    payload = (uint16_t)(n - EL_RMT_HEADER - EL_RMT_TRAILER);
+    switch (cmd) {
+    case EL_RMT_CMD_HELLO:
+        frame[EL_RMT_HEADER] = (uint8_t)EL_RMT_PROTOCOL_VERSION;
+        put_u32(&frame[EL_RMT_HEADER + 1u], el_rmt_device_model_id);
+        frame[EL_RMT_HEADER + 5u] = el_rmt_device_count_;
+        frame[EL_RMT_HEADER + 6u] = state;
+        send((uint8_t)(cmd | EL_RMT_RESPONSE), instant, 7u);
+        break;
+    case EL_RMT_CMD_DEVICE: {
+        const char *path;
+        uint16_t len = 0u;
+        if (payload != 1u || p[0] >= el_rmt_device_count_) {
+            count(EL_RMT_COUNTER_MALFORMED);
+            break;
+        }
+        path = el_rmt_device_paths[p[0]];
+        frame[EL_RMT_HEADER] = p[0];
+        put_u32(&frame[EL_RMT_HEADER + 1u], el_rmt_device_ids[p[0]]);
+        while (path[len] != '\0' && len < EL_RMT_MAX_PAYLOAD - 5u) {
+            frame[EL_RMT_HEADER + 5u + len] = (uint8_t)path[len];
+            len++;
+        }
+        send((uint8_t)(cmd | EL_RMT_RESPONSE), instant, (uint16_t)(5u + len));
+        break;
+    }
+    case EL_RMT_CMD_START:
+        if (payload != 1u || (p[0] != EL_RMT_MODE_REAL_TIME && p[0] != EL_RMT_MODE_LOCK_STEP)) {
+            count(EL_RMT_COUNTER_MALFORMED);
+            break;
+        }
+        mode = p[0];
+        state = EL_RMT_STATE_RUNNING;
+        started = true;
+        overruns_in_a_row = 0u;
+        send((uint8_t)(cmd | EL_RMT_RESPONSE), instant, 0u);
+        break;
+    case EL_RMT_CMD_STOP:
+        enter_safe_state();
+        send((uint8_t)(cmd | EL_RMT_RESPONSE), instant, 0u);
+        el_remote_port_end();
+        break;
+    case EL_RMT_CMD_COUNTERS:
+        frame[EL_RMT_HEADER] = state;
+        for (i = 0u; i < EL_RMT_COUNTER_COUNT; i++) {
+            frame[EL_RMT_HEADER + 1u + 2u * i] = (uint8_t)counters[i];
+            frame[EL_RMT_HEADER + 2u + 2u * i] = (uint8_t)(counters[i] >> 8);
+        }
+        send((uint8_t)(cmd | EL_RMT_RESPONSE), instant, (uint16_t)(1u + 2u * EL_RMT_COUNTER_COUNT));
+        break;
+    case EL_RMT_CMD_DOWN:
+        if (state == EL_RMT_STATE_RUNNING) {
+            on_down(instant, p, payload);
+        }
+        break;
+    default:
+        count(EL_RMT_COUNTER_MALFORMED);
+        break;
+    }
+}
+
+void el_remote_poll(void)
+{
+    uint8_t chunk[32];
+    uint16_t got, i;
+    while ((got = el_remote_port_read(chunk, (uint16_t)sizeof chunk)) != 0u) {
+        for (i = 0u; i < got; i++) {
+            uint8_t r = el_cobs_decode_byte(&rx, chunk[i]);
+            if (r == EL_COBS_FRAME) {
+                on_frame(rx.len);
+            } else if (r == EL_COBS_OVERSIZE || r == EL_COBS_BAD) {
+                count(EL_RMT_COUNTER_MALFORMED);
+            }
+        }
+    }
+}
+
+void el_remote_boot(void)
+{
+    el_cobs_decoder_init(&rx, rx_buf, (uint16_t)sizeof rx_buf);
+    apply_safe_values();
+    while (state != EL_RMT_STATE_RUNNING) { /* the clock starts at START */
+        el_port_idle(50u);
+    }
+}
+
+/* Real time: no valid frame for the watchdog time means the host is gone.
+ * (In lock-step the proxy's clock waits for the host instead.) */
+static void watchdog(void)
+{
+    uint32_t now = (uint32_t)el_now_tick();
+    if (state == EL_RMT_STATE_RUNNING && mode == EL_RMT_MODE_REAL_TIME &&
+        (uint32_t)(now - last_frame_tick) >= el_rmt_watchdog_ticks) {
+        count(EL_RMT_COUNTER_WATCHDOG);
+        enter_safe_state();
+    }
+}
+
+void el_remote_release(uint8_t task)
+{
+    uint32_t now = (uint32_t)el_now_tick();
+    watchdog();
+    if (released_now == 0u || released_tick != now) {
+        released_now = 0u;
+        released_tick = now;
+        up_sent = false;
+        down_done = false;
+    }
+    released_now |= (uint32_t)1u << task;
+    release_tick[task] = now;
+    pending[task] = true;
+    arrived[task] = false;
+}
+
+void el_remote_body(uint8_t task)
+{
+    uint16_t i, at = 0u;
+    (void)task;
+    if (up_sent || !started) {
+        return;
+    }
+    up_sent = true;
+    frame[EL_RMT_HEADER] = state; /* the host learns at once that the safe values hold */
+    at = 1u;
+    for (i = 0u; i < el_rmt_out_count; i++) {
+        const el_rmt_field_t *f = &el_rmt_out_fields[i];
+        if ((el_rmt_device_readers[f->owner] & released_now) != 0u &&
+            (uint16_t)(at + f->size) <= EL_RMT_MAX_PAYLOAD) { /* easylab proxy checked that it fits */
+            copy_bytes(&frame[EL_RMT_HEADER + at], (const uint8_t *)f->addr, f->size);
+            at = (uint16_t)(at + f->size);
+        }
+    }
+    send(EL_RMT_CMD_UP, released_tick, at);
+    while (mode == EL_RMT_MODE_LOCK_STEP && !down_done && state == EL_RMT_STATE_RUNNING) {
+        el_port_idle(20u);
+    }
+}
+
+void el_remote_publish(uint8_t task)
+{
+    uint16_t i, at = 0u;
+    bool got = arrived[task];
+    watchdog();
+    pending[task] = false;
+    arrived[task] = false;
+    if (state != EL_RMT_STATE_RUNNING) {
+        return; /* the safe values stay */
+    }
+    if (!got) { /* an overrun: the previous values stay */
+        count(EL_RMT_COUNTER_OVERRUNS);
+        if (el_overruns[task] < UINT16_MAX) {
+            el_overruns[task]++;
+        }
+        if (++overruns_in_a_row >= el_rmt_overrun_limit) {
+            enter_safe_state();
+        }
+        return;
+    }
+    overruns_in_a_row = 0u;
+    for (i = 0u; i < el_rmt_in_count; i++) {
+        const el_rmt_field_t *f = &el_rmt_in_fields[i];
+        if (f->owner == task) {
+            copy_bytes((uint8_t *)f->addr, &el_rmt_staged[at], f->size);
+        }
+        at = (uint16_t)(at + f->size);
+    }
+}
+
+void el_remote_shutdown(void)
+{
+    enter_safe_state();
+}
+
+#else
+typedef int el_remote_not_a_proxy_t; /* ISO C: a translation unit declares something */
+#endif

@@ -1,0 +1,73 @@
+"""Helpers of the remote-execution tests: host-board proxies built once per
+session, run on a pty, and `easylab remote` against them."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+from easylab.pipeline import lower_file
+from easylab.remote.proxy import build_proxy
+from easylab.remote.stimulus import device_columns as split_devices
+
+ROOT = Path(__file__).resolve().parents[2]
+EXAMPLES = ROOT / "examples"
+EASYLAB = [sys.executable, "-m", "easylab"]
+
+
+def proxy_of(build_cache, model: Path) -> Path:
+    """The host-board proxy of ``model`` (built once per session)."""
+    def make(out: Path) -> Path:
+        program, result = lower_file(model)
+        assert program is not None, result.report()
+        return build_proxy(program, "host", out).executable
+    return build_cache.get(("host-proxy", str(model)), make)
+
+
+def device_columns(stimulus: Path, model: Path, out: Path) -> Path | None:
+    """The device `out` columns of a stimulus (what a host-board proxy
+    reads) in ``out``; None when it has none."""
+    program, _ = lower_file(model)
+    text = split_devices(stimulus.read_text(), program)
+    if text is None:
+        return None
+    out.write_text(text)
+    return out
+
+
+def wait_for(path: Path, timeout: float = 10.0) -> None:
+    deadline = time.monotonic() + timeout
+    while not path.exists():
+        assert time.monotonic() < deadline, f"{path} did not appear"
+        time.sleep(0.01)
+
+
+class Proxy:
+    """A host-board proxy process with its link on a pty (symlink ``link``)."""
+
+    def __init__(self, exe: Path, link: Path, *args: str):
+        self.link = link
+        self.proc = subprocess.Popen([str(exe), "--link", f"pty:{link}", *args], stdout=subprocess.PIPE,
+                                     stderr=subprocess.PIPE, text=True, stdin=subprocess.DEVNULL)
+        wait_for(link)
+
+    def finish(self, timeout: float = 30.0) -> tuple[int, str]:
+        try:
+            _, err = self.proc.communicate(timeout=timeout)
+        except subprocess.TimeoutExpired:
+            self.proc.kill()
+            _, err = self.proc.communicate()
+            raise AssertionError(f"the proxy did not end: {err}") from None
+        return self.proc.returncode, err
+
+    def kill(self) -> None:
+        if self.proc.poll() is None:
+            self.proc.kill()
+            self.proc.communicate()
+
+
+def remote(model: Path, target: Path, *args: str, timeout: float = 300) -> subprocess.CompletedProcess:
+    return subprocess.run([*EASYLAB, "remote", str(model), "--target", str(target), *args], capture_output=True,
+                          text=True, timeout=timeout, stdin=subprocess.DEVNULL)

@@ -1,0 +1,307 @@
+"""The link between `easylab remote` and a proxy: frames and their CRC,
+the device-model id, the two connect errors, corrupted frames, overruns."""
+
+from __future__ import annotations
+
+import os
+import struct
+import time
+
+import pytest
+
+from easylab.core.crc import crc16
+from easylab.pipeline import lower_file
+from easylab.remote import protocol as P
+from easylab.remote.device_model import device_model
+from easylab.remote.link import Link, NoAnswer
+from easylab.remote.protocol import K
+from remote_testlib import EXAMPLES, Proxy, proxy_of, remote
+
+BLINK = EXAMPLES / "blink.elab"
+PT100 = EXAMPLES / "pt100_sensor.elab"
+
+
+def until(condition, timeout: float = 10.0) -> None:
+    deadline = time.monotonic() + timeout
+    while not condition():
+        assert time.monotonic() < deadline, "the condition did not come true in time"
+        time.sleep(0.01)
+
+
+def lower_text(tmp_path, text: str, name: str = "edited.elab"):
+    path = tmp_path / name
+    path.write_text(text)
+    program, result = lower_file(path)
+    assert program is not None, result.report()
+    return path, program
+
+
+def test_frames_carry_their_instant_and_a_crc():
+    wire = P.encode(K.CMD_DOWN, 123456, b"\x00\x01\x02")
+    assert wire.endswith(b"\x00") and b"\x00" not in wire[:-1]
+    assert P.decode(wire[:-1]) == (K.CMD_DOWN, 123456, b"\x00\x01\x02")
+    damaged = bytearray(wire[:-1])
+    damaged[3] ^= 0x40 if damaged[3] != 0x40 else 0x01
+    assert P.decode(bytes(damaged)) is None
+
+
+def test_the_device_model_id_ignores_the_application(tmp_path):
+    program, _ = lower_file(BLINK)
+    text = BLINK.read_text()
+    _, slower = lower_text(tmp_path, text.replace("= 500", "= 250").replace("SquareWave(half_period = half_period)",
+                                                                           "SquareWave(half_period = half_period + 1)"))
+    assert slower.program_id != program.program_id
+    assert device_model(slower).id == device_model(program).id
+    _, moved = lower_text(tmp_path, text.replace('"PB5"', '"PB4"'), "moved.elab")
+    assert device_model(moved).id != device_model(program).id
+    assert device_model(moved).device_ids != device_model(program).device_ids
+    _, faster = lower_text(tmp_path, text.replace("period 1 ms", "period 2 ms"), "faster.elab")
+    assert device_model(faster).id != device_model(program).id  # the instants of the writes moved
+    assert device_model(faster).device_ids == device_model(program).device_ids
+
+
+def test_a_proxy_of_another_device_model_is_refused_by_name(build_cache, tmp_path):
+    moved, _ = lower_text(tmp_path, BLINK.read_text().replace('"PB5"', '"PB4"'), "blink.elab")
+    proxy = Proxy(proxy_of(build_cache, BLINK), tmp_path / "link", "--fast")
+    try:
+        proc = remote(moved, proxy.link, "--fast", "--duration", "10ms")
+        assert proc.returncode == 1
+        assert "runs another device model" in proc.stderr
+        assert "different: led" in proc.stderr
+        assert "rebuild and flash the proxy" in proc.stderr
+        assert proxy.proc.poll() is None  # still waiting for a host of its own model
+    finally:
+        proxy.kill()
+
+
+def test_nothing_answering_is_another_error(tmp_path):
+    master, slave = os.openpty()
+    try:
+        started = time.monotonic()
+        proc = remote(BLINK, os.ttyname(slave), "--fast", "--connect-timeout", "0.6")
+        assert proc.returncode == 1
+        assert "no proxy answers" in proc.stderr and "another device model" not in proc.stderr
+        assert time.monotonic() - started < 30
+        hellos = os.read(master, 4096)  # HELLO was repeated
+        assert hellos.count(b"\x00") >= 2
+    finally:
+        os.close(master)
+        os.close(slave)
+
+
+def test_the_proxy_drops_a_corrupted_frame(build_cache, tmp_path):
+    program, _ = lower_file(PT100)
+    model = device_model(program)
+    proxy = Proxy(proxy_of(build_cache, PT100), tmp_path / "link", "--fast")
+    link = None
+    try:
+        link = Link(str(proxy.link), model)
+        link.connect()
+        link.start(lock_step=True)
+        first = link.up(0, 5.0)
+        assert first[0] == K.STATE_RUNNING and len(first) == 1 + model.frame_bytes(model.up_items([0]))
+        # A DOWN for instant 0 whose CRC does not match: dropped, the proxy still waits.
+        body = struct.pack("<BI", K.CMD_DOWN, 0) + struct.pack("<I", 1) + b"\x01"
+        crc = crc16(body) ^ 0x0101
+        link.transport.send(P.cobs_encode(body + bytes([crc & 0xFF, crc >> 8])) + b"\x00")
+        link.down(0, 1, b"\x01")
+        link.up(1, 5.0)  # the good frame let the proxy go on
+        counters = link.counters()
+        assert counters["bad_crc"] == 1
+        assert counters["malformed"] == 0 and counters["overruns"] == 0
+        link.stop()
+        status, err = proxy.finish()
+        assert status == 0, err
+    finally:
+        if link:
+            link.close()
+        proxy.kill()
+
+
+def answer(link: Link, model, instants: int, value: bytes) -> None:
+    """Answer the proxy's next ``instants`` UP frames of the single device
+    task with its written data = ``value``."""
+    for _ in range(instants):
+        frame = link._receive(K.CMD_UP, 5.0)
+        assert frame is not None, "no UP frame"
+        link.down(frame[0], 1, value)
+
+
+def trace_column(trace, name: str) -> list[tuple[int, str]]:
+    rows = trace.read_text().splitlines()
+    column = rows[0].split(",").index(name)
+    return [(int(r.split(",")[0]), r.split(",")[column]) for r in rows[1:]]
+
+
+def test_overruns_in_a_row_apply_the_safe_values(build_cache, tmp_path):
+    """In real time, a DOWN that does not come by its deadline is an
+    overrun (counted, the value stays); after K in a row the proxy applies
+    the safe values, and a DOWN after its deadline is never applied."""
+    program, _ = lower_file(PT100)
+    model = device_model(program)
+    trace = tmp_path / "proxy.csv"
+    proxy = Proxy(proxy_of(build_cache, PT100), tmp_path / "link", "--trace", str(trace))
+    link = None
+    try:
+        link = Link(str(proxy.link), model)
+        link.connect()
+        link.start(lock_step=False)
+        answer(link, model, 20, b"\x01")  # alarm_led.level = 1 for 20 activations of `acquire` (10 ms)
+        until(lambda: link.counters()["watchdog"] + link.counters()["overruns"] > 0)
+        link.down(0, 1, b"\x01")  # instant 0's value, long after its deadline
+        until(lambda: link._request(K.CMD_COUNTERS)[0] == K.STATE_SAFE)
+        counters = link.counters()
+        assert counters["overruns"] >= model.overrun_limit
+        assert counters["watchdog"] == 0  # K overruns come first (10 ms deadlines, watchdog 100 ms)
+        link.stop()
+        status, err = proxy.finish()
+        assert status == 0, err
+        assert "overruns: acquire" in err
+    finally:
+        if link:
+            link.close()
+        proxy.kill()
+    values = trace_column(trace, "alarm_led.level")
+    assert values[0][1] == "0"  # the safe value until the host's first value is due
+    assert "1" in {v for _, v in values}  # then the host's values, applied at their deadlines
+    assert values[-1][1] == "0"  # and the safe value again
+
+
+def test_the_watchdog_applies_the_safe_values_when_the_host_is_gone(tmp_path):
+    """A task with a 500 ms period: the watchdog (twice the longest gap
+    between frames, 1 s, measured from the instant stamped on the last frame:
+    the one awaited when it came) fires before K overruns would."""
+    from easylab.remote.proxy import build_proxy
+
+    path, program = lower_text(tmp_path, BLINK.read_text().replace("period 1 ms", "period 500 ms"), "slow.elab")
+    model = device_model(program)
+    assert model.watchdog_ticks * model.tick_us == 1_000_000
+    exe = build_proxy(program, "host", tmp_path / "proxy").executable
+    trace = tmp_path / "proxy.csv"
+    proxy = Proxy(exe, tmp_path / "link", "--trace", str(trace))
+    link = None
+    try:
+        link = Link(str(proxy.link), model)
+        link.connect()
+        link.start(lock_step=False)
+        answer(link, model, 1, b"\x01")  # led on at 500 ms; then the host says nothing more
+        # Silence is the stimulus here (any frame, even a question, feeds the
+        # watchdog): the watchdog time and a margin pass before we ask.
+        time.sleep(1.8)
+        counters = link.counters()
+        assert link._request(K.CMD_COUNTERS)[0] == K.STATE_SAFE
+        assert counters["watchdog"] == 1
+        assert counters["overruns"] == 1 < model.overrun_limit  # the activation due at 1 s
+        link.stop()
+        assert proxy.finish()[0] == 0
+    finally:
+        if link:
+            link.close()
+        proxy.kill()
+    # The led goes on at the first deadline and back to its safe value one
+    # watchdog time after the instant stamped on the last frame (it came
+    # while the proxy awaited instant 1, at 500 ms).
+    assert trace_column(trace, "led.level")[:3] == [(0, "0"), (500000, "1"), (1500000, "0")]
+
+
+def test_a_device_model_whose_frames_would_not_fit_is_refused(tmp_path):
+    from easylab.core.errors import BuildError
+    from easylab.remote.proxy import build_proxy
+
+    _, program = lower_text(tmp_path, """model wide
+import std
+device type Camera(ch: uint8) {
+    claims adc[ch]
+    out px: int16 rate 130
+    driver "camera"
+}
+device cam: Camera(ch = 0)
+var mean: int16
+dataflow Look {
+    stats = WindowStats<int16>(n = 130)
+    cam.px -> stats.x
+    stats.mean -> mean
+}
+task look period 10 ms { run Look }
+""", "wide.elab")
+    with pytest.raises(BuildError) as err:
+        build_proxy(program, "host", tmp_path / "proxy")
+    assert str(err.value) == ("wide: the device data of the tasks released at tick 0 (look) take 261 bytes in one "
+                              f"frame, more than the link's {K.MAX_PAYLOAD}: release those tasks at different "
+                              "instants, or read fewer data")
+
+
+def test_random_frames_neither_crash_nor_confuse_the_proxy(tmp_path):
+    """Thousands of frames with good CRCs and random commands, instants and
+    payloads (every command but STOP), and random bytes, to a proxy built
+    with ASan and UBSan: it answers HELLO afterwards, goes on in lock-step
+    and ends cleanly on STOP."""
+    import random
+
+    from easylab.remote.proxy import build_proxy
+
+    program, _ = lower_file(PT100)
+    model = device_model(program)
+    exe = build_proxy(program, "host", tmp_path / "proxy",
+                      extra_cflags=("-fsanitize=address,undefined", "-fno-sanitize-recover=all", "-g")).executable
+    proxy = Proxy(exe, tmp_path / "link", "--fast")
+    link = None
+    rng = random.Random(15)
+    try:
+        link = Link(str(proxy.link), model)
+        link.connect()
+        link.start(lock_step=True)
+        link.up(0, 5.0)
+        commands = [c for c in range(256) if c != K.CMD_STOP]
+        for batch in range(40):
+            wire = bytearray()
+            for _ in range(50):
+                if rng.random() < 0.8:
+                    payload = bytes(rng.randrange(256) for _ in range(rng.choice([0, 1, 4, 5, 8, 60, 243, 260])))
+                    wire += P.encode(rng.choice(commands), rng.choice([0, 1, 2, rng.randrange(2 ** 32)]), payload)
+                else:
+                    wire += bytes(rng.randrange(256) for _ in range(rng.randrange(1, 40)))
+            link.transport.send(bytes(wire) + b"\x00")
+            link.transport.discard_input()  # the answers are not what this test reads
+        link.transport.discard_input()
+        link.connect()  # still answering (a random START may have put it in real time: that is allowed)
+        counters = link.counters()
+        assert counters["bad_crc"] + counters["malformed"] > 0
+        link.stop()
+        status, err = proxy.finish()
+        assert status == 0, err
+        assert "runtime error" not in err and "AddressSanitizer" not in err
+    finally:
+        if link:
+            link.close()
+        proxy.kill()
+
+
+def test_easylab_proxy_builds_and_names_the_device_model(tmp_path):
+    import subprocess
+    import sys
+
+    proc = subprocess.run([sys.executable, "-m", "easylab", "proxy", str(BLINK), "-o", str(tmp_path / "p")],
+                          capture_output=True, text=True, timeout=300, stdin=subprocess.DEVNULL)
+    assert proc.returncode == 0, proc.stderr
+    program, _ = lower_file(BLINK)
+    lines = proc.stdout.splitlines()
+    assert f"device model 0x{device_model(program).id:08x}" in lines
+    assert lines[-1] == str(tmp_path / "p" / "blink_proxy")
+    wrong = subprocess.run([sys.executable, "-m", "easylab", "proxy", str(BLINK), "--board", "nosuch"],
+                           capture_output=True, text=True, timeout=300, stdin=subprocess.DEVNULL)
+    assert wrong.returncode == 1 and "unknown board 'nosuch'" in wrong.stderr
+    not_a_proxy = subprocess.run([str(tmp_path / "p" / "blink_proxy"), "--help"], capture_output=True, text=True,
+                                 timeout=30, stdin=subprocess.DEVNULL)
+    assert "--link pty:LINK" in not_a_proxy.stdout
+
+
+def test_firmware_that_is_not_a_proxy_says_so(build_cache, tmp_path):
+    import subprocess
+
+    exe = build_cache.example("host", "blink").executable
+    proc = subprocess.run([str(exe), "--fast", "--link", f"pty:{tmp_path / 'link'}"], capture_output=True, text=True,
+                          timeout=60, stdin=subprocess.DEVNULL)
+    assert proc.returncode == 2
+    assert "--link: this program is not a remote-execution proxy (easylab proxy builds one)" in proc.stderr
+    assert not (tmp_path / "link").exists()
