@@ -60,8 +60,10 @@ def test_a_build_is_a_softune_project_that_needs_only_softune(demo):
 
 def test_every_file_passes_the_proxies(demo):
     built, out = demo
-    assert "proxy: gcc -std=c89 -pedantic-errors -Wall -Wextra -Werror: 18 files clean" in built.lines
-    assert "proxy: clang --target=msp430 -std=c89 -pedantic-errors -Wall -Wextra -Werror: 18 files clean" \
+    # Every C file of the project (out/, its runtime/ and board/) goes through both.
+    files = len([p for p in out.rglob("*.c")])
+    assert f"proxy: gcc -std=c89 -pedantic-errors -Wall -Wextra -Werror: {files} files clean" in built.lines
+    assert f"proxy: clang --target=msp430 -std=c89 -pedantic-errors -Wall -Wextra -Werror: {files} files clean" \
         in built.lines
     assert any(line.startswith("proxy: clang-tidy bugprone-implicit-widening-of-multiplication-result, "
                                "bugprone-narrowing-conversions") for line in built.lines)
