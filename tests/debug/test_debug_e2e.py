@@ -3,15 +3,15 @@ examples, served on a real pty, driven by the project's client."""
 
 from __future__ import annotations
 
-import struct
 import re
+import struct
 import time
 
 import pytest
 
 from debug_testlib import EXAMPLES, board, builds, firmware, host_only, on_boards  # noqa: F401 (fixtures)
 from easylab.host_tools.debug_protocol import K, DebugError, crc16, cobs_encode, encode_frame
-from easylab.host_tools.transport import TransportTimeout
+from easylab.host_tools.transport import TransportError, TransportTimeout
 
 EXAMPLE_NAMES = sorted(p.stem for p in EXAMPLES.glob("*.elab"))
 
@@ -196,6 +196,7 @@ def test_breakpoints_halt_at_the_right_item(builds, firmware):
 def test_step_advances_exactly_one_unit(builds, firmware):
     fw = firmware(builds["pneumatic_cylinder"])
     c = fw.client()
+    fw.wait_halted(c)  # --debug ...,halt: the link may come up before the first instant's halt
     m = fw.map
     c.write(m.item("start_cmd").id, "bool", True)
 
@@ -373,10 +374,14 @@ def test_dispatcher_keeps_time_while_a_client_floods_it(builds, firmware, board)
     allitems = [(i.id, i.type, i.count) for i in m.items]
     t0 = time.monotonic()
     n = 0
-    while time.monotonic() - t0 < 1.0:
-        c.read(allitems)
-        c.flags()
-        n += 1
+    try:
+        while time.monotonic() - t0 < 1.0:
+            c.read(allitems)
+            c.flags()
+            n += 1
+    except TransportError as lost:  # the firmware (or its simulator) said why on stderr
+        status, _, err = fw.stop()
+        raise AssertionError(f"{lost} after {n} round trips; status {status}, stderr:\n{err}") from None
     status, _, err = fw.stop()
     assert n > FLOOD_ROUND_TRIPS.get(board, 50) and status == 0 and "overruns" not in err, (n, err)
 
