@@ -283,4 +283,7 @@ def firmware(tmp_path, request):
 
     yield start
     for fw in started:
-        fw.stop()
+        ended = fw.proc.poll()  # before the stop: on its own (a crash, a simulator's error)?
+        status, _, err = fw.stop()
+        if ended is not None and status != 0:
+            print(f"{fw.exe.name} ended by itself with status {status}:\n{err}")
