@@ -12,6 +12,7 @@ from pathlib import Path
 
 import pytest
 
+from sim_modbus import check_persist_round_trip
 from avr_testlib import ROOT, run, stimulus_of
 
 NATIVE = ROOT / "tests" / "native" / "data"
@@ -114,66 +115,11 @@ def test_the_simulation_runs_in_real_time_unless_fast(sim_builds, tmp_path):
     assert 0.28 <= time.monotonic() - start < 3.0
 
 
-class Harness:
-    """A harness run with UART1 on a pty, for a Modbus client."""
-
-    def __init__(self, exe: Path, link: Path, *args):
-        self.link = link
-        self.proc = subprocess.Popen([str(exe), "--uart1", f"pty:{link}", "--wait", *map(str, args)],
-                                     stderr=subprocess.PIPE, text=True)
-        deadline = time.monotonic() + 20
-        while not link.exists() and time.monotonic() < deadline:
-            time.sleep(0.05)
-        assert link.exists()
-
-    def client(self):
-        from pymodbus.client import ModbusSerialClient
-
-        client = ModbusSerialClient(port=str(self.link), baudrate=19200, parity="N", timeout=2)
-        assert client.connect()
-        return client
-
-    def stop(self) -> str:
-        self.proc.terminate()
-        self.proc.wait(timeout=10)
-        return self.proc.stderr.read()
-
-
-def read_holding(client, count: int, timeout: float = 20.0) -> list[int]:
-    deadline = time.monotonic() + timeout
-    while time.monotonic() < deadline:  # the first request may meet a firmware still booting
-        reply = client.read_holding_registers(0, count=count, device_id=17)
-        if not reply.isError():
-            return reply.registers
-    raise AssertionError("no Modbus reply")
-
-
 def test_a_uart_on_a_pty_serves_modbus_rtu_and_the_eeprom_persists(sim_builds, tmp_path):
     """The harness's pty plumbing end to end (pymodbus over Modbus RTU on
     USART1), and the EEPROM: a persist param written over Modbus is there
     again in the next run with the same --nvram file."""
-    exe = sim_builds["pt100_sensor"].simulator
-    nv = tmp_path / "eeprom.bin"
-    h = Harness(exe, tmp_path / "uart1", "--nvram", nv)
-    try:
-        client = h.client()
-        assert read_holding(client, 3) == [1000, 0, 800]  # cal_gain, cal_offset, alarm_high
-        assert not client.write_register(1, 25, device_id=17).isError()
-        assert read_holding(client, 3) == [1000, 25, 800]
-        time.sleep(0.5)  # the EEPROM write happens between instants
-        client.close()
-    finally:
-        err = h.stop()
-    assert f"uart1 on {tmp_path / 'uart1'} -> /dev/pts/" in err
-    assert not (tmp_path / "uart1").exists()  # the harness removes its link
-    assert nv.stat().st_size == 4096
-    h = Harness(exe, tmp_path / "uart1", "--nvram", nv)
-    try:
-        client = h.client()
-        assert read_holding(client, 3) == [1000, 25, 800]
-        client.close()
-    finally:
-        h.stop()
+    check_persist_round_trip(sim_builds["pt100_sensor"].simulator, "uart1", tmp_path, 4096)
 
 
 def test_the_uart_link_and_harness_files_of_a_build(sim_builds):

@@ -11,6 +11,7 @@ from pathlib import Path
 
 import pytest
 
+from sim_modbus import check_persist_round_trip
 from pic18_testlib import DATA, MODELS, ROOT, changes, pic18_build, pins_rows, run
 
 DRIVERS_STIMULUS = DATA / "drivers.stimulus.csv"
@@ -139,42 +140,6 @@ def test_the_nvram_file_is_the_eeprom(drivers, tmp_path):
     assert proc.returncode == 2 and "256" in proc.stderr, proc.stderr
 
 
-class Harness:
-    """A harness run with uart0 on a pty, for a Modbus client."""
-
-    def __init__(self, exe: Path, link: Path, *args):
-        import subprocess
-
-        self.link = link
-        self.proc = subprocess.Popen([str(exe), "--uart0", f"pty:{link}", "--wait", *map(str, args)],
-                                     stderr=subprocess.PIPE, text=True)
-        deadline = time.monotonic() + 20
-        while not link.exists() and time.monotonic() < deadline:
-            time.sleep(0.05)
-        assert link.exists()
-
-    def client(self):
-        from pymodbus.client import ModbusSerialClient
-
-        client = ModbusSerialClient(port=str(self.link), baudrate=19200, parity="N", timeout=2)
-        assert client.connect()
-        return client
-
-    def stop(self) -> str:
-        self.proc.terminate()
-        self.proc.wait(timeout=10)
-        return self.proc.stderr.read()
-
-
-def read_holding(client, count: int, timeout: float = 20.0) -> list[int]:
-    deadline = time.monotonic() + timeout
-    while time.monotonic() < deadline:  # the first request may meet a firmware still booting
-        reply = client.read_holding_registers(0, count=count, device_id=17)
-        if not reply.isError():
-            return reply.registers
-    raise AssertionError("no Modbus reply")
-
-
 @pytest.fixture(scope="module")
 def pt100_rtu(tmp_path_factory):
     """The PIC18 variant of pt100_sensor with Modbus RTU on uart0, a
@@ -192,28 +157,7 @@ def test_persist_params_written_over_modbus_are_in_the_eeprom_at_the_next_run(pt
     EUSART), and the data EEPROM: a persist param written over Modbus is
     there again in the next run with the same --nvram file (the
     PIC18F4620's 1024 bytes: EEADRH)."""
-    exe = pt100_rtu.simulator
-    nv = tmp_path / "eeprom.bin"
-    h = Harness(exe, tmp_path / "uart0", "--nvram", nv)
-    try:
-        client = h.client()
-        assert read_holding(client, 3) == [1000, 0, 800]  # cal_gain, cal_offset, alarm_high
-        assert not client.write_register(1, 25, device_id=17).isError()
-        assert read_holding(client, 3) == [1000, 25, 800]
-        time.sleep(0.5)  # the EEPROM is written between instants
-        client.close()
-    finally:
-        err = h.stop()
-    assert f"uart0 on {tmp_path / 'uart0'} -> /dev/pts/" in err
-    assert not (tmp_path / "uart0").exists()  # the harness removes its link
-    assert nv.stat().st_size == 1024 and nv.read_bytes() != b"\xff" * 1024
-    h = Harness(exe, tmp_path / "uart0", "--nvram", nv)
-    try:
-        client = h.client()
-        assert read_holding(client, 3) == [1000, 25, 800]
-        client.close()
-    finally:
-        h.stop()
+    check_persist_round_trip(pt100_rtu.simulator, "uart0", tmp_path, 1024)
 
 
 @pytest.mark.parametrize("name, mcu, duration", [("pneumatic_cylinder", "pic18f4620", "3600ms"),
