@@ -164,36 +164,15 @@ def _cycles(runner: Path, elf: Path) -> tuple[int, int]:
 
 
 def measure(name: str, case: dict, tmp: Path, runner: Path, tiny: bool = False) -> dict:
-    from easylab.codegen import c_model
-
+    """Cycles and flash per activation of a bench_codegen case on the AVR."""
     work = tmp / re.sub(r"\W+", "_", name)
     program, board = _generate(ROOT / case["model"], work, MCU, case.get("schedule"))
-    view = c_model.build_view(program, board)
-    df = next(d for d in program.dataflows if d.name == case["dataflow"])
-    fields = {k: view.items[program.item(v).id].local for k, v in case["names"].items()}
-    fmt = dict(fields, task=f"el_t{df.task}", fn=f"el_df{df.id}_{c_model.ident(df.name)}")
-    n = 2 if tiny else max(1, case["activations"] // 10)
     hand = HERE / "handwritten" / case["handwritten"]
-    progs = {
-        "generated": PROGRAM.format(decls=case["decls"], body=case["generated"].format(**fmt), n=n, setup=""),
-        "handwritten": PROGRAM.format(decls=case["decls"], body=case["hand"], n=n, setup=""),
-        "baseline": PROGRAM.format(decls=case["decls"], body="", n=n, setup=""),
-    }
-    elfs = {k: _compile(board, work, k, src, [hand]) for k, src in progs.items()}
-    gen_cycles, gen_check = _cycles(runner, elfs["generated"])
-    hw_cycles, hw_check = _cycles(runner, elfs["handwritten"])
-    base_cycles, _ = _cycles(runner, elfs["baseline"])
-    if gen_check != hw_check:
-        raise SystemExit(f"{name}: generated and hand-written code disagree on the AVR: {gen_check} != {hw_check}")
-    base_flash = _flash(elfs["baseline"])
-    gen_flash = _flash(elfs["generated"]) - base_flash
-    hw_flash = _flash(elfs["handwritten"]) - base_flash
-    gen = (gen_cycles - base_cycles) / n
-    hw = (hw_cycles - base_cycles) / n
-    return {"case": name, "mcu": MCU, "activations": n, "generated_cycles": round(gen, 1),
-            "handwritten_cycles": round(hw, 1), "cycle_ratio": round(gen / hw, 3),
-            "generated_flash": gen_flash, "handwritten_flash": hw_flash,
-            "flash_ratio": round(gen_flash / hw_flash, 3)}
+    row = _load("bench_codegen").compare_on_target(
+        name, case, program, board, PROGRAM, 2 if tiny else max(1, case["activations"] // 10),
+        build=lambda kind, src: _compile(board, work, kind, src, [hand]),
+        cycles_of=lambda elf: _cycles(runner, elf), flash_of=_flash, target="AVR")
+    return {"mcu": MCU, **row}
 
 
 FOOTPRINT_MODELS = {

@@ -151,6 +151,39 @@ def measure(name: str, case: dict, tmp: Path, tiny: bool = False) -> dict:
             "ratio": round(generated / handwritten, 3)}
 
 
+def compare_on_target(name: str, case: dict, program, board, program_text: str, n: int,
+                      build, cycles_of, flash_of, target: str) -> dict:
+    """One case on a simulated part: `program_text` (a board's benchmark
+    program with {decls}, {body}, {n}, {setup}) is built three times by
+    `build(kind, source)`, with the generated dataflow, the hand-written
+    one and neither; `cycles_of(built)` runs one and gives (cycles between
+    its marks, checksum), `flash_of(built)` its program memory. Both sides'
+    checksums must agree; cycles and flash are per activation and net of
+    the baseline."""
+    from easylab.codegen import c_model
+
+    view = c_model.build_view(program, board)
+    df = next(d for d in program.dataflows if d.name == case["dataflow"])
+    fields = {k: view.items[program.item(v).id].local for k, v in case["names"].items()}
+    fmt = dict(fields, task=f"el_t{df.task}", fn=f"el_df{df.id}_{c_model.ident(df.name)}")
+    bodies = {"generated": case["generated"].format(**fmt), "handwritten": case["hand"], "baseline": ""}
+    built = {k: build(k, program_text.format(decls=case["decls"], body=body, n=n, setup=""))
+             for k, body in bodies.items()}
+    (gen_cycles, gen_check), (hw_cycles, hw_check), (base_cycles, _) = (
+        cycles_of(built[k]) for k in ("generated", "handwritten", "baseline"))
+    if gen_check != hw_check:
+        raise SystemExit(f"{name}: generated and hand-written code disagree on the {target}: {gen_check} != {hw_check}")
+    base_flash = flash_of(built["baseline"])
+    gen_flash = flash_of(built["generated"]) - base_flash
+    hw_flash = flash_of(built["handwritten"]) - base_flash
+    gen = (gen_cycles - base_cycles) / n
+    hw = (hw_cycles - base_cycles) / n
+    return {"case": name, "activations": n, "generated_cycles": round(gen, 1),
+            "handwritten_cycles": round(hw, 1), "cycle_ratio": round(gen / hw, 3),
+            "generated_flash": gen_flash, "handwritten_flash": hw_flash,
+            "flash_ratio": round(gen_flash / hw_flash, 3)}
+
+
 def main(out_dir: Path, tiny: bool = False) -> list[dict]:
     if shutil.which("valgrind") is None:
         raise SystemExit("valgrind is not installed (Debian package: valgrind)")

@@ -159,38 +159,18 @@ def _cycles(runner: Path, hexfile: Path, lmap) -> tuple[int, int]:
 
 
 def measure(name: str, case: dict, tmp: Path, runner: Path, tiny: bool = False) -> dict:
-    from easylab.codegen import c_model
-
+    """Cycles and program memory per activation of a bench_codegen case on the PIC18."""
     work = tmp / re.sub(r"\W+", "_", name)
     model = ROOT / case["model"]
     if (VARIANTS / model.name).is_file():
         model = VARIANTS / model.name  # the same dataflow on the PIC18's pins, without the second UART
     program, board = _generate(model, work, case.get("schedule"))
-    view = c_model.build_view(program, board)
-    df = next(d for d in program.dataflows if d.name == case["dataflow"])
-    fields = {k: view.items[program.item(v).id].local for k, v in case["names"].items()}
-    fmt = dict(fields, task=f"el_t{df.task}", fn=f"el_df{df.id}_{c_model.ident(df.name)}")
-    n = 2 if tiny else max(1, case["activations"] // 20)
     hand = HERE / "handwritten" / case["handwritten"]
-    progs = {
-        "generated": PROGRAM.format(decls=case["decls"], body=case["generated"].format(**fmt), n=n, setup=""),
-        "handwritten": PROGRAM.format(decls=case["decls"], body=case["hand"], n=n, setup=""),
-        "baseline": PROGRAM.format(decls=case["decls"], body="", n=n, setup=""),
-    }
-    built = {k: _build(board, work, k, src, [hand]) for k, src in progs.items()}
-    (gen_cycles, gen_check), (hw_cycles, hw_check), (base_cycles, _) = (
-        _cycles(runner, *built[k]) for k in ("generated", "handwritten", "baseline"))
-    if gen_check != hw_check:
-        raise SystemExit(f"{name}: generated and hand-written code disagree on the PIC18: {gen_check} != {hw_check}")
-    base_flash = built["baseline"][1].flash
-    gen_flash = built["generated"][1].flash - base_flash
-    hw_flash = built["handwritten"][1].flash - base_flash
-    gen = (gen_cycles - base_cycles) / n
-    hw = (hw_cycles - base_cycles) / n
-    return {"case": name, "mcu": MCU, "activations": n, "generated_cycles": round(gen, 1),
-            "handwritten_cycles": round(hw, 1), "cycle_ratio": round(gen / hw, 3),
-            "generated_flash": gen_flash, "handwritten_flash": hw_flash,
-            "flash_ratio": round(gen_flash / hw_flash, 3)}
+    row = _load("bench_codegen").compare_on_target(
+        name, case, program, board, PROGRAM, 2 if tiny else max(1, case["activations"] // 20),
+        build=lambda kind, src: _build(board, work, kind, src, [hand]),
+        cycles_of=lambda built: _cycles(runner, *built), flash_of=lambda built: built[1].flash, target="PIC18")
+    return {"mcu": MCU, **row}
 
 
 # The flat Convert's buffers do not fit the RAM: the PIC18 compares the
