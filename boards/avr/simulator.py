@@ -12,7 +12,7 @@ from easylab.board import handlers
 from easylab.board.cbuild import require_tool, run, write_files
 from easylab.board.registry import load_board
 from easylab.board.resources import parse_claim, parse_select
-from easylab.board.simtables import c_string, no_model_tables, ram_tables, trace_tables
+from easylab.board.simtables import c_string, no_model_tables, ram_tables, sim_table, trace_tables
 from easylab.core.errors import BuildError
 from easylab.core.paths import runtime_dir
 from easylab.ir.program import Program
@@ -172,18 +172,12 @@ def sim_model_source(program: Program, board, elf: Path) -> str:
     lines += trace_tables(program)
     lines += ram_tables(program, ram_symbols(board.description.toolchain.tool("nm", "avr-nm"), elf), TICK_SYMBOL,
                         str(elf))
-    hw = _hardware_rows(program, views)
-    lines.append(f"const sim_hw_t sim_hw[{max(1, len(hw))}] = {{")
-    lines += hw or ["    { 0xffffu, SIM_HW_NONE, 0u, 0u, 0UL },"]
-    lines += ["};", f"const uint16_t sim_hw_count = {len(hw)}u;"]
-    chips = _chip_rows(program, board)
-    lines.append(f"const sim_chip_t sim_chips[{max(1, len(chips))}] = {{")
-    lines += chips or ["    { 0u, 0u, 0u, 0UL, 0u, 0 },"]
-    lines += ["};", f"const uint16_t sim_chip_count = {len(chips)}u;"]
-    pins = _pin_rows(mcu, views)
-    lines.append(f"const sim_pin_t sim_pins[{max(1, len(pins))}] = {{")
-    lines += pins or ["    { 0, 0u, SIM_PIN_LEVEL, 0u, 0u, 0u, \"\", \"\" },"]
-    lines += ["};", f"const uint16_t sim_pin_count = {len(pins)}u;"]
+    lines += sim_table("sim_hw_t", "sim_hw", "sim_hw_count", _hardware_rows(program, views),
+                       "{ 0xffffu, SIM_HW_NONE, 0u, 0u, 0UL }")
+    lines += sim_table("sim_chip_t", "sim_chips", "sim_chip_count", _chip_rows(program, board),
+                       "{ 0u, 0u, 0u, 0UL, 0u, 0 }")
+    lines += sim_table("sim_pin_t", "sim_pins", "sim_pin_count", _pin_rows(mcu, views),
+                       "{ 0, 0u, SIM_PIN_LEVEL, 0u, 0u, 0u, \"\", \"\" }")
     lines += harness_constants(board, elf)
     return "\n".join(lines) + "\n"
 

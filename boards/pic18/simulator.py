@@ -10,7 +10,7 @@ from pathlib import Path
 
 from easylab.board.cbuild import require_tool, run, write_files
 from easylab.board.registry import load_board
-from easylab.board.simtables import c_string, no_model_tables, ram_tables, trace_tables
+from easylab.board.simtables import c_string, no_model_tables, ram_tables, sim_table, trace_tables
 from easylab.core.errors import BuildError
 from easylab.core.paths import runtime_dir
 from easylab.ir.program import Program
@@ -82,14 +82,10 @@ def sim_model_source(program: Program, board, hexfile: Path, lmap: linkmap.LinkM
     lines += trace_tables(program)
     lines += ram_tables(program, {name: (addr, 0) for name, addr in lmap.ram_symbols().items()}, TICK_SYMBOL,
                         str(hexfile))
-    hw = _hardware_rows(program, views)
-    lines.append(f"const sim_hw_t sim_hw[{max(1, len(hw))}] = {{")
-    lines += hw or ["    { 0xffffu, SIM_HW_NONE, 0u, 0u, 0UL },"]
-    lines += ["};", f"const uint16_t sim_hw_count = {len(hw)}u;"]
-    pins = _pin_rows(views)
-    lines.append(f"const sim_pin_t sim_pins[{max(1, len(pins))}] = {{")
-    lines += pins or ["    { 0u, SIM_PIN_LEVEL, 0u, \"\", \"\" },"]
-    lines += ["};", f"const uint16_t sim_pin_count = {len(pins)}u;"]
+    lines += sim_table("sim_hw_t", "sim_hw", "sim_hw_count", _hardware_rows(program, views),
+                       "{ 0xffffu, SIM_HW_NONE, 0u, 0u, 0UL }")
+    lines += sim_table("sim_pin_t", "sim_pins", "sim_pin_count", _pin_rows(views),
+                       "{ 0u, SIM_PIN_LEVEL, 0u, \"\", \"\" }")
     parity = {"none": 0, "even": 1, "odd": 2}[str(uarts.get(0, {}).get("parity", "none"))]
     lines += _hooks(lmap, str(hexfile)) + harness_constants(board, hexfile)
     lines.append(f"const uint8_t sim_uart_parity = {parity}u;")

@@ -97,6 +97,13 @@ def ram_tables(program: Program, symbols: dict[str, tuple[int, int]], tick_symbo
     return lines
 
 
+def sim_table(c_type: str, name: str, count_name: str, rows: list[str], empty_row: str) -> list[str]:
+    """A harness table and its row count: C has no empty arrays, so a table
+    without rows holds ``empty_row`` (an unused row) and a count of 0."""
+    return ([f"const {c_type} {name}[{max(1, len(rows))}] = {{"] + (rows or [f"    {empty_row},"])
+            + ["};", f"const uint16_t {count_name} = {len(rows)}u;"])
+
+
 def kept_symbols(program: Program) -> list[str]:
     """Every item and chart symbol: a simulation build keeps them all, even
     one no code reads, since the harness traces them from RAM."""
