@@ -10,6 +10,7 @@
 #define EL_DRV_DIGITAL_H
 
 #include "avr_internal.h"
+#include "el_driver.h"
 
 #define EL_AVR_DDR(pin) ((pin) + 1)
 #define EL_AVR_PORT(pin) ((pin) + 2)
@@ -32,30 +33,16 @@ static inline void el_drv_digital_in_open(const el_drv_digital_in_t *d)
     *EL_AVR_PORT(d->pin) &= (uint8_t)~d->mask;
 }
 
-static inline void el_drv_digital_in_start(const el_drv_digital_in_t *d)
-{
-    (void)d;
-}
+EL_DRV_NOTHING(el_drv_digital_in_start, el_drv_digital_in_t)
 
 static inline void el_drv_digital_in_read(const el_drv_digital_in_t *d)
 {
     *d->level = (*d->pin & d->mask) != 0u;
 }
 
-static inline void el_drv_digital_in_write(const el_drv_digital_in_t *d)
-{
-    (void)d;
-}
-
-static inline void el_drv_digital_in_stop(const el_drv_digital_in_t *d)
-{
-    (void)d;
-}
-
-static inline void el_drv_digital_in_close(const el_drv_digital_in_t *d)
-{
-    (void)d;
-}
+EL_DRV_NOTHING(el_drv_digital_in_write, el_drv_digital_in_t)
+EL_DRV_NOTHING(el_drv_digital_in_stop, el_drv_digital_in_t)
+EL_DRV_NOTHING(el_drv_digital_in_close, el_drv_digital_in_t)
 
 static inline void el_drv_digital_out_open(const el_drv_digital_out_t *d)
 {
@@ -63,15 +50,8 @@ static inline void el_drv_digital_out_open(const el_drv_digital_out_t *d)
     *EL_AVR_DDR(d->pin) |= d->mask;
 }
 
-static inline void el_drv_digital_out_start(const el_drv_digital_out_t *d)
-{
-    (void)d;
-}
-
-static inline void el_drv_digital_out_read(const el_drv_digital_out_t *d)
-{
-    (void)d;
-}
+EL_DRV_NOTHING(el_drv_digital_out_start, el_drv_digital_out_t)
+EL_DRV_NOTHING(el_drv_digital_out_read, el_drv_digital_out_t)
 
 static inline void el_drv_digital_out_write(const el_drv_digital_out_t *d)
 {
@@ -87,9 +67,6 @@ static inline void el_drv_digital_out_stop(const el_drv_digital_out_t *d)
     *EL_AVR_PORT(d->pin) &= (uint8_t)~d->mask;
 }
 
-static inline void el_drv_digital_out_close(const el_drv_digital_out_t *d)
-{
-    (void)d;
-}
+EL_DRV_NOTHING(el_drv_digital_out_close, el_drv_digital_out_t)
 
 #endif /* EL_DRV_DIGITAL_H */

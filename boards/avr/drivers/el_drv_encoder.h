@@ -11,6 +11,7 @@
 #define EL_DRV_ENCODER_H
 
 #include "avr_internal.h"
+#include "el_driver.h"
 #include "el_drv_digital.h"
 
 #include <util/atomic.h>
@@ -62,10 +63,7 @@ static inline void el_drv_encoder_open(const el_drv_encoder_t *d)
     }
 }
 
-static inline void el_drv_encoder_start(const el_drv_encoder_t *d)
-{
-    (void)d;
-}
+EL_DRV_NOTHING(el_drv_encoder_start, el_drv_encoder_t)
 
 static inline void el_drv_encoder_read(const el_drv_encoder_t *d)
 {
@@ -76,19 +74,8 @@ static inline void el_drv_encoder_read(const el_drv_encoder_t *d)
     *d->count = n;
 }
 
-static inline void el_drv_encoder_write(const el_drv_encoder_t *d)
-{
-    (void)d;
-}
-
-static inline void el_drv_encoder_stop(const el_drv_encoder_t *d)
-{
-    (void)d;
-}
-
-static inline void el_drv_encoder_close(const el_drv_encoder_t *d)
-{
-    (void)d;
-}
+EL_DRV_NOTHING(el_drv_encoder_write, el_drv_encoder_t)
+EL_DRV_NOTHING(el_drv_encoder_stop, el_drv_encoder_t)
+EL_DRV_NOTHING(el_drv_encoder_close, el_drv_encoder_t)
 
 #endif /* EL_DRV_ENCODER_H */

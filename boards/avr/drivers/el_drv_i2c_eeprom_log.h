@@ -12,6 +12,7 @@
 #define EL_DRV_I2C_EEPROM_LOG_H
 
 #include "el_bus.h"
+#include "el_driver.h"
 #include "el_drv_eeprom_log.h"
 
 typedef struct {
@@ -46,15 +47,8 @@ static inline void el_drv_i2c_eeprom_log_open(const el_drv_i2c_eeprom_log_t *d)
     el_eeprom_log_find(&d->state->log, d->layout.slots, el_drv_i2c_eeprom_log_seq, d);
 }
 
-static inline void el_drv_i2c_eeprom_log_start(const el_drv_i2c_eeprom_log_t *d)
-{
-    (void)d;
-}
-
-static inline void el_drv_i2c_eeprom_log_read(const el_drv_i2c_eeprom_log_t *d)
-{
-    (void)d;
-}
+EL_DRV_NOTHING(el_drv_i2c_eeprom_log_start, el_drv_i2c_eeprom_log_t)
+EL_DRV_NOTHING(el_drv_i2c_eeprom_log_read, el_drv_i2c_eeprom_log_t)
 
 static inline void el_drv_i2c_eeprom_log_write(const el_drv_i2c_eeprom_log_t *d)
 {
@@ -85,9 +79,6 @@ static inline void el_drv_i2c_eeprom_log_stop(const el_drv_i2c_eeprom_log_t *d)
     (void)el_i2c_wait(&d->state->job); /* the last record reaches the memory */
 }
 
-static inline void el_drv_i2c_eeprom_log_close(const el_drv_i2c_eeprom_log_t *d)
-{
-    (void)d;
-}
+EL_DRV_NOTHING(el_drv_i2c_eeprom_log_close, el_drv_i2c_eeprom_log_t)
 
 #endif /* EL_DRV_I2C_EEPROM_LOG_H */

@@ -13,6 +13,7 @@
 #define EL_DRV_I2C_TEMPERATURE_H
 
 #include "el_bus.h"
+#include "el_driver.h"
 
 typedef struct {
     uint8_t bus;          /* i2c[bus] */
@@ -20,15 +21,8 @@ typedef struct {
     int16_t *temperature; /* `out int16`, 1/16 degC */
 } el_drv_i2c_temperature_t;
 
-static inline void el_drv_i2c_temperature_open(const el_drv_i2c_temperature_t *d)
-{
-    (void)d;
-}
-
-static inline void el_drv_i2c_temperature_start(const el_drv_i2c_temperature_t *d)
-{
-    (void)d;
-}
+EL_DRV_NOTHING(el_drv_i2c_temperature_open, el_drv_i2c_temperature_t)
+EL_DRV_NOTHING(el_drv_i2c_temperature_start, el_drv_i2c_temperature_t)
 
 static inline void el_drv_i2c_temperature_read(const el_drv_i2c_temperature_t *d)
 {
@@ -39,19 +33,8 @@ static inline void el_drv_i2c_temperature_read(const el_drv_i2c_temperature_t *d
     }
 }
 
-static inline void el_drv_i2c_temperature_write(const el_drv_i2c_temperature_t *d)
-{
-    (void)d;
-}
-
-static inline void el_drv_i2c_temperature_stop(const el_drv_i2c_temperature_t *d)
-{
-    (void)d;
-}
-
-static inline void el_drv_i2c_temperature_close(const el_drv_i2c_temperature_t *d)
-{
-    (void)d;
-}
+EL_DRV_NOTHING(el_drv_i2c_temperature_write, el_drv_i2c_temperature_t)
+EL_DRV_NOTHING(el_drv_i2c_temperature_stop, el_drv_i2c_temperature_t)
+EL_DRV_NOTHING(el_drv_i2c_temperature_close, el_drv_i2c_temperature_t)
 
 #endif /* EL_DRV_I2C_TEMPERATURE_H */

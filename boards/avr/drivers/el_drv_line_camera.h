@@ -15,6 +15,7 @@
 #define EL_DRV_LINE_CAMERA_H
 
 #include "avr_internal.h"
+#include "el_driver.h"
 
 #ifndef EL_DRV_LINE_CAMERA_BAUD
 #define EL_DRV_LINE_CAMERA_BAUD 115200UL
@@ -41,10 +42,7 @@ static inline void el_drv_line_camera_open(const el_drv_line_camera_t *d)
     el_avr_uart_open(d->uart, EL_DRV_LINE_CAMERA_BAUD, EL_AVR_PARITY_NONE);
 }
 
-static inline void el_drv_line_camera_start(const el_drv_line_camera_t *d)
-{
-    (void)d;
-}
+EL_DRV_NOTHING(el_drv_line_camera_start, el_drv_line_camera_t)
 
 static inline void el_drv_line_camera_read(const el_drv_line_camera_t *d)
 {
@@ -82,19 +80,8 @@ static inline void el_drv_line_camera_read(const el_drv_line_camera_t *d)
     *d->offset = s->latest;
 }
 
-static inline void el_drv_line_camera_write(const el_drv_line_camera_t *d)
-{
-    (void)d;
-}
-
-static inline void el_drv_line_camera_stop(const el_drv_line_camera_t *d)
-{
-    (void)d;
-}
-
-static inline void el_drv_line_camera_close(const el_drv_line_camera_t *d)
-{
-    (void)d;
-}
+EL_DRV_NOTHING(el_drv_line_camera_write, el_drv_line_camera_t)
+EL_DRV_NOTHING(el_drv_line_camera_stop, el_drv_line_camera_t)
+EL_DRV_NOTHING(el_drv_line_camera_close, el_drv_line_camera_t)
 
 #endif /* EL_DRV_LINE_CAMERA_H */

@@ -10,6 +10,7 @@
 #define EL_DRV_PWM_H
 
 #include "avr_internal.h"
+#include "el_driver.h"
 #include "el_drv_digital.h"
 
 typedef struct {
@@ -66,15 +67,8 @@ static inline void el_drv_pwm_out_open(const el_drv_pwm_out_t *d)
     el_drv_pwm_setup(d);
 }
 
-static inline void el_drv_pwm_out_start(const el_drv_pwm_out_t *d)
-{
-    (void)d;
-}
-
-static inline void el_drv_pwm_out_read(const el_drv_pwm_out_t *d)
-{
-    (void)d;
-}
+EL_DRV_NOTHING(el_drv_pwm_out_start, el_drv_pwm_out_t)
+EL_DRV_NOTHING(el_drv_pwm_out_read, el_drv_pwm_out_t)
 
 static inline void el_drv_pwm_out_write(const el_drv_pwm_out_t *d)
 {
@@ -86,10 +80,7 @@ static inline void el_drv_pwm_out_stop(const el_drv_pwm_out_t *d)
     el_drv_pwm_set(d, 0u);
 }
 
-static inline void el_drv_pwm_out_close(const el_drv_pwm_out_t *d)
-{
-    (void)d;
-}
+EL_DRV_NOTHING(el_drv_pwm_out_close, el_drv_pwm_out_t)
 
 static inline void el_drv_motor_open(const el_drv_motor_t *d)
 {
@@ -98,15 +89,8 @@ static inline void el_drv_motor_open(const el_drv_motor_t *d)
     el_drv_pwm_setup(&d->pwm);
 }
 
-static inline void el_drv_motor_start(const el_drv_motor_t *d)
-{
-    (void)d;
-}
-
-static inline void el_drv_motor_read(const el_drv_motor_t *d)
-{
-    (void)d;
-}
+EL_DRV_NOTHING(el_drv_motor_start, el_drv_motor_t)
+EL_DRV_NOTHING(el_drv_motor_read, el_drv_motor_t)
 
 static inline void el_drv_motor_write(const el_drv_motor_t *d)
 {
@@ -125,9 +109,6 @@ static inline void el_drv_motor_stop(const el_drv_motor_t *d)
     el_drv_pwm_set(&d->pwm, 0u);
 }
 
-static inline void el_drv_motor_close(const el_drv_motor_t *d)
-{
-    (void)d;
-}
+EL_DRV_NOTHING(el_drv_motor_close, el_drv_motor_t)
 
 #endif /* EL_DRV_PWM_H */

@@ -11,6 +11,7 @@
 #define EL_DRV_SPI_EEPROM_LOG_H
 
 #include "el_bus.h"
+#include "el_driver.h"
 #include "el_drv_eeprom_log.h"
 
 #define EL_DRV_SPI_EEPROM_READ 0x03u
@@ -52,15 +53,8 @@ static inline void el_drv_spi_eeprom_log_open(const el_drv_spi_eeprom_log_t *d)
     el_eeprom_log_find(&d->state->log, d->layout.slots, el_drv_spi_eeprom_log_seq, d);
 }
 
-static inline void el_drv_spi_eeprom_log_start(const el_drv_spi_eeprom_log_t *d)
-{
-    (void)d;
-}
-
-static inline void el_drv_spi_eeprom_log_read(const el_drv_spi_eeprom_log_t *d)
-{
-    (void)d;
-}
+EL_DRV_NOTHING(el_drv_spi_eeprom_log_start, el_drv_spi_eeprom_log_t)
+EL_DRV_NOTHING(el_drv_spi_eeprom_log_read, el_drv_spi_eeprom_log_t)
 
 static inline void el_drv_spi_eeprom_log_write(const el_drv_spi_eeprom_log_t *d)
 {
@@ -83,14 +77,7 @@ static inline void el_drv_spi_eeprom_log_write(const el_drv_spi_eeprom_log_t *d)
     el_eeprom_log_advance(&s->log, d->layout.slots);
 }
 
-static inline void el_drv_spi_eeprom_log_stop(const el_drv_spi_eeprom_log_t *d)
-{
-    (void)d;
-}
-
-static inline void el_drv_spi_eeprom_log_close(const el_drv_spi_eeprom_log_t *d)
-{
-    (void)d;
-}
+EL_DRV_NOTHING(el_drv_spi_eeprom_log_stop, el_drv_spi_eeprom_log_t)
+EL_DRV_NOTHING(el_drv_spi_eeprom_log_close, el_drv_spi_eeprom_log_t)
 
 #endif /* EL_DRV_SPI_EEPROM_LOG_H */

@@ -7,6 +7,7 @@
 #define EL_DRV_ANALOG_IN_H
 
 #include "pic18_hw.h"
+#include "el_driver.h"
 
 typedef struct {
     uint8_t channel;  /* adc[channel] */
@@ -18,29 +19,15 @@ static inline void el_drv_analog_in_open(const el_drv_analog_in_t *d)
     el_pic18_adc_open(d->channel);
 }
 
-static inline void el_drv_analog_in_start(const el_drv_analog_in_t *d)
-{
-    (void)d;
-}
+EL_DRV_NOTHING(el_drv_analog_in_start, el_drv_analog_in_t)
 
 static inline void el_drv_analog_in_read(const el_drv_analog_in_t *d)
 {
     *d->value = el_pic18_adc_read(d->channel);
 }
 
-static inline void el_drv_analog_in_write(const el_drv_analog_in_t *d)
-{
-    (void)d;
-}
-
-static inline void el_drv_analog_in_stop(const el_drv_analog_in_t *d)
-{
-    (void)d;
-}
-
-static inline void el_drv_analog_in_close(const el_drv_analog_in_t *d)
-{
-    (void)d;
-}
+EL_DRV_NOTHING(el_drv_analog_in_write, el_drv_analog_in_t)
+EL_DRV_NOTHING(el_drv_analog_in_stop, el_drv_analog_in_t)
+EL_DRV_NOTHING(el_drv_analog_in_close, el_drv_analog_in_t)
 
 #endif /* EL_DRV_ANALOG_IN_H */

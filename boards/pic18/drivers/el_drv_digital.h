@@ -7,6 +7,7 @@
 #define EL_DRV_DIGITAL_H
 
 #include "pic18_hw.h"
+#include "el_driver.h"
 
 typedef struct {
     el_pic18_pin_t pin;
@@ -23,45 +24,24 @@ static inline void el_drv_digital_in_open(const el_drv_digital_in_t *d)
     el_pic18_pin_input(d->pin);
 }
 
-static inline void el_drv_digital_in_start(const el_drv_digital_in_t *d)
-{
-    (void)d;
-}
+EL_DRV_NOTHING(el_drv_digital_in_start, el_drv_digital_in_t)
 
 static inline void el_drv_digital_in_read(const el_drv_digital_in_t *d)
 {
     *d->level = el_pic18_pin_read(d->pin);
 }
 
-static inline void el_drv_digital_in_write(const el_drv_digital_in_t *d)
-{
-    (void)d;
-}
-
-static inline void el_drv_digital_in_stop(const el_drv_digital_in_t *d)
-{
-    (void)d;
-}
-
-static inline void el_drv_digital_in_close(const el_drv_digital_in_t *d)
-{
-    (void)d;
-}
+EL_DRV_NOTHING(el_drv_digital_in_write, el_drv_digital_in_t)
+EL_DRV_NOTHING(el_drv_digital_in_stop, el_drv_digital_in_t)
+EL_DRV_NOTHING(el_drv_digital_in_close, el_drv_digital_in_t)
 
 static inline void el_drv_digital_out_open(const el_drv_digital_out_t *d)
 {
     el_pic18_pin_output(d->pin);
 }
 
-static inline void el_drv_digital_out_start(const el_drv_digital_out_t *d)
-{
-    (void)d;
-}
-
-static inline void el_drv_digital_out_read(const el_drv_digital_out_t *d)
-{
-    (void)d;
-}
+EL_DRV_NOTHING(el_drv_digital_out_start, el_drv_digital_out_t)
+EL_DRV_NOTHING(el_drv_digital_out_read, el_drv_digital_out_t)
 
 static inline void el_drv_digital_out_write(const el_drv_digital_out_t *d)
 {
@@ -73,9 +53,6 @@ static inline void el_drv_digital_out_stop(const el_drv_digital_out_t *d)
     el_pic18_pin_write(d->pin, false);
 }
 
-static inline void el_drv_digital_out_close(const el_drv_digital_out_t *d)
-{
-    (void)d;
-}
+EL_DRV_NOTHING(el_drv_digital_out_close, el_drv_digital_out_t)
 
 #endif /* EL_DRV_DIGITAL_H */

@@ -9,6 +9,7 @@
 #define EL_DRV_ENCODER_H
 
 #include "pic18_hw.h"
+#include "el_driver.h"
 
 typedef struct {
     uint8_t slot; /* the hardware's encoder slot (< EL_PIC18_ENCODERS) */
@@ -21,29 +22,15 @@ static inline void el_drv_encoder_open(const el_drv_encoder_t *d)
     el_pic18_encoder_open(d->slot, d->a, d->b);
 }
 
-static inline void el_drv_encoder_start(const el_drv_encoder_t *d)
-{
-    (void)d;
-}
+EL_DRV_NOTHING(el_drv_encoder_start, el_drv_encoder_t)
 
 static inline void el_drv_encoder_read(const el_drv_encoder_t *d)
 {
     *d->count = el_pic18_encoder_count(d->slot);
 }
 
-static inline void el_drv_encoder_write(const el_drv_encoder_t *d)
-{
-    (void)d;
-}
-
-static inline void el_drv_encoder_stop(const el_drv_encoder_t *d)
-{
-    (void)d;
-}
-
-static inline void el_drv_encoder_close(const el_drv_encoder_t *d)
-{
-    (void)d;
-}
+EL_DRV_NOTHING(el_drv_encoder_write, el_drv_encoder_t)
+EL_DRV_NOTHING(el_drv_encoder_stop, el_drv_encoder_t)
+EL_DRV_NOTHING(el_drv_encoder_close, el_drv_encoder_t)
 
 #endif /* EL_DRV_ENCODER_H */

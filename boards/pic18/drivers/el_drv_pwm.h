@@ -10,6 +10,7 @@
 #define EL_DRV_PWM_H
 
 #include "pic18_hw.h"
+#include "el_driver.h"
 
 typedef struct {
     uint8_t ccp;   /* 1 or 2 */
@@ -32,15 +33,8 @@ static inline void el_drv_pwm_out_open(const el_drv_pwm_out_t *d)
     el_pic18_pwm_open(d->ccp);
 }
 
-static inline void el_drv_pwm_out_start(const el_drv_pwm_out_t *d)
-{
-    (void)d;
-}
-
-static inline void el_drv_pwm_out_read(const el_drv_pwm_out_t *d)
-{
-    (void)d;
-}
+EL_DRV_NOTHING(el_drv_pwm_out_start, el_drv_pwm_out_t)
+EL_DRV_NOTHING(el_drv_pwm_out_read, el_drv_pwm_out_t)
 
 static inline void el_drv_pwm_out_write(const el_drv_pwm_out_t *d)
 {
@@ -52,10 +46,7 @@ static inline void el_drv_pwm_out_stop(const el_drv_pwm_out_t *d)
     el_pic18_pwm_set(d->ccp, 0u);
 }
 
-static inline void el_drv_pwm_out_close(const el_drv_pwm_out_t *d)
-{
-    (void)d;
-}
+EL_DRV_NOTHING(el_drv_pwm_out_close, el_drv_pwm_out_t)
 
 static inline void el_drv_motor_open(const el_drv_motor_t *d)
 {
@@ -63,15 +54,8 @@ static inline void el_drv_motor_open(const el_drv_motor_t *d)
     el_pic18_pwm_open(d->ccp);
 }
 
-static inline void el_drv_motor_start(const el_drv_motor_t *d)
-{
-    (void)d;
-}
-
-static inline void el_drv_motor_read(const el_drv_motor_t *d)
-{
-    (void)d;
-}
+EL_DRV_NOTHING(el_drv_motor_start, el_drv_motor_t)
+EL_DRV_NOTHING(el_drv_motor_read, el_drv_motor_t)
 
 static inline void el_drv_motor_write(const el_drv_motor_t *d)
 {
@@ -85,9 +69,6 @@ static inline void el_drv_motor_stop(const el_drv_motor_t *d)
     el_pic18_pwm_set(d->ccp, 0u);
 }
 
-static inline void el_drv_motor_close(const el_drv_motor_t *d)
-{
-    (void)d;
-}
+EL_DRV_NOTHING(el_drv_motor_close, el_drv_motor_t)
 
 #endif /* EL_DRV_PWM_H */
