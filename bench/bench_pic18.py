@@ -8,7 +8,7 @@ cycles, the footprint of the debug server, the Modbus response time.
    dropped, RAM-only pointers as __data) against the hand-written C of
    bench/handwritten/ compiled by the same sdcc, on the same inputs (the
    cases of bench_codegen.py; pt100_sensor is its PIC18 variant of
-   tests/pic18/models/, the same Acquire). Convert runs its nested
+   boards/pic18/conformance/, the same Acquire). Convert runs its nested
    schedule against the hand-written nested version
    (cd_to_dat_convert_nested.c): the flat schedule's buffers, generated or
    hand-written, take 4,724 bytes, more than the part's RAM. A small libgpsim runner stamps
@@ -35,7 +35,7 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 HERE = ROOT / "bench"
 MCU = "pic18f4620"  # Convert's buffers, generated or hand-written, need more than the 4520's RAM
-VARIANTS = ROOT / "tests" / "pic18" / "models"
+VARIANTS = ROOT / "boards" / "pic18" / "conformance"
 
 PROGRAM = """
 #include "model.c"

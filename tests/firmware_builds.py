@@ -86,25 +86,41 @@ def write_model(folder: Path, text: str, files: dict[str, str] | None = None, na
     return path
 
 
-PIC18_MODELS = ROOT / "tests" / "pic18" / "models"
 _INTERFACE = {"debug": re.compile(r"^\s*debug\b"), "modbus-rtu": re.compile(r"^\s*modbus\s+rtu\b")}
 
 
+def board_conformance(board: str, board_path: list[str] | tuple[str, ...] = ()) -> tuple[Path | None, dict]:
+    """A board's folder and its board.toml [conformance] table ((None, {})
+    for a mode that is not a board, as the interpreter)."""
+    import tomllib
+
+    from easylab.board.registry import board_folders
+
+    found = board_folders(board_path).get(board)
+    if found is None:
+        return None, {}
+    return found.folder, tomllib.loads((found.folder / "board.toml").read_text()).get("conformance", {})
+
+
 def board_model(board: str, model: Path, interface: str, out: Path) -> Path:
-    """The model a suite runs on a board: ``model`` itself, but on the PIC18
-    (one EUSART) the PIC18 variant of it (tests/pic18/models/: the part's
-    pins, no interface line) with the one interface the suite tests,
-    ``debug`` or ``modbus-rtu``, as the model declares it but on uart0, and
-    no other (a model without a variant keeps its lines)."""
-    if board != "pic18":
+    """The model a suite runs on a board: ``model`` itself, but on a board
+    whose [conformance] table names an ``interface_uart`` (a part with one
+    UART, as the PIC18's EUSART) the board's variant of it (its folder's
+    ``variants``: the part's pins, no interface line) with the one interface
+    the suite tests, ``debug`` or ``modbus-rtu``, as the model declares it
+    but on that UART, and no other (a model without a variant keeps its
+    lines)."""
+    folder, table = board_conformance(board)
+    uart = table.get("interface_uart")
+    if uart is None:
         return model
-    variant = PIC18_MODELS / model.name
+    variant = folder / table.get("variants", "conformance") / model.name
     base = (variant if variant.is_file() else model).read_text(encoding="utf-8").splitlines(keepends=True)
     wanted = [line for line in model.read_text(encoding="utf-8").splitlines(keepends=True)
               if _INTERFACE[interface].match(line)]
     lines = [line for line in base if not any(p.match(line) for p in _INTERFACE.values())
              and not line.lstrip().startswith("modbus tcp")]
-    lines += [re.sub(r"\bon\s+uart\d+", "on uart0", line) for line in wanted]
+    lines += [re.sub(r"\bon\s+uart\d+", f"on {uart}", line) for line in wanted]
     out.mkdir(parents=True, exist_ok=True)
     path = out / model.name
     path.write_text("".join(lines), encoding="utf-8")

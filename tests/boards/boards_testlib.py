@@ -8,10 +8,9 @@ import atexit
 import os
 import shutil
 import tempfile
-import tomllib
 from pathlib import Path
 
-from firmware_builds import ROOT
+from firmware_builds import ROOT, board_conformance
 
 HERE = Path(__file__).resolve().parent
 CONTRACT = HERE / "port_contract.c"
@@ -59,10 +58,7 @@ def board_names() -> list[str]:
 
 def conformance(board: str) -> dict:
     """board.toml's [conformance] table of a board."""
-    from easylab.board.registry import board_folders
-
-    folder = board_folders(BOARD_PATH)[board].folder
-    return tomllib.loads((folder / "board.toml").read_text()).get("conformance", {})
+    return board_conformance(board, BOARD_PATH)[1]
 
 
 def conformance_mcu(board: str) -> list[str]:

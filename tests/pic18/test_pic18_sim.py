@@ -164,12 +164,12 @@ def test_persist_params_written_over_modbus_are_in_the_eeprom_at_the_next_run(pt
                                                  ("pt100_sensor", "pic18f4520", "2s")])
 def test_the_pic18_variants_of_the_examples_give_the_host_trace(name, mcu, duration, tmp_path, build_cache):
     """The examples that need two UARTs, as the suites run them on the PIC18
-    (tests/pic18/models/: the part's pins, no interface), against the host
+    (boards/pic18/conformance/: the part's pins, no interface), against the host
     board's trace of the same model; release builds (pneumatic_cylinder
     needs more than the PIC18F4520's 32 KB)."""
     from firmware_builds import build, stimulus_of
 
-    model = MODELS / f"{name}.elab"
+    model = ROOT / "boards" / "pic18" / "conformance" / f"{name}.elab"
     pic = build_cache.get(("pic18-variant", name, mcu),
                           lambda out: pic18_build(model, out, "--mcu", mcu, "--sim", "--release"))
     host = build_cache.get(("host-variant", name), lambda out: build(model, "host", out))
