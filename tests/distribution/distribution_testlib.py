@@ -20,9 +20,9 @@ link lan dds domain 7 {
 device m1: Motor(pwm = "PD6", dir = "PD7") on j1
 device m2: Motor(pwm = "PD6", dir = "PD7") on j2
 device e1: Encoder(pin_a = "PD2", pin_b = "PD4") on j1
-channel goal1: int16 delay 1 over bus
+channel goal1: int16 delay 2 over bus
 channel goal2: int16 delay 2 over bus
-channel pos1: int32 delay 1 over bus
+channel pos1: int32 delay 2 over bus
 var seen: int32
 export pos1 over lan
 dataflow Plan {

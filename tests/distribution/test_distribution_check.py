@@ -50,7 +50,7 @@ def test_the_same_pin_twice_on_one_node_is_still_an_error():
 
 
 def test_a_channel_between_nodes_without_a_link_names_both_ends():
-    text = variant("channel goal1: int16 delay 1 over bus", "channel goal1: int16 delay 1")
+    text = variant("channel goal1: int16 delay 2 over bus", "channel goal1: int16 delay 2")
     line, col, message, hint = only_error(text)
     assert (line, col) == position(text, "goal1")
     assert message == ("channel 'goal1' goes from task 'plan' on node 'pc' to task 'c1' on node 'j1' "
