@@ -24,11 +24,24 @@ def cmd_check(args) -> int:
             count = len(result.diagnostics.sorted())
             print(f"{path}: {count} error{'s' if count != 1 else ''}", file=sys.stderr)
             status = EXIT_MODEL_ERROR
+        elif result.model.nodes and _node_problems(result):
+            status = EXIT_MODEL_ERROR
         elif not args.quiet:
             m = result.model
             print(f"{path}: ok (model '{m.name}': {len(m.devices)} devices, {len(m.dataflows)} dataflows, "
                   f"{len(m.charts)} charts, {len(m.tasks)} tasks)")
     return status
+
+
+def _node_problems(result) -> bool:
+    """Print what keeps a distributed model's nodes off their boards; whether there was anything."""
+    from ..board.nodes import node_problems
+    from ..ir.lower import lower
+
+    problems = node_problems(lower(result.model, result.timing))
+    for problem in problems:
+        print(problem, file=sys.stderr)
+    return bool(problems)
 
 
 def _checked_model(path: str):
