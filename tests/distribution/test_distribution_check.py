@@ -132,3 +132,12 @@ def test_a_model_without_nodes_cannot_use_links():
     text = "model m\nimport std\nchannel c: int16 over bus\n"
     found = diagnostics(text)
     assert (*position(text, "over"), "channel 'c' goes over a link, but the model has no nodes", None) in found
+
+
+def test_a_device_on_the_uart_of_a_link_names_the_link():
+    text = variant('device e1: Encoder(pin_a = "PD2", pin_b = "PD4") on j1',
+                   'device e1: Encoder(pin_a = "PD2", pin_b = "PD4") on j1\ndevice cam: LineCam() on j1')
+    text = variant("var seen: int32\n", "var seen: int32\ndevice type LineCam() {\n    claims uart[0]\n"
+                   "    out offset: int16\n    driver \"line_camera\"\n}\n", text)
+    found = diagnostics(text)
+    assert [d[2] for d in found] == ["resource uart[0] is claimed by device 'cam' and by link 'bus'"]

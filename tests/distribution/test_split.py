@@ -115,3 +115,26 @@ def test_easylab_check_reports_the_nodes_that_do_not_fit(tmp_path):
     assert run.returncode == 1
     assert run.stderr.startswith("node 'j2' (board avr, atmega328p): the model does not fit")
     assert f"{path}:15: error: device 'm2' claims pwm[\"PB3\"]" in run.stderr
+
+
+def test_an_unknown_board_or_mcu_of_a_node_is_named(tmp_path):
+    text = variant("node j2 board avr mcu atmega328p", "node j2 board avr mcu atmega9")
+    problems = node_problems(lowered(tmp_path, text))
+    assert len(problems) == 1 and problems[0].startswith("node 'j2' (board avr, atmega9): ")
+    assert "atmega9" in problems[0].split(": ", 1)[1]
+
+
+def test_a_channel_between_two_slaves_takes_a_slot_of_each(tmp_path):
+    text = variant("channel pos1: int32 delay 2 over bus\n", "channel pos1: int32 delay 2 over bus\n"
+                   "channel relay: int16 delay 2 over bus\n")
+    text = variant("    e1 -> pos1\n", "    e1 -> pos1\n    g.y -> relay\n", text)
+    text = variant("    g.y -> m2.speed\n", "    g.y -> m2.speed\n    relay -> seen2\n", text)
+    text = variant("var seen: int32\n", "var seen: int32\nvar seen2: int16\n", text)
+    program = lowered(tmp_path, text)
+    j1, j2 = program.deployment.rounds["bus"].slots
+    assert [(b.channel, b.offset, b.registers) for b in j1.reads] == [("pos1", 1, 2), ("relay", 3, 1)]
+    assert [(b.channel, b.offset, b.registers) for b in j2.writes] == [("goal2", 0, 1), ("relay", 1, 1)]
+    nodes = split(program)
+    assert [(e.name, e.other_node) for e in nodes["j1"].outputs] == [("pos1", "pc"), ("relay", "j2")]
+    assert [(e.name, e.other_node) for e in nodes["j2"].inputs] == [("goal2", "pc"), ("relay", "j1")]
+    assert "relay" not in [c.name for c in nodes["pc"].program.channels]

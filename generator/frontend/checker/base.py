@@ -255,6 +255,8 @@ class CheckerBase:
 
 
 def claim_owner(c: Claim) -> str:
+    if c.owner.startswith("link "):
+        return f"link '{c.owner[5:]}'"
     return f"interface '{c.owner}'" if " " in c.owner or c.owner == "debug" else f"device '{c.owner}'"
 
 
