@@ -41,7 +41,7 @@ class NodeRules:
             value = self._link_setting(a, keys, given, f"link '{decl.name}'")
             if value is not None:
                 settings[a.key] = value
-        if decl.engine == "modbus-rtu" and "round" not in settings:
+        if decl.engine == "modbus-rtu" and "round" not in given:
             self.error(decl.name_span, f"Modbus link '{decl.name}' has no round period",
                        f"write: link {decl.name} modbus rtu baud 115200 round 20 ms {{ ... }}")
         members: list[LinkMemberInfo] = []
