@@ -289,6 +289,46 @@ def _round_table(model: CheckedModel, link: LinkInfo, crossing: list, diags: Dia
     return RoundTable(link.name, master, slots, timing)
 
 
+def round_summary(table: RoundTable) -> dict:
+    """The round table as JSON-ready data (times in µs, two decimals)."""
+    t = table.timing
+
+    def blocks(items, base):
+        return [{"channel": b.channel, "register": base + b.offset, "registers": b.registers, "values": b.tokens}
+                for b in items]
+
+    return {
+        "link": table.link, "master": table.master, "baud": t.baud, "period_us": t.period_us,
+        "character_us": _two(t.character_us), "silence_us": _two(t.silence_us), "turnaround_us": t.turnaround_us,
+        "sync_us": _two(t.sync_us), "length_us": _two(t.length_us), "sync_error_us": _two(t.error_us),
+        "slots": [{"node": s.node, "unit": s.unit, "uart": s.uart, "start_us": _two(timing.start_us),
+                   "length_us": _two(timing.length_us), "writes": blocks(s.writes, WRITE_BASE),
+                   "reads": blocks(s.reads, READ_BASE)} for s, timing in zip(table.slots, t.slots)],
+    }
+
+
+def render_round(table: RoundTable) -> str:
+    """The round table as text, for ``easylab analyze``."""
+    t = table.timing
+    lines = [f"link {table.link} (Modbus RTU, master {table.master}): a round every {t.period_us} us at {t.baud} "
+             f"baud takes {_two(t.length_us)} us",
+             f"  character {_two(t.character_us)} us, t3.5 {_two(t.silence_us)} us, turnaround {t.turnaround_us} us, "
+             f"sync error {_two(t.error_us)} us",
+             f"  sync                 0.00 us  +{_two(t.sync_us)} us  broadcast round number to 0x{SYNC_REGISTER:04X}"]
+    for s, timing in zip(table.slots, t.slots):
+        writes = ", ".join(f"{b.channel} 0x{WRITE_BASE + b.offset:04X} ({b.registers})" for b in s.writes) \
+            or f"round number 0x{WRITE_BASE:04X} (1)"
+        reads = ", ".join([f"status 0x{READ_BASE:04X} (1)"] + [f"{b.channel} 0x{READ_BASE + b.offset:04X} "
+                                                              f"({b.registers})" for b in s.reads])
+        lines.append(f"  slot {s.node} (unit {s.unit}, {s.uart})  {_two(timing.start_us)} us  +{_two(timing.length_us)} us"
+                     f"  writes {writes}; reads {reads}")
+    return "\n".join(lines) + "\n"
+
+
+def _two(value) -> float:
+    return round(float(value), 2)
+
+
 def _us(value) -> str:
     """Microseconds for messages, rounded up to a whole microsecond."""
     return f"{ceil(Fraction(value))} us"
@@ -301,5 +341,6 @@ def worst_latency_us(carriage: Carriage, publications) -> int:
 
 
 __all__ = ["Carriage", "LinkPlan", "RoundTable", "RoundTiming", "SlotTable", "SlotTiming", "character_us",
-           "frame_us", "next_start", "plan_links", "registers_per_value", "round_timing", "silence_us",
+           "frame_us", "next_start", "plan_links", "registers_per_value", "render_round", "round_summary", "round_timing",
+           "silence_us",
            "worst_latency_us"]

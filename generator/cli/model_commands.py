@@ -105,10 +105,17 @@ def _analyze(args) -> int:
             print(f"easylab: error: model '{checked.model.name}' has no dataflow '{args.dataflow}' "
                   f"(its dataflows: {names})", file=sys.stderr)
             return 1
+    from ..analysis.distribution import render_round, round_summary
+
+    # A model of nodes: its Modbus links' rounds too (not when one dataflow is asked for)
+    rounds = list(checked.timing.links.rounds.values()) if checked.timing.links and not args.dataflow else []
     if args.json:
-        print(json.dumps({"dataflows": [df.analysis.summary() for df in flows]}, indent=2))
+        found = {"dataflows": [df.analysis.summary() for df in flows]}
+        if rounds:
+            found["rounds"] = [round_summary(r) for r in rounds]
+        print(json.dumps(found, indent=2))
     else:
-        sys.stdout.write("\n".join(df.analysis.render_text() for df in flows))
+        sys.stdout.write("\n".join([df.analysis.render_text() for df in flows] + [render_round(r) for r in rounds]))
     return 0
 
 

@@ -46,3 +46,21 @@ def test_a_model_of_nodes_is_not_built_for_one_board(tmp_path):
     run = easylab("build", str(ROBOT), "--board", "host", "-o", str(tmp_path / "b"))
     assert run.returncode != 0
     assert "model 'robot' has nodes: it is built node by node, which is not built yet" in run.stdout + run.stderr
+
+
+def test_analyze_shows_the_round():
+    run = easylab("analyze", str(ROBOT))
+    assert run.returncode == 0, run.stderr
+    text = run.stdout[run.stdout.index("link field"):]
+    assert text.splitlines() == [
+        "link field (Modbus RTU, master planner): a round every 20000 us at 115200 baud takes 17097.22 us",
+        "  character 95.49 us, t3.5 1750.0 us, turnaround 1000 us, sync error 190.97 us",
+        "  sync                 0.00 us  +3513.89 us  broadcast round number to 0xE000",
+        "  slot joint1 (unit 2, uart[0])  3513.89 us  +6791.67 us  writes target1 0xE200 (1); "
+        "reads status 0xE100 (1), position1 0xE101 (1)",
+        "  slot joint2 (unit 3, uart[0])  10305.56 us  +6791.67 us  writes target2 0xE200 (1); "
+        "reads status 0xE100 (1), position2 0xE101 (1)"]
+    import json
+    data = json.loads(easylab("analyze", "--json", str(ROBOT)).stdout)
+    assert [(s["node"], s["start_us"], s["length_us"]) for s in data["rounds"][0]["slots"]] == [
+        ("joint1", 3513.89, 6791.67), ("joint2", 10305.56, 6791.67)]
