@@ -53,6 +53,9 @@ def build(program: Program, board_name: str, out_dir: Path, extra_cflags: list[s
     path: ``board_path``, EASYLAB_BOARD_PATH, the installation). A release
     build has no debug interface; ``sim`` adds the board's simulator;
     ``check`` runs the board's further checks of the C."""
+    if program.deployment is not None:
+        raise BuildError(f"model '{program.name}' has nodes: it is built node by node, which is not built yet "
+                         "(docs/distribution.md); 'easylab check' checks each node against its board")
     board = load_board(board_name, board_path).configure(mcu, sim)
     checked = board.check(program)
     generated = generate(program, board, out_dir, release, checked)

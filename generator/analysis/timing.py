@@ -11,6 +11,7 @@ from dataclasses import dataclass, field
 from math import gcd
 
 from ..core.expr import refs
+from .distribution import Carriage, LinkPlan, plan_links, worst_latency_us
 from ..frontend.model import ChannelInfo, CheckedModel, DataflowInfo, TaskInfo
 from ..core.source import Diagnostics, note
 
@@ -52,6 +53,7 @@ class Timing:
     instants: list[Instant]
     channels: list[ChannelTiming]
     utilisation: float | None       # sum of wcet / period where every task has a wcet
+    links: LinkPlan | None = None   # a model of nodes: the links' rounds and the channels crossing them
 
 
 def _ticks(us, tick_us: int) -> int:
@@ -96,7 +98,10 @@ def compute_timing(model: CheckedModel, diags: Diagnostics) -> Timing | None:
         diags.error(tasks[0].decl.name_span, f"the dispatch table would have {len(table)} instants "
                                              f"(at most {MAX_INSTANTS})")
         return None
-    channels = _check_channels(model, ordered, tick, hyper_ticks, diags)
+    links = plan_links(model, diags) if model.links else None
+    if model.links and links is None:
+        return None
+    channels = _check_channels(model, ordered, tick, hyper_ticks, diags, links)
     utilisation = None
     if all(t.wcet_us is not None for t in tasks):
         utilisation = float(sum(t.wcet_us / t.period_us for t in tasks))
@@ -109,7 +114,7 @@ def compute_timing(model: CheckedModel, diags: Diagnostics) -> Timing | None:
             ok = _check_wcet(ordered, tick, hyper_ticks, diags) and ok
     if channels is None or not ok:
         return None
-    return Timing(tick, hyper_ticks, ordered, table, channels, utilisation)
+    return Timing(tick, hyper_ticks, ordered, table, channels, utilisation, links)
 
 
 def _check_wcet(tasks: list[TaskInfo], tick: int, hyper: int, diags: Diagnostics) -> bool:
@@ -173,7 +178,7 @@ def _owner_task(df: DataflowInfo, diags: Diagnostics, ch: ChannelInfo) -> TaskIn
 
 
 def _check_channels(model: CheckedModel, tasks: list[TaskInfo], tick: int, hyper: int,
-                    diags: Diagnostics) -> list[ChannelTiming] | None:
+                    diags: Diagnostics, links: LinkPlan | None = None) -> list[ChannelTiming] | None:
     result = []
     ok = True
     for ch in model.channels.values():
@@ -205,8 +210,20 @@ def _check_channels(model: CheckedModel, tasks: list[TaskInfo], tick: int, hyper
                         notes=(note(prod_edge.decl.span, "produced here"), note(cons_edge.decl.span, "consumed here")))
             ok = False
             continue
+        carriage = links.carriages.get(ch.name) if links is not None else None
         missing, capacity = _channel_simulation(ch, tasks.index(p_task), tasks.index(c_task), tasks,
-                                                n_in, n_out, tick, hyper)
+                                                n_in, n_out, tick, hyper, carriage)
+        if missing > 0 and carriage is not None:
+            have = len(ch.initial_tokens)
+            latency = worst_latency_us(carriage, _publications(p_task, tick, hyper))
+            diags.error(ch.decl.name_span,
+                        f"channel '{ch.name}' runs dry: it crosses link '{carriage.link}' from node "
+                        f"'{carriage.producer_node}' to node '{carriage.consumer_node}', where a value reaches "
+                        f"task '{c_task.name}' up to {latency} us after task '{p_task.name}' publishes it; it "
+                        f"needs {missing} more initial token(s)",
+                        f"declare it with: delay {have + missing}")
+            ok = False
+            continue
         if missing > 0:
             have = len(ch.initial_tokens)
             diags.error(ch.decl.name_span,
@@ -232,20 +249,28 @@ def _us(us) -> str:
     return f"{us} us"
 
 
-def _channel_simulation(ch, p_index, c_index, tasks, n_in, n_out, tick, hyper):
+def _publications(task: TaskInfo, tick: int, hyper: int, hyperperiods: int = 1) -> list[int]:
+    """The task's deadlines (when its outputs are published), in microseconds."""
+    period, offset, deadline = (_ticks(task.period_us, tick), _ticks(task.offset_us, tick),
+                                _ticks(task.deadline_us, tick))
+    return [(offset + k * period + deadline) * tick for k in range(hyperperiods * hyper // period)]
+
+
+def _channel_simulation(ch, p_index, c_index, tasks, n_in, n_out, tick, hyper, carriage: Carriage | None = None):
     """Tokens over two hyperperiods: publications at the producer's deadlines
-    come before releases at the same instant. Returns (missing, capacity)."""
+    come before releases at the same instant. A channel that crosses a link
+    publishes at each value's arrival on the consumer's node instead, over
+    two periods of the pattern that the tasks and the link's round repeat.
+    Returns (missing, capacity)."""
     p, c = tasks[p_index], tasks[c_index]
+    if carriage is not None and carriage.round is not None:
+        hyper = _lcm(hyper * tick, carriage.round.period_us) // tick
     events = []
-    for task, kind in ((p, "publish"), (c, "release")):
-        period, offset, deadline = _ticks(task.period_us, tick), _ticks(task.offset_us, tick), \
-            _ticks(task.deadline_us, tick)
-        for k in range(2 * hyper // period):
-            t = offset + k * period
-            if kind == "publish":
-                events.append((t + deadline, 0, n_in))
-            else:
-                events.append((t, 1, -n_out))
+    for d in _publications(p, tick, hyper, 2):
+        events.append((carriage.arrival(d) if carriage is not None else d, 0, n_in))
+    period, offset = _ticks(c.period_us, tick), _ticks(c.offset_us, tick)
+    for k in range(2 * hyper // period):
+        events.append(((offset + k * period) * tick, 1, -n_out))
     events.sort()
     level = low = len(ch.initial_tokens)
     high = level

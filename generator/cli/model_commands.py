@@ -24,11 +24,24 @@ def cmd_check(args) -> int:
             count = len(result.diagnostics.sorted())
             print(f"{path}: {count} error{'s' if count != 1 else ''}", file=sys.stderr)
             status = EXIT_MODEL_ERROR
+        elif result.model.nodes and _node_problems(result):
+            status = EXIT_MODEL_ERROR
         elif not args.quiet:
             m = result.model
             print(f"{path}: ok (model '{m.name}': {len(m.devices)} devices, {len(m.dataflows)} dataflows, "
                   f"{len(m.charts)} charts, {len(m.tasks)} tasks)")
     return status
+
+
+def _node_problems(result) -> bool:
+    """Print what keeps a distributed model's nodes off their boards; whether there was anything."""
+    from ..board.nodes import node_problems
+    from ..ir.lower import lower
+
+    problems = node_problems(lower(result.model, result.timing))
+    for problem in problems:
+        print(problem, file=sys.stderr)
+    return bool(problems)
 
 
 def _checked_model(path: str):
@@ -92,10 +105,17 @@ def _analyze(args) -> int:
             print(f"easylab: error: model '{checked.model.name}' has no dataflow '{args.dataflow}' "
                   f"(its dataflows: {names})", file=sys.stderr)
             return 1
+    from ..analysis.distribution import render_round, round_summary
+
+    # A model of nodes: its Modbus links' rounds too (not when one dataflow is asked for)
+    rounds = list(checked.timing.links.rounds.values()) if checked.timing.links and not args.dataflow else []
     if args.json:
-        print(json.dumps({"dataflows": [df.analysis.summary() for df in flows]}, indent=2))
+        found = {"dataflows": [df.analysis.summary() for df in flows]}
+        if rounds:
+            found["rounds"] = [round_summary(r) for r in rounds]
+        print(json.dumps(found, indent=2))
     else:
-        sys.stdout.write("\n".join(df.analysis.render_text() for df in flows))
+        sys.stdout.write("\n".join([df.analysis.render_text() for df in flows] + [render_round(r) for r in rounds]))
     return 0
 
 

@@ -146,9 +146,16 @@ class Delay(Node):
 
 
 @dataclass(frozen=True)
+class Placement(Named):
+    """``on NODE`` (a task's or device's node) or ``over LINK`` (a channel's
+    link): the name it gives."""
+
+
+@dataclass(frozen=True)
 class Channel(Named):
     type: TypeRef
     delay: Delay | None
+    over: Placement | None = None
 
 
 @dataclass(frozen=True)
@@ -221,6 +228,7 @@ class DeviceInstance(Named):
     type_name: str
     type_span: Span
     args: tuple[Actual, ...]
+    node: Placement | None = None
 
 
 @dataclass(frozen=True)
@@ -328,6 +336,7 @@ class TaskAttr(Node):
 class Task(Named):
     attrs: tuple[TaskAttr, ...]
     runs: tuple[Run, ...]
+    node: Placement | None = None
 
 
 @dataclass(frozen=True)
@@ -345,8 +354,55 @@ class Interface(Node):
     attrs: tuple[InterfaceAttr, ...]
 
 
+# ---------------------------------------------------------------- distribution
+
+
+@dataclass(frozen=True)
+class NodeDecl(Named):
+    """``node NAME board B [mcu M] ["title"]``."""
+
+    board: str
+    board_span: Span
+    mcu: str | None
+    title: str | None
+
+
+@dataclass(frozen=True)
+class LinkAttr(Node):
+    key: str
+    value: Expr
+
+
+@dataclass(frozen=True)
+class LinkMember(Node):
+    """A node on a link: ``master N on uart0``, ``slave N on uart0 unit 2``,
+    ``peer N``."""
+
+    role: str  # "master" | "slave" | "peer"
+    node: str
+    node_span: Span
+    resource: Resource | None
+    attrs: tuple[LinkAttr, ...]
+
+
+@dataclass(frozen=True)
+class LinkDecl(Named):
+    engine: str  # "modbus-rtu" | "dds"
+    attrs: tuple[LinkAttr, ...]
+    members: tuple[LinkMember, ...]
+
+
+@dataclass(frozen=True)
+class Export(Node):
+    """``export NAME over LINK``: a var or channel published on a DDS link."""
+
+    name: str
+    name_span: Span
+    link: Placement
+
+
 Declaration = (Const | Data | Channel | DeviceType | DeviceInstance | ActorType
-               | Dataflow | Chart | Task)
+               | Dataflow | Chart | Task | NodeDecl | LinkDecl)
 
 
 @dataclass(frozen=True)
@@ -358,3 +414,4 @@ class Module:
     imports: tuple[Import, ...]
     declarations: tuple[Named, ...]
     interfaces: tuple[Interface, ...]
+    exports: tuple[Export, ...] = ()

@@ -55,6 +55,7 @@ class ChannelInfo:
     initial_tokens: tuple
     producers: list["EdgeInfo"] = field(default_factory=list)
     consumers: list["EdgeInfo"] = field(default_factory=list)
+    link: "LinkInfo | None" = None  # the link it crosses between nodes (`over`)
 
     @property
     def name(self) -> str:
@@ -79,15 +80,16 @@ class Claim:
     # A device's place on a shared bus: ("addr", 0x48) or ("cs", "PB2");
     # None when the claim owns the resource whole.
     select: tuple[str, object] | None = None
+    node: str | None = None  # the node whose resource it is, in a model of nodes
 
     @property
     def key(self) -> tuple:
-        return (self.kind, self.index, self.select)
+        return (self.node, self.kind, self.index, self.select)
 
     @property
     def resource(self) -> tuple:
         """The resource itself, whatever the place on it."""
-        return (self.kind, self.index)
+        return (self.node, self.kind, self.index)
 
     def __str__(self) -> str:
         text = f"{self.kind}[{_claim_value(self.index)}]"
@@ -267,6 +269,57 @@ class InterfaceInfo:
 
 
 @dataclass
+class NodeInfo:
+    """A node: one program on one board (docs/distribution.md)."""
+
+    decl: ast.NodeDecl
+    board: str
+    mcu: str | None
+
+    @property
+    def name(self) -> str:
+        return self.decl.name
+
+
+@dataclass
+class LinkMemberInfo:
+    node: NodeInfo
+    role: str  # master | slave | peer
+    uart: Claim | None  # the UART it is on (a claim of its node)
+    unit: int | None  # a slave's Modbus unit id
+    decl: ast.LinkMember
+
+
+@dataclass
+class LinkInfo:
+    """A link over an existing engine. ``settings`` are constants in their
+    run-time units: baud, parity, and durations in microseconds (round,
+    turnaround, jitter, latency) or the DDS domain."""
+
+    decl: ast.LinkDecl
+    engine: str  # modbus-rtu | dds
+    settings: dict[str, object]
+    members: list[LinkMemberInfo]
+
+    @property
+    def name(self) -> str:
+        return self.decl.name
+
+    def member(self, node: str) -> LinkMemberInfo | None:
+        return next((m for m in self.members if m.node.name == node), None)
+
+
+@dataclass
+class ExportInfo:
+    """A var or channel published on a DDS link from ``node``."""
+
+    decl: ast.Export
+    target: object  # DataInfo or ChannelInfo
+    link: LinkInfo
+    node: NodeInfo
+
+
+@dataclass
 class CheckedModel:
     """A model that passed the checker."""
 
@@ -287,3 +340,10 @@ class CheckedModel:
     interfaces: list[InterfaceInfo]
     claims: list[Claim]
     actor_type_files: dict[str, str] = field(default_factory=dict)
+    # Distribution (empty for a model without nodes): the nodes, the links,
+    # where each task and primitive device runs, the exports.
+    nodes: dict[str, NodeInfo] = field(default_factory=dict)
+    links: dict[str, LinkInfo] = field(default_factory=dict)
+    task_nodes: dict[str, str] = field(default_factory=dict)  # task name -> node name
+    device_nodes: dict[str, str] = field(default_factory=dict)  # primitive device path -> node name
+    exports: list[ExportInfo] = field(default_factory=list)

@@ -109,7 +109,7 @@ class ToAst(Transformer):
     # top level
     def start(self, meta, items):
         header = None
-        imports, decls, ifaces = [], [], []
+        imports, decls, ifaces, exports = [], [], [], []
         extra_headers = []
         for item in items:
             if isinstance(item, ast.ModelDecl):
@@ -121,13 +121,15 @@ class ToAst(Transformer):
                 imports.append(item)
             elif isinstance(item, ast.Interface):
                 ifaces.append(item)
+            elif isinstance(item, ast.Export):
+                exports.append(item)
             else:
                 decls.append(item)
         if extra_headers:
             d = extra_headers[0]
             raise ModelError([Diagnostic(d.span, "a file has at most one 'model' header",
                                          notes=(note(header.span, "the first 'model' header"),))])
-        return ast.Module(self.file, header, tuple(imports), tuple(decls), tuple(ifaces))
+        return ast.Module(self.file, header, tuple(imports), tuple(decls), tuple(ifaces), tuple(exports))
 
     def model_decl(self, meta, ch):
         title = self._string(ch[1]) if len(ch) > 1 else None
@@ -187,7 +189,9 @@ class ToAst(Transformer):
         return ("persist", True, self._span(meta))
 
     def channel_decl(self, meta, ch):
-        return ast.Channel(**self._named(meta, ch[0]), type=ch[1], delay=ch[2] if len(ch) > 2 else None)
+        delay = next((c for c in ch[2:] if isinstance(c, ast.Delay)), None)
+        over = next((c for c in ch[2:] if isinstance(c, ast.Placement)), None)
+        return ast.Channel(**self._named(meta, ch[0]), type=ch[1], delay=delay, over=over)
 
     def delay(self, meta, ch):
         value = ch[0]
@@ -278,7 +282,7 @@ class ToAst(Transformer):
 
     def device_decl(self, meta, ch):
         return ast.DeviceInstance(**self._named(meta, ch[0]), type_name=str(ch[1]),
-                                  type_span=self._tspan(ch[1]), args=ch[2])
+                                  type_span=self._tspan(ch[1]), args=ch[2], node=ch[3] if len(ch) > 3 else None)
 
     # actors
     def type_params(self, meta, ch):
@@ -389,7 +393,8 @@ class ToAst(Transformer):
     def task(self, meta, ch):
         return ast.Task(**self._named(meta, ch[0]),
                         attrs=tuple(c for c in ch[1:] if isinstance(c, ast.TaskAttr)),
-                        runs=tuple(c for c in ch[1:] if isinstance(c, ast.Run)))
+                        runs=tuple(c for c in ch[1:] if isinstance(c, ast.Run)),
+                        node=next((c for c in ch[1:] if isinstance(c, ast.Placement)), None))
 
     def iface_attr(self, meta, ch):
         key, value = ch
@@ -404,6 +409,41 @@ class ToAst(Transformer):
         resource = ch[1] if len(ch) > 1 and isinstance(ch[1], ast.Resource) else None
         attrs = tuple(c for c in ch[1:] if isinstance(c, ast.InterfaceAttr))
         return ast.Interface(self._span(meta), "modbus", mode, resource, attrs)
+
+    # distribution
+    def _placement(self, meta, ch):
+        return ast.Placement(**self._named(meta, ch[0]))
+
+    placement = channel_over = _placement
+
+    def node_mcu(self, meta, ch):
+        return ("mcu", ch[0])
+
+    def node_decl(self, meta, ch):
+        mcu = next((str(c[1]) for c in ch[2:] if isinstance(c, tuple)), None)
+        title = next((self._string(c) for c in ch[2:] if isinstance(c, Token) and c.type == "STRING"), None)
+        return ast.NodeDecl(**self._named(meta, ch[0]), board=str(ch[1]), board_span=self._tspan(ch[1]),
+                            mcu=mcu, title=title)
+
+    def link_engine(self, meta, ch):
+        return "dds" if ch[0].type == "DDS" else "modbus-" + str(ch[0])
+
+    def link_attr(self, meta, ch):
+        return ast.LinkAttr(self._span(meta), str(ch[0]), ch[1])
+
+    def link_member(self, meta, ch):
+        resource = next((c for c in ch[2:] if isinstance(c, ast.Resource)), None)
+        return ast.LinkMember(self._span(meta), str(ch[0]), str(ch[1]), self._tspan(ch[1]), resource,
+                              tuple(c for c in ch[2:] if isinstance(c, ast.LinkAttr)))
+
+    def link_decl(self, meta, ch):
+        return ast.LinkDecl(**self._named(meta, ch[0]), engine=ch[1],
+                            attrs=tuple(c for c in ch[2:] if isinstance(c, ast.LinkAttr)),
+                            members=tuple(c for c in ch[2:] if isinstance(c, ast.LinkMember)))
+
+    def export_decl(self, meta, ch):
+        link = ast.Placement(self._tspan(ch[1]), str(ch[1]), self._tspan(ch[1]))
+        return ast.Export(self._span(meta), str(ch[0]), self._tspan(ch[0]), link)
 
     # expressions
     def primary(self, meta, ch):  # "(" expr ")": the parentheses are dropped

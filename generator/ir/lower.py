@@ -13,6 +13,7 @@ from ..core import expr as I
 from ..core import types as T
 from ..frontend.loader import module_dir
 from ..frontend.model import ActorInstanceInfo, ChartInfo, CheckedModel, DataflowInfo
+from .deployment import Crossing, Deployment, ExportSpec, LinkMember, LinkSpec, NodeSpec, topic_name
 from .program import (Action, ActorInstance, ActorSpec, Buffer, Channel, Chart, Dataflow, Device, External, Fire,
                       Instant, Interface, Item, Port, Program, Schedule, Step, Task, Transition, location,
                       program_id)
@@ -287,5 +288,27 @@ def lower(model: CheckedModel, timing: Timing) -> Program:
     program = Program(model.name, model.title, model.file, 0, timing.tick_us, timing.hyperperiod_ticks,
                       low.items, low.devices, low.specs, low.instances, low.dataflows, low.charts, low.channels,
                       tasks, instants, interfaces)
+    if model.nodes:
+        program.deployment = _deployment(model, timing, program, low)
     program.program_id = program_id(program)
     return program
+
+
+def _deployment(model: CheckedModel, timing: Timing, program: Program, low: _Lowering) -> Deployment:
+    """Where each task and device runs, the links and what crosses them."""
+    nodes = [NodeSpec(n.name, n.board, n.mcu, n.decl.title) for n in model.nodes.values()]
+    links = [LinkSpec(lk.name, lk.engine, dict(lk.settings),
+                      [LinkMember(m.node.name, m.role, str(m.uart) if m.uart else None, m.unit) for m in lk.members])
+             for lk in model.links.values()]
+    task_nodes = {t.id: model.task_nodes[t.name] for t in program.tasks}
+    device_nodes = {d.id: model.device_nodes[d.path] for d in program.devices}
+    plan = timing.links
+    crossings = [Crossing(low.channel_index[name], c.link, c.producer_node, c.consumer_node)
+                 for name, c in (plan.carriages.items() if plan else ())]
+    exports = []
+    for e in model.exports:
+        kind = "channel" if e.target.name in model.channels else "var"
+        target = low.channel_index[e.target.name] if kind == "channel" else low.item_of[id(e.target)]
+        exports.append(ExportSpec(e.target.name, kind, target, e.link.name, e.node.name,
+                                  topic_name(model.name, e.node.name, e.target.name)))
+    return Deployment(nodes, links, task_nodes, device_nodes, crossings, exports, dict(plan.rounds) if plan else {})

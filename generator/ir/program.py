@@ -283,6 +283,8 @@ class Program:
     tasks: list[Task]
     instants: list[Instant]
     interfaces: list[Interface]
+    # Where it runs, for a model of several nodes (ir/deployment.py); None for one board.
+    deployment: object = None
 
     def item(self, name: str) -> Item:
         return next(i for i in self.items if i.name == name)
@@ -294,6 +296,8 @@ class Program:
 def to_json(program: Program) -> dict:
     """A canonical, JSON-serialisable dump of the IR (also hashed for the id)."""
     def conv(value):
+        if isinstance(value, Program) and value.deployment is None:  # a one-board program, as before nodes
+            return {k: conv(getattr(value, k)) for k in value.__dataclass_fields__ if k != "deployment"}
         if isinstance(value, T.ValueType):
             return value.name
         if isinstance(value, (Schedule,)):

@@ -17,12 +17,13 @@ from .charts import ChartRules
 from .data import DataRules
 from .dataflows import DataflowRules
 from .devices import DeviceRules
+from .nodes import NodeRules
 from .tasks import TaskRules
 
 __all__ = ["C_RESERVED", "Checker", "check", "kind_name"]
 
 
-class Checker(DataRules, DataflowRules, DeviceRules, ChartRules, TaskRules, CheckerBase):
+class Checker(DataRules, DataflowRules, DeviceRules, ChartRules, TaskRules, NodeRules, CheckerBase):
     """Checks one loaded model; see :func:`check`."""
 
 

@@ -17,7 +17,7 @@ from ..model import (ChannelInfo, ChartInfo, CheckedModel, Claim, ConstInfo, Dat
 _KIND_NAMES = {
     ast.Const: "const", ast.Channel: "channel", ast.DeviceType: "device type",
     ast.DeviceInstance: "device", ast.ActorType: "actor type", ast.Dataflow: "dataflow",
-    ast.Chart: "chart", ast.Task: "task",
+    ast.Chart: "chart", ast.Task: "task", ast.NodeDecl: "node", ast.LinkDecl: "link",
 }
 MAX_RATE = 65535
 # Names an actor's C code cannot see under their own name (docs/language.md §5).
@@ -66,6 +66,12 @@ class CheckerBase:
         self.tasks: dict[str, TaskInfo] = {}
         self.interfaces: list[InterfaceInfo] = []
         self.claims: list[Claim] = []
+        self.nodes: dict = {}  # distribution (checker/nodes.py)
+        self.links: dict = {}
+        self.task_nodes: dict[str, str] = {}
+        self.device_nodes: dict[str, str] = {}
+        self._top_device_nodes: dict[str, str] = {}
+        self.exports: list = []
         self._const_in_progress: list[str] = []
         self._const_failed: set[str] = set()
         self._addresses: dict[tuple[str, int, int], ast.Data] = {}  # (table, first, last) -> item
@@ -76,6 +82,10 @@ class CheckerBase:
         self.collect_names()
         for decl in self._decls(ast.Const):
             self.const_value(decl.name)
+        for decl in self._decls(ast.NodeDecl):
+            self.check_node(decl)
+        for decl in self._decls(ast.LinkDecl):
+            self.check_link(decl)
         for decl in self._decls(ast.Data):
             self.check_data(decl)
         for decl in self._decls(ast.Channel):
@@ -98,6 +108,7 @@ class CheckerBase:
         for module in self.modules:
             for iface in module.interfaces:
                 self.check_interface(iface)
+        self.check_placement()
         self.check_claims()
         if self.diags.has_errors:
             return None
@@ -109,7 +120,8 @@ class CheckerBase:
             device_types=self.device_types, devices=self.devices, device_data=self.device_data,
             top_devices=self.top_devices, actor_types=self.actor_types, dataflows=self.dataflows,
             charts=self.charts, tasks=self.tasks, interfaces=self.interfaces, claims=self.claims,
-            actor_type_files=self.actor_type_files)
+            actor_type_files=self.actor_type_files, nodes=self.nodes, links=self.links,
+            task_nodes=self.task_nodes, device_nodes=self.device_nodes, exports=self.exports)
 
     def _decls(self, cls):
         for module in self.modules:
@@ -243,6 +255,8 @@ class CheckerBase:
 
 
 def claim_owner(c: Claim) -> str:
+    if c.owner.startswith("link "):
+        return f"link '{c.owner[5:]}'"
     return f"interface '{c.owner}'" if " " in c.owner or c.owner == "debug" else f"device '{c.owner}'"
 
 
