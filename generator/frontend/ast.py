@@ -217,10 +217,20 @@ class DeviceType(Named):
 
 
 @dataclass(frozen=True)
+class SafeValue(Node):
+    """``safe level = true`` after a device's arguments: the value of one
+    of its `in` data when nothing drives it."""
+
+    datum: Path  # relative to the device
+    value: Expr
+
+
+@dataclass(frozen=True)
 class DeviceInstance(Named):
     type_name: str
     type_span: Span
     args: tuple[Actual, ...]
+    safe: tuple[SafeValue, ...] = ()
 
 
 @dataclass(frozen=True)
@@ -345,6 +355,20 @@ class Interface(Node):
     attrs: tuple[InterfaceAttr, ...]
 
 
+@dataclass(frozen=True)
+class RemoteAttr(Node):
+    key: str  # "watchdog" | "overruns"
+    value: Expr
+
+
+@dataclass(frozen=True)
+class RemoteSettings(Node):
+    """``remote watchdog 250 ms overruns 5``: remote execution's fault
+    reactions (docs/remote.md)."""
+
+    attrs: tuple[RemoteAttr, ...]
+
+
 Declaration = (Const | Data | Channel | DeviceType | DeviceInstance | ActorType
                | Dataflow | Chart | Task)
 
@@ -358,3 +382,4 @@ class Module:
     imports: tuple[Import, ...]
     declarations: tuple[Named, ...]
     interfaces: tuple[Interface, ...]
+    remote: tuple[RemoteSettings, ...] = ()

@@ -124,6 +124,7 @@ class DeviceDatum:
     port: DevicePort
     name: str  # the path the model uses for it first, e.g. "sensor.raw"
     writers: list[Writer] = field(default_factory=list)
+    safe: object = None  # `in` data: the declared safe value (a checked constant), None = zero/false
 
     @property
     def type(self) -> ValueType:
@@ -267,6 +268,16 @@ class InterfaceInfo:
 
 
 @dataclass
+class RemoteInfo:
+    """``remote watchdog T overruns K``: None where the model keeps the
+    default (docs/remote.md)."""
+
+    decl: ast.RemoteSettings
+    watchdog_us: int | None
+    overrun_limit: int | None
+
+
+@dataclass
 class CheckedModel:
     """A model that passed the checker."""
 
@@ -287,3 +298,4 @@ class CheckedModel:
     interfaces: list[InterfaceInfo]
     claims: list[Claim]
     actor_type_files: dict[str, str] = field(default_factory=dict)
+    remote: RemoteInfo | None = None

@@ -109,7 +109,7 @@ class ToAst(Transformer):
     # top level
     def start(self, meta, items):
         header = None
-        imports, decls, ifaces = [], [], []
+        imports, decls, ifaces, remote = [], [], [], []
         extra_headers = []
         for item in items:
             if isinstance(item, ast.ModelDecl):
@@ -121,13 +121,15 @@ class ToAst(Transformer):
                 imports.append(item)
             elif isinstance(item, ast.Interface):
                 ifaces.append(item)
+            elif isinstance(item, ast.RemoteSettings):
+                remote.append(item)
             else:
                 decls.append(item)
         if extra_headers:
             d = extra_headers[0]
             raise ModelError([Diagnostic(d.span, "a file has at most one 'model' header",
                                          notes=(note(header.span, "the first 'model' header"),))])
-        return ast.Module(self.file, header, tuple(imports), tuple(decls), tuple(ifaces))
+        return ast.Module(self.file, header, tuple(imports), tuple(decls), tuple(ifaces), tuple(remote))
 
     def model_decl(self, meta, ch):
         title = self._string(ch[1]) if len(ch) > 1 else None
@@ -278,7 +280,13 @@ class ToAst(Transformer):
 
     def device_decl(self, meta, ch):
         return ast.DeviceInstance(**self._named(meta, ch[0]), type_name=str(ch[1]),
-                                  type_span=self._tspan(ch[1]), args=ch[2])
+                                  type_span=self._tspan(ch[1]), args=ch[2], safe=ch[3] if len(ch) > 3 else ())
+
+    def safe_values(self, meta, ch):
+        return tuple(ch)
+
+    def safe_value(self, meta, ch):
+        return ast.SafeValue(self._span(meta), ch[0], ch[1])
 
     # actors
     def type_params(self, meta, ch):
@@ -390,6 +398,12 @@ class ToAst(Transformer):
         return ast.Task(**self._named(meta, ch[0]),
                         attrs=tuple(c for c in ch[1:] if isinstance(c, ast.TaskAttr)),
                         runs=tuple(c for c in ch[1:] if isinstance(c, ast.Run)))
+
+    def remote_attr(self, meta, ch):
+        return ast.RemoteAttr(self._span(meta), str(ch[0]), ch[1])
+
+    def remote_settings(self, meta, ch):
+        return ast.RemoteSettings(self._span(meta), tuple(ch))
 
     def iface_attr(self, meta, ch):
         key, value = ch

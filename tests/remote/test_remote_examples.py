@@ -1,7 +1,8 @@
 """Acceptance: for every example and its stimulus (and the interpreter's
 dataflow test model, for device ports with rates and float32 device data),
 the host-board proxy with `easylab remote --fast` (lock-step virtual time)
-writes the host-native firmware's trace, byte for byte."""
+writes the host-native firmware's trace, byte for byte; and so for a model
+that declares a safe value."""
 
 from __future__ import annotations
 
@@ -10,6 +11,7 @@ import pytest
 from remote_testlib import EXAMPLES, Proxy, device_columns, proxy_of, remote
 
 DATA = EXAMPLES.parent / "tests" / "interp" / "data"
+SAFE = EXAMPLES.parent / "tests" / "remote" / "data"
 CASES = {  # name: (model, stimulus or None, duration)
     **{name: (EXAMPLES / f"{name}.elab", EXAMPLES / f"{name}.stimulus.csv", duration)
        for name, duration in (("blink", "3s"), ("line_follower", "3s"), ("pneumatic_cylinder", "3600ms"),
@@ -17,6 +19,8 @@ CASES = {  # name: (model, stimulus or None, duration)
     "cd_to_dat": (EXAMPLES / "cd_to_dat.elab", None, "200ms"),
     # device ports with rates, float32 device data, tasks of several periods
     "multirate": (DATA / "multirate.elab", DATA / "multirate.stimulus.csv", "1500ms"),
+    # a declared safe value: the led's initial value in the firmware and at the proxy's boot
+    "safe_blink": (SAFE / "safe_blink.elab", EXAMPLES / "blink.stimulus.csv", "1500ms"),
 }
 
 

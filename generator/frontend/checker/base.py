@@ -12,7 +12,7 @@ from ...core import types as T
 from .. import ast
 from ..expressions import ExprTyper, Symbol
 from ..model import (ChannelInfo, ChartInfo, CheckedModel, Claim, ConstInfo, DataflowInfo, DataInfo, DeviceDatum,
-                     InterfaceInfo, PrimitiveDevice, TaskInfo)
+                     InterfaceInfo, PrimitiveDevice, RemoteInfo, TaskInfo)
 
 _KIND_NAMES = {
     ast.Const: "const", ast.Channel: "channel", ast.DeviceType: "device type",
@@ -65,6 +65,7 @@ class CheckerBase:
         self.charts: dict[str, ChartInfo] = {}
         self.tasks: dict[str, TaskInfo] = {}
         self.interfaces: list[InterfaceInfo] = []
+        self.remote: RemoteInfo | None = None
         self.claims: list[Claim] = []
         self._const_in_progress: list[str] = []
         self._const_failed: set[str] = set()
@@ -98,6 +99,8 @@ class CheckerBase:
         for module in self.modules:
             for iface in module.interfaces:
                 self.check_interface(iface)
+            for settings in module.remote:
+                self.check_remote_settings(settings)
         self.check_claims()
         if self.diags.has_errors:
             return None
@@ -109,7 +112,7 @@ class CheckerBase:
             device_types=self.device_types, devices=self.devices, device_data=self.device_data,
             top_devices=self.top_devices, actor_types=self.actor_types, dataflows=self.dataflows,
             charts=self.charts, tasks=self.tasks, interfaces=self.interfaces, claims=self.claims,
-            actor_type_files=self.actor_type_files)
+            actor_type_files=self.actor_type_files, remote=self.remote)
 
     def _decls(self, cls):
         for module in self.modules:
