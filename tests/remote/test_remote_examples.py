@@ -69,6 +69,31 @@ def test_remote_trace_equals_native(name, ext, build_cache, tmp_path):
         assert expected.count(b"\n") > 20, "the stimulus should make the model move"
 
 
+def test_a_tcp_link_gives_the_pty_links_trace(build_cache, tmp_path):
+    """The host-board proxy on `--link tcp:PORT`, the host on
+    `socket://127.0.0.1:PORT`: a real socket, the same lock-step trace as
+    over a pty (and as the firmware)."""
+    name = "pt100_sensor"
+    model, stimulus, duration = CASES[name]
+    devices = device_columns(stimulus, model, tmp_path / "devices.csv")
+    traces = {}
+    for tcp in (False, True):
+        proxy = Proxy(proxy_of(build_cache, model), tmp_path / "link", "--fast", "--stimulus", str(devices), tcp=tcp)
+        try:
+            assert str(proxy.link).startswith("socket://127.0.0.1:") == tcp
+            traces[tcp] = tmp_path / f"remote_{'tcp' if tcp else 'pty'}.csv"
+            proc = remote(model, proxy.link, "--fast", "--duration", duration, "--trace", str(traces[tcp]),
+                          "--stimulus", str(stimulus))
+            assert proc.returncode == 0, proc.stderr
+            status, err = proxy.finish()  # STOP ends it, over a socket too
+            assert status == 0, err
+        finally:
+            proxy.kill()
+    native = tmp_path / "native.csv"
+    run_native(native_of(build_cache, model), native, duration, stimulus)
+    assert traces[True].read_bytes() == traces[False].read_bytes() == native.read_bytes()
+
+
 def test_real_time_paced_by_the_proxy(build_cache, tmp_path):
     """Without --fast the proxy's clock paces the run (the proxy does not
     wait for the host); the trace is the same."""

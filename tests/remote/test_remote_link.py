@@ -348,7 +348,11 @@ def test_easylab_proxy_builds_and_names_the_device_model(tmp_path):
     assert wrong.returncode == 1 and "unknown board 'nosuch'" in wrong.stderr
     not_a_proxy = subprocess.run([str(tmp_path / "p" / "blink_proxy"), "--help"], capture_output=True, text=True,
                                  timeout=30, stdin=subprocess.DEVNULL)
-    assert "--link pty:LINK" in not_a_proxy.stdout
+    assert "--link pty:LINK|tcp:PORT" in not_a_proxy.stdout
+    bad_port = subprocess.run([str(tmp_path / "p" / "blink_proxy"), "--link", "tcp:99999"], capture_output=True,
+                              text=True, timeout=30, stdin=subprocess.DEVNULL)
+    assert bad_port.returncode == 2
+    assert "--link tcp:99999: not a port number (0..65535)" in bad_port.stderr
 
 
 def test_firmware_that_is_not_a_proxy_says_so(build_cache, tmp_path):
