@@ -64,6 +64,10 @@ def test_the_host_side_serves_the_debug_interface(build_cache, tmp_path):
         moved = client.replace_model(BLINK.read_bytes().replace(b'"PB5"', b'"PB4"'))
         assert moved.state == "refused" and "the edit changes the device model (devices led)" in moved.message
         assert host.poll() is None and not client.flags().halted
+        deadline = time.monotonic() + 60
+        while client.flags().tick < 400:  # logical time past 0.4 s (1 ms ticks)
+            assert time.monotonic() < deadline, "the run does not go on"
+            time.sleep(0.05)
         host.send_signal(signal.SIGTERM)  # the run ends at the next instant; STOP ends the proxy
         _, err = host.communicate(timeout=120)
         assert host.returncode == 0, err
