@@ -73,8 +73,8 @@ def test_a_declared_safe_value_and_the_fault_settings_change_the_device_model(tm
                          "safe.elab")
     assert safe.item("led.level").initial is True
     assert device_model(safe).id != base.id and device_model(safe).device_ids != base.device_ids
-    _, unsafe = lower_text(tmp_path, text.replace('DigitalOut(pin = "PB5")', 'DigitalOut(pin = "PB5") safe level = false'),
-                           "unsafe.elab")
+    _, unsafe = lower_text(tmp_path, text.replace('DigitalOut(pin = "PB5")',
+                                                  'DigitalOut(pin = "PB5") safe level = false'), "unsafe.elab")
     assert device_model(unsafe).id == base.id  # the default, declared
     _, k5 = lower_text(tmp_path, text + "remote overruns 5\n", "k5.elab")
     assert device_model(k5).overrun_limit == 5 and device_model(k5).id != base.id
