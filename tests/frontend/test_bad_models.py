@@ -747,6 +747,17 @@ CASES = [
         }
         """),
          E(5, 5, "device 'sensor' has no part or datum 'rwa'", hint="did you mean 'raw'?")),
+    case('actor-unknown-bound-used', dedent("""\
+        actor type A<T: numbr>() {
+            in  x: T
+            out y: T
+            step {{ y = x; }}
+        }
+        dataflow D {
+            a = A<int16>()
+        }
+        """),
+         E(1, 14, "unknown type bound 'numbr'", hint="did you mean 'number'?")),
     case('safe-value-out-of-range', dedent("""\
         import std
         device m: Motor(pwm = "PB1", dir = "PB2") safe speed = 40000
