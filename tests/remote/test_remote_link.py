@@ -13,7 +13,7 @@ from easylab.core.crc import crc16
 from easylab.pipeline import lower_file
 from easylab.remote import protocol as P
 from easylab.remote.device_model import device_model
-from easylab.remote.link import Link, NoAnswer
+from easylab.remote.link import Link, NoAnswer, RemoteError
 from easylab.remote.protocol import K
 from easylab.remote.proxy import build_proxy
 from remote_testlib import EXAMPLES, Proxy, proxy_of, remote
@@ -364,3 +364,36 @@ def test_firmware_that_is_not_a_proxy_says_so(build_cache, tmp_path):
     assert proc.returncode == 2
     assert "--link: this program is not a remote-execution proxy (easylab proxy builds one)" in proc.stderr
     assert not (tmp_path / "link").exists()
+
+
+def test_the_tcp_link_takes_one_host_at_a_time(build_cache, tmp_path):
+    """On `--link tcp:PORT` a host that leaves does not end the proxy, and a
+    new connection replaces the one before it."""
+    program, _ = lower_file(BLINK)
+    model = device_model(program)
+    proxy = Proxy(proxy_of(build_cache, BLINK), tmp_path / "link", "--fast", tcp=True)
+    links = []
+    try:
+        gone = Link(str(proxy.link), model)
+        gone.connect()
+        gone.close()  # a host that went away
+        stale = Link(str(proxy.link), model)
+        links.append(stale)
+        stale.connect()
+        current = Link(str(proxy.link), model)
+        links.append(current)
+        current.connect()  # replaces `stale`, whose connection the proxy closed
+        with pytest.raises(RemoteError):
+            stale.connect(0.6)
+        assert proxy.proc.poll() is None
+        current.start(lock_step=True)
+        assert current.up(0, 5.0)[0] == K.STATE_RUNNING
+        current.down(0, 1, b"\x01")
+        assert current.up(1, 5.0)[0] == K.STATE_RUNNING
+        current.stop()
+        status, err = proxy.finish()
+        assert status == 0, err
+    finally:
+        for link in links:
+            link.close()
+        proxy.kill()
