@@ -237,6 +237,24 @@ void el_remote_poll(void)
 
 void el_remote_boot(void)
 {
+    uint8_t t;
+    /* A session starts from a known state whatever ran before (a fuzz
+     * target boots one per input; a board's RAM is zeroed anyway). */
+    state = EL_RMT_STATE_SAFE;
+    started = false;
+    mode = EL_RMT_MODE_REAL_TIME;
+    for (t = 0u; t < EL_RMT_COUNTER_COUNT; t++) {
+        counters[t] = 0u;
+    }
+    for (t = 0u; t < MAX_TASKS; t++) {
+        pending[t] = false;
+        arrived[t] = false;
+    }
+    last_frame_tick = 0u;
+    overruns_in_a_row = 0u;
+    released_now = 0u;
+    up_sent = false;
+    down_done = false;
     el_cobs_decoder_init(&rx, rx_buf, (uint16_t)sizeof rx_buf);
     apply_safe_values();
     while (state != EL_RMT_STATE_RUNNING) { /* the clock starts at START */

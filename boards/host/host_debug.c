@@ -38,10 +38,8 @@
 
 #if defined(EL_DEBUG_SERVER) && EL_DEBUG_SERVER
 
-#include <arpa/inet.h>
 #include <errno.h>
 #include <fcntl.h>
-#include <netinet/in.h>
 #include <poll.h>
 #include <signal.h>
 #include <stdio.h>
@@ -196,34 +194,8 @@ static bool open_pty(const char *link)
 
 static bool open_tcp(const char *port_text)
 {
-    char *end;
-    long port;
-    int one = 1;
-    struct sockaddr_in addr;
-    socklen_t len = sizeof addr;
-
-    errno = 0;
-    port = strtol(port_text, &end, 10);
-    if (port_text[0] == '\0' || *end != '\0' || errno != 0 || port < 0 || port > 65535) {
-        el_host_error("--debug tcp:%s: not a port number (0..65535)", port_text);
-        return false;
-    }
-    listen_fd = socket(AF_INET, SOCK_STREAM, 0);
-    memset(&addr, 0, sizeof addr);
-    addr.sin_family = AF_INET;
-    addr.sin_port = htons((uint16_t)port);
-    addr.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-    if (listen_fd < 0 || setsockopt(listen_fd, SOL_SOCKET, SO_REUSEADDR, &one, sizeof one) != 0 ||
-        bind(listen_fd, (struct sockaddr *)&addr, sizeof addr) != 0 || listen(listen_fd, 2) != 0 ||
-        !set_nonblocking(listen_fd)) {
-        el_host_error("--debug tcp:%s: cannot listen on 127.0.0.1:%s: %s", port_text, port_text, strerror(errno));
-        return false;
-    }
-    if (port == 0 && getsockname(listen_fd, (struct sockaddr *)&addr, &len) == 0) {
-        fprintf(stderr, "%s: debug interface on 127.0.0.1:%u\n", el_host_prog, (unsigned)ntohs(addr.sin_port));
-        fflush(stderr);
-    }
-    return true;
+    listen_fd = el_host_listen_tcp("--debug", port_text, "debug interface");
+    return listen_fd >= 0;
 }
 
 /* After a reset: take over the descriptors of the process we replaced. */

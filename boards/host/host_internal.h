@@ -44,6 +44,11 @@ bool el_host_watching(void);
  * slave descriptor (-1: nothing to wait for). */
 void el_host_drain_pty(int slave);
 
+/* Listen on 127.0.0.1:PORT for `option tcp:PORT` (port_text "0": any free
+ * port, printed on stderr as "PROG: WHAT on 127.0.0.1:N"): a non-blocking
+ * socket, closed on exec, or -1 after reporting the error. */
+int el_host_listen_tcp(const char *option, const char *port_text, const char *what);
+
 /* ---- messages (host_port.c) ---- */
 
 /* The program name used in messages: argv[0] without its directory. */

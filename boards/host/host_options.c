@@ -74,7 +74,8 @@ const el_host_option_t el_host_options[] = {
      el_host_opt_modbus_rtu},
     {"--hmi", "pty:LINK", "the example HMI (get NAME / set NAME VALUE lines) on a new pty (symlink LINK)", false,
      el_host_opt_hmi},
-    {"--link", "pty:LINK", "a remote-execution proxy's link to easylab remote on a new pty (symlink LINK)", false,
+    {"--link", "pty:LINK|tcp:PORT",
+     "a remote-execution proxy's link to easylab remote: a new pty (symlink LINK) or 127.0.0.1:PORT", false,
      el_host_opt_link},
     {"--help", NULL, "show this help and exit", false, opt_help},
 };

@@ -4,6 +4,11 @@
  *   --link pty:LINK   make a pseudo-terminal and a symlink LINK to it
  *                     (removed at exit); the host side (easylab remote
  *                     --target LINK) opens LINK
+ *   --link tcp:PORT   listen on 127.0.0.1:PORT (0: any free port, printed
+ *                     on stderr); the host side connects with --target
+ *                     socket://127.0.0.1:PORT. One host at a time: a new
+ *                     connection replaces the old one (the watchdog covers
+ *                     the gap in real time)
  *
  * Only a proxy build (easylab proxy: -DEL_REMOTE_PROXY=1) has a link; in
  * other firmware the option says so. STOP from the host ends the run at
@@ -20,29 +25,70 @@
 #include "el_remote.h"
 
 #include <errno.h>
+#include <fcntl.h>
+#include <netinet/in.h>
+#include <netinet/tcp.h>
 #include <poll.h>
 #include <signal.h>
 #include <string.h>
+#include <sys/socket.h>
 #include <unistd.h>
 
-static int conn_fd = -1;   /* pty master */
-static int keep_fd = -1;   /* our own slave descriptor: no hangup between clients */
+static int conn_fd = -1;   /* pty master, or the host's TCP connection */
+static int keep_fd = -1;   /* pty: our own slave descriptor (no hangup between clients) */
+static int listen_fd = -1; /* TCP */
+
+static void drop_conn(void)
+{
+    el_host_unwatch_fd(conn_fd);
+    (void)close(conn_fd);
+    conn_fd = -1;
+}
 
 static void on_conn(int fd, short revents, void *ctx)
 {
     (void)fd;
-    (void)revents;
     (void)ctx; /* bytes are taken by el_remote_poll (from el_idle, right after this) */
+    if (listen_fd >= 0 && (revents & (POLLHUP | POLLERR | POLLNVAL)) != 0 && (revents & POLLIN) == 0)
+        drop_conn(); /* the host closed the connection */
+}
+
+static void on_listen(int fd, short revents, void *ctx)
+{
+    int client, one = 1, fl;
+    (void)ctx;
+    if ((revents & POLLIN) == 0)
+        return;
+    client = accept(fd, NULL, NULL);
+    if (client < 0)
+        return;
+    /* Frames are small and answer each other: no Nagle delay. */
+    if ((fl = fcntl(client, F_GETFL)) < 0 || fcntl(client, F_SETFL, fl | O_NONBLOCK) != 0 ||
+        setsockopt(client, IPPROTO_TCP, TCP_NODELAY, &one, sizeof one) != 0) {
+        (void)close(client);
+        return;
+    }
+    if (conn_fd >= 0)
+        drop_conn(); /* a new host replaces the old one */
+    conn_fd = client;
+    if (!el_host_watch_fd(client, on_conn, NULL)) {
+        (void)close(client);
+        conn_fd = -1;
+    }
 }
 
 bool el_host_opt_link(const char *arg)
 {
-    if (strncmp(arg, "pty:", 4) != 0 || arg[4] == '\0') {
-        el_host_error("--link %s: give pty:LINK", arg);
-        return false;
+    if (strncmp(arg, "pty:", 4) == 0 && arg[4] != '\0') {
+        conn_fd = el_host_make_pty("--link", arg + 4, &keep_fd);
+        return conn_fd >= 0 && el_host_watch_fd(conn_fd, on_conn, NULL);
     }
-    conn_fd = el_host_make_pty("--link", arg + 4, &keep_fd);
-    return conn_fd >= 0 && el_host_watch_fd(conn_fd, on_conn, NULL);
+    if (strncmp(arg, "tcp:", 4) == 0) {
+        listen_fd = el_host_listen_tcp("--link", arg + 4, "link");
+        return listen_fd >= 0 && el_host_watch_fd(listen_fd, on_listen, NULL);
+    }
+    el_host_error("--link %s: give pty:LINK or tcp:PORT", arg);
+    return false;
 }
 
 uint16_t el_remote_port_read(uint8_t *buf, uint16_t max)
@@ -51,6 +97,8 @@ uint16_t el_remote_port_read(uint8_t *buf, uint16_t max)
     if (conn_fd < 0 || max == 0u)
         return 0u;
     r = read(conn_fd, buf, max);
+    if (listen_fd >= 0 && (r == 0 || (r < 0 && errno != EAGAIN && errno != EWOULDBLOCK && errno != EINTR)))
+        drop_conn(); /* the host closed the connection, or it broke */
     return r > 0 ? (uint16_t)r : 0u;
 }
 
@@ -59,7 +107,9 @@ bool el_remote_port_write(const uint8_t *frame, uint16_t len)
     size_t done = 0u;
     int tries = 0;
     while (conn_fd >= 0 && done < len) {
-        ssize_t w = write(conn_fd, frame + done, len - done);
+        /* A socket whose host went away fails with EPIPE, never SIGPIPE. */
+        ssize_t w = listen_fd >= 0 ? send(conn_fd, frame + done, len - done, MSG_NOSIGNAL)
+                                   : write(conn_fd, frame + done, len - done);
         if (w > 0) {
             done += (size_t)w;
             continue;
@@ -80,6 +130,8 @@ bool el_remote_port_write(const uint8_t *frame, uint16_t len)
 void el_remote_port_end(void)
 {
     el_host_drain_pty(keep_fd); /* the host reads STOP's answer before the pty goes */
+    if (listen_fd >= 0 && conn_fd >= 0)
+        (void)shutdown(conn_fd, SHUT_WR); /* STOP's answer, then the end of the stream */
     (void)raise(SIGTERM); /* the port ends the run at the next tick */
 }
 

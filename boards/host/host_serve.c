@@ -1,5 +1,6 @@
 /* EasyLab host board: the file descriptors served between instants (the
- * debug and Modbus transports, the HMI) and el_port_idle.
+ * debug and Modbus transports, the HMI, a proxy's link), el_port_idle and
+ * the TCP listening sockets of the options that take tcp:PORT.
  *
  * Shared by the host firmware (host_port.c waits for ticks through it) and
  * by the interfaces library of local execution (host_interp.c), which
@@ -12,9 +13,18 @@
 #include "host_internal.h"
 #include "el_dispatch.h"
 
+#include <arpa/inet.h>
+#include <errno.h>
+#include <fcntl.h>
+#include <netinet/in.h>
 #include <poll.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
 #include <sys/ioctl.h>
+#include <sys/socket.h>
 #include <time.h>
+#include <unistd.h>
 
 /* ---- file descriptors served between instants ---- */
 
@@ -106,4 +116,39 @@ void el_host_drain_pty(int slave)
             break;
         idle = pending == 0 ? idle + 1 : 0;
     }
+}
+
+int el_host_listen_tcp(const char *option, const char *port_text, const char *what)
+{
+    char *end;
+    long port;
+    int one = 1, fd, fl, fd_fl;
+    struct sockaddr_in addr;
+    socklen_t len = sizeof addr;
+
+    errno = 0;
+    port = strtol(port_text, &end, 10);
+    if (port_text[0] == '\0' || *end != '\0' || errno != 0 || port < 0 || port > 65535) {
+        el_host_error("%s tcp:%s: not a port number (0..65535)", option, port_text);
+        return -1;
+    }
+    fd = socket(AF_INET, SOCK_STREAM, 0);
+    memset(&addr, 0, sizeof addr);
+    addr.sin_family = AF_INET;
+    addr.sin_port = htons((uint16_t)port);
+    addr.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+    if (fd < 0 || setsockopt(fd, SOL_SOCKET, SO_REUSEADDR, &one, sizeof one) != 0 ||
+        bind(fd, (struct sockaddr *)&addr, sizeof addr) != 0 || listen(fd, 2) != 0 ||
+        (fl = fcntl(fd, F_GETFL)) < 0 || fcntl(fd, F_SETFL, fl | O_NONBLOCK) != 0 ||
+        (fd_fl = fcntl(fd, F_GETFD)) < 0 || fcntl(fd, F_SETFD, fd_fl | FD_CLOEXEC) != 0) {
+        el_host_error("%s tcp:%s: cannot listen on 127.0.0.1:%s: %s", option, port_text, port_text, strerror(errno));
+        if (fd >= 0)
+            (void)close(fd);
+        return -1;
+    }
+    if (port == 0 && getsockname(fd, (struct sockaddr *)&addr, &len) == 0) {
+        fprintf(stderr, "%s: %s on 127.0.0.1:%u\n", el_host_prog, what, (unsigned)ntohs(addr.sin_port));
+        fflush(stderr);
+    }
+    return fd;
 }

@@ -12,6 +12,7 @@ import sys
 from pathlib import Path
 
 from .common import EXIT_OK, EXIT_USAGE, CliError, add_board_options, default_out_dir, lower_model, report_built
+from .run_command import add_debug_arguments
 
 EXIT_ERROR = 1
 
@@ -54,6 +55,9 @@ def add_parsers(sub) -> None:
     r.add_argument("--watch", action="store_true",
                    help="replace the running application when its files change (an edit of the device model is "
                         "refused: the proxy would have to be rebuilt)")
+    add_debug_arguments(r.add_argument_group(
+        "debug interface (the firmware's server, as `easylab run` serves it; in real time a halt lets the "
+        "proxy apply its safe values)"))
     r.set_defaults(func=cmd_remote)
 
 
@@ -77,13 +81,15 @@ def cmd_proxy(args) -> int:
 def cmd_remote(args) -> int:
     """Run the application against a proxy until the duration or a signal."""
     from ..interp.clock import Clock
+    from ..interp.engine import InterfaceOptions
     from ..interp.trace import TraceError, TraceWriter, columns_of
     from ..remote.budget import refusal
     from ..remote.device_model import device_model
     from ..remote.host import RemoteEngine
     from ..remote.link import Link, RemoteError
     from ..interp.watch import ModelWatcher
-    from .run_command import SetupError, _on_signals, duration_arg, finish_run, plugins_of, stimulus_arg
+    from .run_command import (SetupError, _on_signals, _restore, boot_served, duration_arg, finish_run, plugins_of,
+                              stimulus_arg)
 
     try:
         duration = duration_arg(args, "remote")
@@ -116,11 +122,19 @@ def cmd_remote(args) -> int:
         _say(f"easylab remote: at {report.time_us / 1e6:.6f} s the program id changed from 0x{report.old_id:08x} "
              f"to 0x{report.new_id:08x} (the proxy runs on)")
 
-    engine = RemoteEngine(program, model, link, stimulus, plugin_cache=cache, trace=trace, say=_say,
-                          on_replace=replaced)
+    interfaces = None
+    if args.debug or args.maps:
+        interfaces = InterfaceOptions(debug=args.debug, maps=Path(args.maps) if args.maps else None,
+                                      model=Path(args.file))
     clock = Clock(None)  # virtual: the proxy's frames pace the run
-    engine.clock = clock
-    handlers = _on_signals(clock)
+    handlers = _on_signals(clock)  # before the interfaces chain their own
+    engine, failed = boot_served(lambda: RemoteEngine(program, model, link, stimulus, plugin_cache=cache, trace=trace,
+                                                      say=_say, on_replace=replaced, interfaces=interfaces),
+                                 clock, args, trace, "remote")
+    if engine is None:
+        _restore(handlers)
+        link.close()
+        return failed
     watcher = ModelWatcher(args.file, engine, _say) if args.watch else None
     status = EXIT_OK
     try:

@@ -82,17 +82,22 @@ def add_parser(sub) -> None:
     p.add_argument("--schedule", choices=SCHEDULE_KINDS,
                    help="schedule kind of every dataflow (default: each dataflow's own, else sas)")
     served = p.add_argument_group("debug and service interfaces (the firmware's servers, as on the host board)")
-    served.add_argument("--debug", metavar="pty:LINK|tcp:PORT[,halt]",
-                        help="serve the debug interface on a new pseudo-terminal (LINK: a symlink to it) or on "
-                             "127.0.0.1:PORT; ,halt halts before the first instant")
+    add_debug_arguments(served)
     served.add_argument("--modbus-tcp", metavar="PORT", help="serve the model's `modbus tcp` interface on "
                                                              "127.0.0.1:PORT (default: the model's port)")
     served.add_argument("--modbus-rtu", metavar="pty:LINK", help="serve its `modbus rtu` interface on a new "
                                                                  "pseudo-terminal")
     served.add_argument("--nvram", metavar="FILE", help="keep `persist` params in FILE (default: in memory)")
-    served.add_argument("--maps", metavar="DIR", help="write debug_map.json and service_map.* into DIR (at start "
-                                                      "and at each replacement)")
     p.set_defaults(func=cmd_run)
+
+
+def add_debug_arguments(group) -> None:
+    """``--debug`` and ``--maps``, as ``run`` and ``remote`` serve them."""
+    group.add_argument("--debug", metavar="pty:LINK|tcp:PORT[,halt]",
+                       help="serve the debug interface on a new pseudo-terminal (LINK: a symlink to it) or on "
+                            "127.0.0.1:PORT; ,halt halts before the first instant")
+    group.add_argument("--maps", metavar="DIR", help="write debug_map.json and service_map.* into DIR (at start "
+                                                     "and at each replacement)")
 
 
 def _say(text: str) -> None:
@@ -153,8 +158,7 @@ def cmd_run(args) -> int:
     from pathlib import Path
 
     from ..interp.clock import Clock
-    from ..interp.engine import Engine, InterfaceError, InterfaceOptions
-    from ..interp.plugins import PluginError
+    from ..interp.engine import Engine, InterfaceOptions
     from ..interp.trace import TraceError, TraceWriter, columns_of
     from ..interp.watch import ModelWatcher
 
@@ -202,24 +206,11 @@ def cmd_run(args) -> int:
                                       Path(args.maps) if args.maps else None, Path(args.file), args.schedule)
     clock = Clock(None if args.fast else (args.pace or 1.0))
     previous_handlers = _on_signals(clock)  # before the interfaces chain their own
-    try:
-        engine = Engine(program, cache, stimulus, trace, on_replace=replaced, interfaces=interfaces, say=_say)
-        engine.clock = clock
-        engine.boot()
-    except (PluginError, InterfaceError, OSError) as err:
-        if isinstance(err, PluginError):
-            _say(f"easylab: error: {err}")
-        elif isinstance(err, OSError):
-            _say(f"easylab run: --maps {args.maps}: {err.strerror or err}")
+    engine, failed = boot_served(lambda: Engine(program, cache, stimulus, trace, on_replace=replaced,
+                                                interfaces=interfaces, say=_say), clock, args, trace, "run")
+    if engine is None:
         _restore(previous_handlers)
-        if trace is not None:  # nothing ran: no trace file, as the host board
-            trace.file.close()
-            Path(args.trace).unlink(missing_ok=True)
-        return EXIT_ERROR if isinstance(err, PluginError) else EXIT_USAGE
-    if interfaces is not None and interfaces.maps is None:
-        maps = engine.io.library.directory
-        _say(f"easylab run: maps of program 0x{program.program_id:08x}: {maps}/debug_map.json, "
-             f"{maps}/service_map.json")
+        return failed
     watcher = ModelWatcher(args.file, engine, _say, args.schedule) if args.watch else None
     status = EXIT_OK
     try:
@@ -235,6 +226,37 @@ def cmd_run(args) -> int:
     if engine.overruns:
         _say("easylab run: overruns: " + " ".join(f"{name} {n}" for name, n in engine.overruns.items()))
     return status
+
+
+def boot_served(make_engine, clock, args, trace, command: str):
+    """(engine, None): the engine ``make_engine`` makes, on ``clock`` and
+    booted with the interfaces it serves open (``--debug``, ...), having
+    said where their maps are when ``--maps`` does not; or (None, exit
+    status) when that fails (said on stderr; nothing ran, so no trace file
+    is left, as on the host board)."""
+    from pathlib import Path
+
+    from ..interp.engine import InterfaceError
+    from ..interp.plugins import PluginError
+
+    try:
+        engine = make_engine()
+        engine.clock = clock
+        engine.boot()
+    except (PluginError, InterfaceError, OSError) as err:
+        if isinstance(err, PluginError):
+            _say(f"easylab: error: {err}")
+        elif isinstance(err, OSError):
+            _say(f"easylab {command}: --maps {args.maps}: {err.strerror or err}")
+        if trace is not None:
+            trace.file.close()
+            Path(args.trace).unlink(missing_ok=True)
+        return None, EXIT_ERROR if isinstance(err, PluginError) else EXIT_USAGE
+    if engine.interfaces is not None and engine.interfaces.maps is None:
+        maps = engine.io.library.directory
+        _say(f"easylab {command}: maps of program 0x{engine.program.program_id:08x}: {maps}/debug_map.json, "
+             f"{maps}/service_map.json")
+    return engine, None
 
 
 def finish_run(engine, watcher, handlers: dict, command: str) -> bool:

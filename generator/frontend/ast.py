@@ -224,11 +224,21 @@ class DeviceType(Named):
 
 
 @dataclass(frozen=True)
+class SafeValue(Node):
+    """``safe level = true`` after a device's arguments: the value of one
+    of its `in` data when nothing drives it."""
+
+    datum: Path  # relative to the device
+    value: Expr
+
+
+@dataclass(frozen=True)
 class DeviceInstance(Named):
     type_name: str
     type_span: Span
     args: tuple[Actual, ...]
     node: Placement | None = None
+    safe: tuple[SafeValue, ...] = ()
 
 
 @dataclass(frozen=True)
@@ -374,6 +384,12 @@ class LinkAttr(Node):
 
 
 @dataclass(frozen=True)
+class RemoteAttr(Node):
+    key: str  # "watchdog" | "overruns"
+    value: Expr
+
+
+@dataclass(frozen=True)
 class LinkMember(Node):
     """A node on a link: ``master N on uart0``, ``slave N on uart0 unit 2``,
     ``peer N``."""
@@ -401,6 +417,14 @@ class Export(Node):
     link: Placement
 
 
+@dataclass(frozen=True)
+class RemoteSettings(Node):
+    """``remote watchdog 250 ms overruns 5``: remote execution's fault
+    reactions (docs/remote.md)."""
+
+    attrs: tuple[RemoteAttr, ...]
+
+
 Declaration = (Const | Data | Channel | DeviceType | DeviceInstance | ActorType
                | Dataflow | Chart | Task | NodeDecl | LinkDecl)
 
@@ -415,3 +439,4 @@ class Module:
     declarations: tuple[Named, ...]
     interfaces: tuple[Interface, ...]
     exports: tuple[Export, ...] = ()
+    remote: tuple[RemoteSettings, ...] = ()

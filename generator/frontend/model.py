@@ -126,6 +126,7 @@ class DeviceDatum:
     port: DevicePort
     name: str  # the path the model uses for it first, e.g. "sensor.raw"
     writers: list[Writer] = field(default_factory=list)
+    safe: object = None  # `in` data: the declared safe value (a checked constant), None = zero/false
 
     @property
     def type(self) -> ValueType:
@@ -320,6 +321,16 @@ class ExportInfo:
 
 
 @dataclass
+class RemoteInfo:
+    """``remote watchdog T overruns K``: None where the model keeps the
+    default (docs/remote.md)."""
+
+    decl: ast.RemoteSettings
+    watchdog_us: int | None
+    overrun_limit: int | None
+
+
+@dataclass
 class CheckedModel:
     """A model that passed the checker."""
 
@@ -347,3 +358,4 @@ class CheckedModel:
     task_nodes: dict[str, str] = field(default_factory=dict)  # task name -> node name
     device_nodes: dict[str, str] = field(default_factory=dict)  # primitive device path -> node name
     exports: list[ExportInfo] = field(default_factory=list)
+    remote: RemoteInfo | None = None

@@ -109,7 +109,7 @@ class ToAst(Transformer):
     # top level
     def start(self, meta, items):
         header = None
-        imports, decls, ifaces, exports = [], [], [], []
+        imports, decls, ifaces, exports, remote = [], [], [], [], []
         extra_headers = []
         for item in items:
             if isinstance(item, ast.ModelDecl):
@@ -123,13 +123,16 @@ class ToAst(Transformer):
                 ifaces.append(item)
             elif isinstance(item, ast.Export):
                 exports.append(item)
+            elif isinstance(item, ast.RemoteSettings):
+                remote.append(item)
             else:
                 decls.append(item)
         if extra_headers:
             d = extra_headers[0]
             raise ModelError([Diagnostic(d.span, "a file has at most one 'model' header",
                                          notes=(note(header.span, "the first 'model' header"),))])
-        return ast.Module(self.file, header, tuple(imports), tuple(decls), tuple(ifaces), tuple(exports))
+        return ast.Module(self.file, header, tuple(imports), tuple(decls), tuple(ifaces),
+                          exports=tuple(exports), remote=tuple(remote))
 
     def model_decl(self, meta, ch):
         title = self._string(ch[1]) if len(ch) > 1 else None
@@ -282,7 +285,15 @@ class ToAst(Transformer):
 
     def device_decl(self, meta, ch):
         return ast.DeviceInstance(**self._named(meta, ch[0]), type_name=str(ch[1]),
-                                  type_span=self._tspan(ch[1]), args=ch[2], node=ch[3] if len(ch) > 3 else None)
+                                  type_span=self._tspan(ch[1]), args=ch[2],
+                                  node=next((c for c in ch[3:] if isinstance(c, ast.Placement)), None),
+                                  safe=next((c for c in ch[3:] if isinstance(c, tuple)), ()))
+
+    def safe_values(self, meta, ch):
+        return tuple(ch)
+
+    def safe_value(self, meta, ch):
+        return ast.SafeValue(self._span(meta), ch[0], ch[1])
 
     # actors
     def type_params(self, meta, ch):
@@ -395,6 +406,12 @@ class ToAst(Transformer):
                         attrs=tuple(c for c in ch[1:] if isinstance(c, ast.TaskAttr)),
                         runs=tuple(c for c in ch[1:] if isinstance(c, ast.Run)),
                         node=next((c for c in ch[1:] if isinstance(c, ast.Placement)), None))
+
+    def remote_attr(self, meta, ch):
+        return ast.RemoteAttr(self._span(meta), str(ch[0]), ch[1])
+
+    def remote_settings(self, meta, ch):
+        return ast.RemoteSettings(self._span(meta), tuple(ch))
 
     def iface_attr(self, meta, ch):
         key, value = ch

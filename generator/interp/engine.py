@@ -76,6 +76,8 @@ class Engine:
     interfaces are served, and a model sent over the debug link replaces
     the program; ``say`` prints what the run reports (a refused model)."""
 
+    command = "run"  # the easylab command running it, in what it says
+
     def __init__(self, program: Program, plugin_cache: PluginCache | None = None,
                  stimulus: Stimulus | None = None, trace: TraceWriter | None = None,
                  on_replace: Callable[[Replacement], None] | None = None,
@@ -173,7 +175,7 @@ class Engine:
             if result is not None:
                 first = result.diagnostics.sorted()
                 message = first[0].render(result.sources).splitlines()[0] if first else "refused"
-            self.say(f"easylab run: a model sent by the debugger was refused: {message}; {running}")
+            self.say(f"easylab {self.command}: a model sent by the debugger was refused: {message}; {running}")
             self._load_results.put((LOAD_REFUSED, 0, message))
             self._loading = False
             return
@@ -184,7 +186,7 @@ class Engine:
         try:
             self.replace_model(program)
         except PluginError as err:
-            self.say(f"easylab run: a model sent by the debugger was refused: {err}; {running}")
+            self.say(f"easylab {self.command}: a model sent by the debugger was refused: {err}; {running}")
             self._load_results.put((LOAD_REFUSED, 0, str(err).splitlines()[0]))
             self._loading = False
 

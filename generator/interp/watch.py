@@ -67,20 +67,20 @@ class ModelWatcher(threading.Thread):
     def reload(self) -> None:
         """Run the front end on the model and hand a good result over."""
         running = f"still running program 0x{self.engine.program.program_id:08x}"
+        command = f"easylab {self.engine.command}"
         try:
             program, result = lower_file(self.path, self.schedule)
         except (OSError, UnicodeDecodeError) as err:
-            self.say(f"easylab run: {self.path}: {getattr(err, 'strerror', None) or err}; {running}")
+            self.say(f"{command}: {self.path}: {getattr(err, 'strerror', None) or err}; {running}")
             return
         self.files = model_files(self.path, program)
         if program is None:
             count = len(result.diagnostics.sorted())
-            self.say(f"{result.report()}\neasylab run: {self.path}: {count} error{'s' if count != 1 else ''}; "
-                     f"{running}")
+            self.say(f"{result.report()}\n{command}: {self.path}: {count} error{'s' if count != 1 else ''}; {running}")
             return
         if self.engine.is_running(program):
             return
         try:
             self.engine.replace_model(program)
         except PluginError as err:
-            self.say(f"easylab run: error: {err}\neasylab run: {running}")
+            self.say(f"{command}: error: {err}\n{command}: {running}")

@@ -15,8 +15,8 @@ from ..frontend.loader import module_dir
 from ..frontend.model import ActorInstanceInfo, ChartInfo, CheckedModel, DataflowInfo
 from .deployment import Crossing, Deployment, ExportSpec, LinkMember, LinkSpec, NodeSpec, topic_name
 from .program import (Action, ActorInstance, ActorSpec, Buffer, Channel, Chart, Dataflow, Device, External, Fire,
-                      Instant, Interface, Item, Port, Program, Schedule, Step, Task, Transition, location,
-                      program_id)
+                      Instant, Interface, Item, Port, Program, RemoteSettings, Schedule, Step, Task, Transition,
+                      location, program_id)
 
 
 def _runtime_value(t: T.ValueType, value):
@@ -76,9 +76,12 @@ class _Lowering:
                 if id(datum) in seen:
                     continue
                 seen.add(id(datum))
-                zero = False if port.type is T.BOOL else (0.0 if port.type is T.FLOAT32 else 0)
+                # A device `in` datum starts at its safe value (docs/ir.md, "Items").
+                initial = False if port.type is T.BOOL else (0.0 if port.type is T.FLOAT32 else 0)
+                if datum.safe is not None:
+                    initial = _runtime_value(port.type, datum.safe)
                 item = Item(len(self.items), datum.name, "dev_out" if port.direction == "out" else "dev_in",
-                            port.type, port.rate, zero, location(dev.span), device=device.id, port=port.name)
+                            port.type, port.rate, initial, location(dev.span), device=device.id, port=port.name)
                 self._add_item(datum, item)
                 device.items.append(item.id)
 
@@ -290,6 +293,9 @@ def lower(model: CheckedModel, timing: Timing) -> Program:
                       tasks, instants, interfaces)
     if model.nodes:
         program.deployment = _deployment(model, timing, program, low)
+    if model.remote is not None:
+        r = model.remote
+        program.remote = RemoteSettings(r.watchdog_us, r.overrun_limit, location(r.decl.span))
     program.program_id = program_id(program)
     return program
 

@@ -266,6 +266,17 @@ class Interface:
 
 
 @dataclass
+class RemoteSettings:
+    """Remote execution's fault reactions as the model sets them
+    (``remote watchdog T overruns K``; docs/remote.md): None keeps the
+    device model's default."""
+
+    watchdog_us: int | None = None
+    overrun_limit: int | None = None
+    location: str = "?"
+
+
+@dataclass
 class Program:
     name: str
     title: str | None
@@ -285,6 +296,7 @@ class Program:
     interfaces: list[Interface]
     # Where it runs, for a model of several nodes (ir/deployment.py); None for one board.
     deployment: object = None
+    remote: RemoteSettings | None = None  # None: the defaults
 
     def item(self, name: str) -> Item:
         return next(i for i in self.items if i.name == name)

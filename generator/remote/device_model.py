@@ -22,17 +22,27 @@ from .protocol import K
 
 # The proxy applies the safe values after this many consecutive overruns, and
 # when no valid frame came for twice the longest gap between two release
-# instants, but never sooner than WATCHDOG_MIN_US (docs/remote.md).
+# instants, but never sooner than WATCHDOG_MIN_US (docs/remote.md); a model
+# may set either (`remote watchdog T overruns K`).
 OVERRUN_LIMIT = 3
 WATCHDOG_MIN_US = 100_000
 
 
-def watchdog_ticks(tick_us: int, hyperperiod: int, release_ticks: list[int]) -> int:
-    """The proxy's watchdog time in ticks: twice the longest gap between two
-    release instants (frames come at each), at least WATCHDOG_MIN_US."""
+def longest_gap(hyperperiod: int, release_ticks: list[int]) -> int:
+    """The longest time in ticks between two release instants (frames come
+    at each), cyclically over the hyperperiod."""
     ticks = sorted(set(release_ticks))
     gaps = [b - a for a, b in zip(ticks, ticks[1:])] + ([ticks[0] + hyperperiod - ticks[-1]] if ticks else [])
-    return max(2 * max(gaps, default=hyperperiod), -(-WATCHDOG_MIN_US // tick_us))
+    return max(gaps, default=hyperperiod)
+
+
+def watchdog_ticks(tick_us: int, hyperperiod: int, release_ticks: list[int], declared_us: int | None = None) -> int:
+    """The proxy's watchdog time in ticks: the model's (rounded up to whole
+    ticks), else twice the longest gap between two release instants, at
+    least WATCHDOG_MIN_US."""
+    if declared_us is not None:
+        return -(-declared_us // tick_us)
+    return max(2 * longest_gap(hyperperiod, release_ticks), -(-WATCHDOG_MIN_US // tick_us))
 
 
 def value_size(t: T.ValueType) -> int:
@@ -90,6 +100,11 @@ class DeviceModel:
         tasks ``released``: each one's written device data, task order."""
         return [(k, self.tasks[k].writes) for k in sorted(released) if self.tasks[k].writes]
 
+    def release_ticks(self) -> list[int]:
+        """The ticks of the instants at which a proxy task is released (an
+        UP and a DOWN frame each)."""
+        return [i.tick for i in self.instants if i.release]
+
     def item_kind(self, item_id: int) -> str:
         return self._by_id[item_id].kind
 
@@ -116,9 +131,10 @@ def _device_json(program: Program, device: Device) -> dict:
 
 def safe_value(item: Item):
     """The value the proxy applies to a device `in` datum when the host is
-    not driving it (boot, stop, watchdog, repeated overruns): zero or false
-    (docs/remote.md, "Safe values")."""
-    return False if item.type.name == "bool" else 0
+    not driving it (boot, stop, watchdog, repeated overruns): the model's
+    `safe` value, zero or false by default, which is also the datum's
+    initial value in the IR (docs/remote.md, "Safe values")."""
+    return item.initial
 
 
 def _hash32(dump) -> int:
@@ -147,7 +163,11 @@ def device_model(program: Program) -> DeviceModel:
             instants.append(Instant(instant.tick, publish, release))
     model = DeviceModel(program.name, program.tick_us, program.hyperperiod, list(program.devices), device_items,
                         tasks, instants)
-    model.watchdog_ticks = watchdog_ticks(program.tick_us, program.hyperperiod, [i.tick for i in instants if i.release])
+    settings = program.remote
+    model.watchdog_ticks = watchdog_ticks(program.tick_us, program.hyperperiod, model.release_ticks(),
+                                          settings.watchdog_us if settings else None)
+    if settings and settings.overrun_limit is not None:
+        model.overrun_limit = settings.overrun_limit
     model.device_ids = [_hash32(_device_json(program, d)) for d in program.devices]
     model.id = _hash32({
         "version": K.PROTOCOL_VERSION, "tick_us": program.tick_us, "hyperperiod": program.hyperperiod,

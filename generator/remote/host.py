@@ -97,6 +97,8 @@ class RemoteEngine(Engine):
     at each release instant of the device model, the proxy's UP frame is
     awaited before the instant and the DOWN frame sent after its bodies."""
 
+    command = "remote"
+
     def __init__(self, program: Program, model: DeviceModel, link: Link, stimulus: Stimulus | None = None,
                  up_timeout: float | None = None, **kwargs):
         self.devices = ProxyDevices(model, stimulus)

@@ -16,7 +16,7 @@ from ..build import BuildResult
 from ..codegen.c_syntax import C_KIND_ENUM, C_TYPE_ENUM, c_literal, ident
 from ..codegen.render import environment
 from ..ir.program import Program
-from .device_model import DeviceModel, device_model, item_bytes, proxy_program, safe_value
+from .device_model import DeviceModel, device_model, item_bytes, longest_gap, proxy_program, safe_value
 from .protocol import K
 
 # The flag every C file of a proxy build sees (runtime_c/el_remote.c, the
@@ -86,8 +86,8 @@ def view(program: Program, model: DeviceModel, board) -> _View:
     instants = [dict(tick=i.tick, publish=_mask(i.publish), release=_mask(i.release)) for i in proxy.instants]
     if not instants:  # no task uses a device: one empty instant per hyperperiod keeps the clock
         instants = [dict(tick=0, publish=0, release=0)]
-    return _View(proxy.name, model.id, model.watchdog_ticks, model.overrun_limit, model.tick_us, model.hyperperiod, items, devices, out_fields, in_fields, safe,
-                 tasks, instants)
+    return _View(proxy.name, model.id, model.watchdog_ticks, model.overrun_limit, model.tick_us, model.hyperperiod,
+                 items, devices, out_fields, in_fields, safe, tasks, instants)
 
 
 def check_frames(program: Program, model: DeviceModel) -> None:
@@ -102,6 +102,26 @@ def check_frames(program: Program, model: DeviceModel) -> None:
             raise BuildError(f"{program.name}: the device data of the tasks released at tick {instant.tick} "
                              f"({tasks}) take {max(up, down)} bytes in one frame, more than the link's "
                              f"{K.MAX_PAYLOAD}: release those tasks at different instants, or read fewer data")
+
+
+def check_watchdog(program: Program, model: DeviceModel) -> None:
+    """A watchdog time the model sets must be longer than the longest gap
+    between two release instants: frames come only at those, so a shorter
+    one would apply the safe values in a run that keeps up."""
+    settings = program.remote
+    if settings is None or settings.watchdog_us is None:
+        return
+    gap = longest_gap(model.hyperperiod, model.release_ticks())
+    if model.watchdog_ticks <= gap:
+        raise BuildError(f"{settings.location}: the watchdog time ({_ms(settings.watchdog_us)}) must be longer "
+                         f"than the longest time between two frames of the device model ({_ms(gap * model.tick_us)})")
+    if model.watchdog_ticks > 0xFFFFFFFF:
+        raise BuildError(f"{settings.location}: the watchdog time ({_ms(settings.watchdog_us)}) is more than "
+                         f"2^32 - 1 ticks of {model.tick_us} us")
+
+
+def _ms(us: int) -> str:
+    return f"{us / 1000:g} ms"
 
 
 def render_proxy(program: Program, board, model: DeviceModel | None = None) -> dict[str, str]:
@@ -121,6 +141,7 @@ def build_proxy(program: Program, board_name: str, out_dir: Path, mcu: str | Non
     model would not fit the protocol's largest frame."""
     model = device_model(program)
     check_frames(program, model)
+    check_watchdog(program, model)
     proxy = proxy_program(program, model)
     board = load_board(board_name, board_path).configure(mcu, sim)
     checked = board.check(proxy)

@@ -747,6 +747,56 @@ CASES = [
         }
         """),
          E(5, 5, "device 'sensor' has no part or datum 'rwa'", hint="did you mean 'raw'?")),
+    case('actor-unknown-bound-used', dedent("""\
+        actor type A<T: numbr>() {
+            in  x: T
+            out y: T
+            step {{ y = x; }}
+        }
+        dataflow D {
+            a = A<int16>()
+        }
+        """),
+         E(1, 14, "unknown type bound 'numbr'", hint="did you mean 'number'?")),
+    case('safe-value-out-of-range', dedent("""\
+        import std
+        device m: Motor(pwm = "PB1", dir = "PB2") safe speed = 40000
+        """),
+         E(2, 56, "the safe value of 'm.speed': 40000 does not fit 'int16' (-32768..32767)")),
+    case('safe-value-of-wrong-type', dedent("""\
+        import std
+        device lamp: DigitalOut(pin = "PB5") safe level = 1
+        """),
+         E(2, 51, "the safe value of 'lamp.level' expects 'bool' but the value is an integer constant")),
+    case('safe-value-on-a-sensor-output', dedent("""\
+        import std
+        device sensor: Pt100(channel = 0) safe raw = 0
+        """),
+         E(2, 40, "'sensor.raw' is an out datum (read from the device): only in data have safe values")),
+    case('safe-value-of-an-unknown-datum', dedent("""\
+        import std
+        device lamp: DigitalOut(pin = "PB5") safe levle = true
+        """),
+         E(2, 43, "device 'lamp' has no datum 'levle'", hint="did you mean 'level'?")),
+    case('safe-value-given-twice', dedent("""\
+        import std
+        device lamp: DigitalOut(pin = "PB5") safe level = true, level = false
+        """),
+         E(2, 57, "the safe value of 'lamp.level' is given twice", note=(2, 43, "first given here"))),
+    case('safe-value-not-a-constant', dedent("""\
+        import std
+        param p: int16 = 3
+        device m: Motor(pwm = "PB1", dir = "PB2") safe speed = p
+        """),
+         E(3, 56, "'p' is a param, known only at run time; a compile-time constant is needed here",
+           hint="use literals and consts here")),
+    case('remote-settings', dedent("""\
+        remote watchdog 0 ms overruns 256
+        remote overruns 2 overruns 3
+        """),
+         E(1, 17, "the watchdog time is a positive whole number of microseconds"),
+         E(1, 31, "'overruns' counts overruns in a row: 1 to 255, not 256"),
+         E(2, 1, "a model has at most one 'remote' declaration", note=(1, 1, "the other one"))),
     case('device-driver-name', dedent("""\
         device type X() {
             out a: int8

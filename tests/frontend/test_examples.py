@@ -207,6 +207,9 @@ def test_all_features_model():
     data = m.device_data["station.data"]
     assert data is m.device_data["station.probe.samples"] and data.port.rate == 4
     assert m.device_data["station.light"].name == "station.light"
+    assert (m.device_data["station.light"].safe, m.device_data["station.fan.duty"].safe) == (True, 100)
+    assert m.device_data["station.data"].safe is None  # an out datum has none
+    assert (m.remote.watchdog_us, m.remote.overrun_limit) == (150_000, 4)
     assert {str(c): c.owner for c in m.claims} == {
         "adc[3]": "station.probe", 'pin["PC3"]': "station.lamp", 'pwm["PD5"]': "station.fan",
         'pin["PB0"]': "button", "uart[0]": "debug", "uart[1]": "modbus rtu"}

@@ -3,6 +3,7 @@ session, run on a pty, and `easylab remote` against them."""
 
 from __future__ import annotations
 
+import re
 import subprocess
 import sys
 import time
@@ -45,13 +46,22 @@ def wait_for(path: Path, timeout: float = 10.0) -> None:
 
 
 class Proxy:
-    """A host-board proxy process with its link on a pty (symlink ``link``)."""
+    """A host-board proxy process with its link on a pty (symlink ``link``),
+    or with ``tcp`` on a TCP port of its choosing; ``link`` is then what
+    the host opens (``socket://127.0.0.1:PORT``)."""
 
-    def __init__(self, exe: Path, link: Path, *args: str):
-        self.link = link
-        self.proc = subprocess.Popen([str(exe), "--link", f"pty:{link}", *args], stdout=subprocess.PIPE,
-                                     stderr=subprocess.PIPE, text=True, stdin=subprocess.DEVNULL)
-        wait_for(link)
+    def __init__(self, exe: Path, link: Path, *args: str, tcp: bool = False):
+        self.link: Path | str = link
+        self.proc = subprocess.Popen([str(exe), "--link", "tcp:0" if tcp else f"pty:{link}", *args],
+                                     stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                                     stdin=subprocess.DEVNULL)
+        if tcp:
+            line = self.proc.stderr.readline()  # "PROGRAM: link on 127.0.0.1:PORT"
+            found = re.search(r": link on (127\.0\.0\.1:\d+)$", line.rstrip("\n"))
+            assert found, f"no port announced: {line!r}"
+            self.link = f"socket://{found.group(1)}"
+        else:
+            wait_for(link)
 
     def finish(self, timeout: float = 30.0) -> tuple[int, str]:
         try:
@@ -68,6 +78,6 @@ class Proxy:
             self.proc.communicate()
 
 
-def remote(model: Path, target: Path, *args: str, timeout: float = 300) -> subprocess.CompletedProcess:
+def remote(model: Path, target: Path | str, *args: str, timeout: float = 300) -> subprocess.CompletedProcess:
     return subprocess.run([*EASYLAB, "remote", str(model), "--target", str(target), *args], capture_output=True,
                           text=True, timeout=timeout, stdin=subprocess.DEVNULL)

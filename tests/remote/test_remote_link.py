@@ -13,8 +13,9 @@ from easylab.core.crc import crc16
 from easylab.pipeline import lower_file
 from easylab.remote import protocol as P
 from easylab.remote.device_model import device_model
-from easylab.remote.link import Link, NoAnswer
+from easylab.remote.link import Link, NoAnswer, RemoteError
 from easylab.remote.protocol import K
+from easylab.remote.proxy import build_proxy
 from remote_testlib import EXAMPLES, Proxy, proxy_of, remote
 
 BLINK = EXAMPLES / "blink.elab"
@@ -58,6 +59,40 @@ def test_the_device_model_id_ignores_the_application(tmp_path):
     _, faster = lower_text(tmp_path, text.replace("period 1 ms", "period 2 ms"), "faster.elab")
     assert device_model(faster).id != device_model(program).id  # the instants of the writes moved
     assert device_model(faster).device_ids == device_model(program).device_ids
+
+
+def test_a_declared_safe_value_and_the_fault_settings_change_the_device_model(tmp_path):
+    """A safe value is part of the device model (the proxy applies it): a
+    changed one changes the id, and the device's own id; so do K and the
+    watchdog time. The safe value is also the datum's initial value."""
+    program, _ = lower_file(BLINK)
+    base = device_model(program)
+    assert program.item("led.level").initial is False and base.overrun_limit == 3
+    text = BLINK.read_text()
+    _, safe = lower_text(tmp_path, text.replace('DigitalOut(pin = "PB5")', 'DigitalOut(pin = "PB5") safe level = true'),
+                         "safe.elab")
+    assert safe.item("led.level").initial is True
+    assert device_model(safe).id != base.id and device_model(safe).device_ids != base.device_ids
+    _, unsafe = lower_text(tmp_path, text.replace('DigitalOut(pin = "PB5")',
+                                                  'DigitalOut(pin = "PB5") safe level = false'), "unsafe.elab")
+    assert device_model(unsafe).id == base.id  # the default, declared
+    _, k5 = lower_text(tmp_path, text + "remote overruns 5\n", "k5.elab")
+    assert device_model(k5).overrun_limit == 5 and device_model(k5).id != base.id
+    _, wd = lower_text(tmp_path, text + "remote watchdog 250 ms\n", "wd.elab")
+    assert device_model(wd).watchdog_ticks == 250 and device_model(wd).id != base.id
+    assert device_model(wd).device_ids == base.device_ids
+
+
+def test_a_watchdog_time_shorter_than_the_frames_gap_is_refused(tmp_path):
+    from easylab.core.errors import BuildError
+
+    path, program = lower_text(tmp_path, BLINK.read_text().replace("period 1 ms", "period 20 ms")
+                               + "remote watchdog 20 ms\n", "short.elab")
+    with pytest.raises(BuildError) as err:
+        build_proxy(program, "host", tmp_path / "proxy")
+    line = path.read_text().splitlines().index("remote watchdog 20 ms") + 1
+    assert str(err.value) == (f"{path}:{line}: the watchdog time (20 ms) must be longer than the longest time "
+                              "between two frames of the device model (20 ms)")
 
 
 def test_a_proxy_of_another_device_model_is_refused_by_name(build_cache, tmp_path):
@@ -133,22 +168,35 @@ def trace_column(trace, name: str) -> list[tuple[int, str]]:
     return [(int(r.split(",")[0]), r.split(",")[column]) for r in rows[1:]]
 
 
-def test_overruns_in_a_row_apply_the_safe_values(build_cache, tmp_path):
+SAFE_ALARM = 'DigitalOut(pin = "PB7") safe level = true'
+
+
+@pytest.mark.parametrize("declared", [False, True], ids=["default", "declared"])
+def test_overruns_in_a_row_apply_the_safe_values(declared, build_cache, tmp_path):
     """In real time, a DOWN that does not come by its deadline is an
     overrun (counted, the value stays); after K in a row the proxy applies
-    the safe values, and a DOWN after its deadline is never applied."""
-    program, _ = lower_file(PT100)
+    the safe values, and a DOWN after its deadline is never applied. The
+    safe value and K are the defaults (false, 3) or the model's (true, 5)."""
+    if declared:
+        path, program = lower_text(tmp_path, PT100.read_text().replace('DigitalOut(pin = "PB7")', SAFE_ALARM)
+                                   + "remote overruns 5\n", "pt100_safe.elab")
+        exe = build_proxy(program, "host", tmp_path / "proxy").executable
+    else:
+        program, _ = lower_file(PT100)
+        exe = proxy_of(build_cache, PT100)
+    safe, driven = ("1", b"\x00") if declared else ("0", b"\x01")
     model = device_model(program)
+    assert model.overrun_limit == (5 if declared else 3)
     trace = tmp_path / "proxy.csv"
-    proxy = Proxy(proxy_of(build_cache, PT100), tmp_path / "link", "--trace", str(trace))
+    proxy = Proxy(exe, tmp_path / "link", "--trace", str(trace))
     link = None
     try:
         link = Link(str(proxy.link), model)
         link.connect()
         link.start(lock_step=False)
-        answer(link, model, 20, b"\x01")  # alarm_led.level = 1 for 20 activations of `acquire` (10 ms)
+        answer(link, model, 20, driven)  # alarm_led.level driven for 20 activations of `acquire` (10 ms)
         until(lambda: link.counters()["watchdog"] + link.counters()["overruns"] > 0)
-        link.down(0, 1, b"\x01")  # instant 0's value, long after its deadline
+        link.down(0, 1, driven)  # instant 0's value, long after its deadline
         until(lambda: link._request(K.CMD_COUNTERS)[0] == K.STATE_SAFE)
         counters = link.counters()
         assert counters["overruns"] >= model.overrun_limit
@@ -162,20 +210,26 @@ def test_overruns_in_a_row_apply_the_safe_values(build_cache, tmp_path):
             link.close()
         proxy.kill()
     values = trace_column(trace, "alarm_led.level")
-    assert values[0][1] == "0"  # the safe value until the host's first value is due
-    assert "1" in {v for _, v in values}  # then the host's values, applied at their deadlines
-    assert values[-1][1] == "0"  # and the safe value again
+    assert values[0][1] == safe  # the safe value from boot until the host's first value is due
+    assert str(driven[0]) in {v for _, v in values}  # then the host's values, applied at their deadlines
+    assert values[-1][1] == safe  # and the safe value again
 
 
-def test_the_watchdog_applies_the_safe_values_when_the_host_is_gone(tmp_path):
-    """A task with a 500 ms period: the watchdog (twice the longest gap
-    between frames, 1 s, measured from the instant stamped on the last frame:
-    the one awaited when it came) fires before K overruns would."""
-    from easylab.remote.proxy import build_proxy
-
-    path, program = lower_text(tmp_path, BLINK.read_text().replace("period 1 ms", "period 500 ms"), "slow.elab")
+@pytest.mark.parametrize("declared", [False, True], ids=["default", "declared"])
+def test_the_watchdog_applies_the_safe_values_when_the_host_is_gone(declared, tmp_path):
+    """A task with a 500 ms period: the watchdog (by default twice the
+    longest gap between frames, 1 s; or the model's 1.5 s), measured from
+    the instant stamped on the last frame (the one awaited when it came),
+    fires before K overruns would. The safe value is false, or the model's
+    true."""
+    text = BLINK.read_text().replace("period 1 ms", "period 500 ms")
+    if declared:
+        text = text.replace('DigitalOut(pin = "PB5")', 'DigitalOut(pin = "PB5") safe level = true')
+        text += "remote watchdog 1500 ms overruns 5\n"
+    path, program = lower_text(tmp_path, text, "slow.elab")
     model = device_model(program)
-    assert model.watchdog_ticks * model.tick_us == 1_000_000
+    assert model.watchdog_ticks * model.tick_us == (1_500_000 if declared else 1_000_000)
+    safe, driven = ("1", b"\x00") if declared else ("0", b"\x01")
     exe = build_proxy(program, "host", tmp_path / "proxy").executable
     trace = tmp_path / "proxy.csv"
     proxy = Proxy(exe, tmp_path / "link", "--trace", str(trace))
@@ -184,29 +238,31 @@ def test_the_watchdog_applies_the_safe_values_when_the_host_is_gone(tmp_path):
         link = Link(str(proxy.link), model)
         link.connect()
         link.start(lock_step=False)
-        answer(link, model, 1, b"\x01")  # led on at 500 ms; then the host says nothing more
+        answer(link, model, 1, driven)  # the led driven at 500 ms; then the host says nothing more
         # Silence is the stimulus here (any frame, even a question, feeds the
         # watchdog): the watchdog time and a margin pass before we ask.
-        time.sleep(1.8)
+        time.sleep(2.6 if declared else 1.8)
         counters = link.counters()
         assert link._request(K.CMD_COUNTERS)[0] == K.STATE_SAFE
         assert counters["watchdog"] == 1
-        assert counters["overruns"] == 1 < model.overrun_limit  # the activation due at 1 s
+        # the activations due at 1 s (and 1.5 s) overran, fewer than K
+        assert counters["overruns"] == (2 if declared else 1) < model.overrun_limit
         link.stop()
         assert proxy.finish()[0] == 0
     finally:
         if link:
             link.close()
         proxy.kill()
-    # The led goes on at the first deadline and back to its safe value one
-    # watchdog time after the instant stamped on the last frame (it came
-    # while the proxy awaited instant 1, at 500 ms).
-    assert trace_column(trace, "led.level")[:3] == [(0, "0"), (500000, "1"), (1500000, "0")]
+    # The led is driven at the first deadline and back at its safe value at
+    # the first instant one watchdog time after the instant stamped on the
+    # last frame (it came while the proxy awaited instant 1, at 500 ms):
+    # 1.5 s by default, 2 s (500 ms + 1.5 s) declared.
+    back = 2_000_000 if declared else 1_500_000
+    assert trace_column(trace, "led.level")[:3] == [(0, safe), (500000, str(driven[0])), (back, safe)]
 
 
 def test_a_device_model_whose_frames_would_not_fit_is_refused(tmp_path):
     from easylab.core.errors import BuildError
-    from easylab.remote.proxy import build_proxy
 
     _, program = lower_text(tmp_path, """model wide
 import std
@@ -238,7 +294,6 @@ def test_random_frames_neither_crash_nor_confuse_the_proxy(tmp_path):
     and ends cleanly on STOP."""
     import random
 
-    from easylab.remote.proxy import build_proxy
 
     program, _ = lower_file(PT100)
     model = device_model(program)
@@ -293,7 +348,11 @@ def test_easylab_proxy_builds_and_names_the_device_model(tmp_path):
     assert wrong.returncode == 1 and "unknown board 'nosuch'" in wrong.stderr
     not_a_proxy = subprocess.run([str(tmp_path / "p" / "blink_proxy"), "--help"], capture_output=True, text=True,
                                  timeout=30, stdin=subprocess.DEVNULL)
-    assert "--link pty:LINK" in not_a_proxy.stdout
+    assert "--link pty:LINK|tcp:PORT" in not_a_proxy.stdout
+    bad_port = subprocess.run([str(tmp_path / "p" / "blink_proxy"), "--link", "tcp:99999"], capture_output=True,
+                              text=True, timeout=30, stdin=subprocess.DEVNULL)
+    assert bad_port.returncode == 2
+    assert "--link tcp:99999: not a port number (0..65535)" in bad_port.stderr
 
 
 def test_firmware_that_is_not_a_proxy_says_so(build_cache, tmp_path):
@@ -305,3 +364,36 @@ def test_firmware_that_is_not_a_proxy_says_so(build_cache, tmp_path):
     assert proc.returncode == 2
     assert "--link: this program is not a remote-execution proxy (easylab proxy builds one)" in proc.stderr
     assert not (tmp_path / "link").exists()
+
+
+def test_the_tcp_link_takes_one_host_at_a_time(build_cache, tmp_path):
+    """On `--link tcp:PORT` a host that leaves does not end the proxy, and a
+    new connection replaces the one before it."""
+    program, _ = lower_file(BLINK)
+    model = device_model(program)
+    proxy = Proxy(proxy_of(build_cache, BLINK), tmp_path / "link", "--fast", tcp=True)
+    links = []
+    try:
+        gone = Link(str(proxy.link), model)
+        gone.connect()
+        gone.close()  # a host that went away
+        stale = Link(str(proxy.link), model)
+        links.append(stale)
+        stale.connect()
+        current = Link(str(proxy.link), model)
+        links.append(current)
+        current.connect()  # replaces `stale`, whose connection the proxy closed
+        with pytest.raises(RemoteError):
+            stale.connect(0.6)
+        assert proxy.proc.poll() is None
+        current.start(lock_step=True)
+        assert current.up(0, 5.0)[0] == K.STATE_RUNNING
+        current.down(0, 1, b"\x01")
+        assert current.up(1, 5.0)[0] == K.STATE_RUNNING
+        current.stop()
+        status, err = proxy.finish()
+        assert status == 0, err
+    finally:
+        for link in links:
+            link.close()
+        proxy.kill()

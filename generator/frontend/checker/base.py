@@ -12,7 +12,7 @@ from ...core import types as T
 from .. import ast
 from ..expressions import ExprTyper, Symbol
 from ..model import (ChannelInfo, ChartInfo, CheckedModel, Claim, ConstInfo, DataflowInfo, DataInfo, DeviceDatum,
-                     InterfaceInfo, PrimitiveDevice, TaskInfo)
+                     InterfaceInfo, PrimitiveDevice, RemoteInfo, TaskInfo)
 
 _KIND_NAMES = {
     ast.Const: "const", ast.Channel: "channel", ast.DeviceType: "device type",
@@ -65,6 +65,7 @@ class CheckerBase:
         self.charts: dict[str, ChartInfo] = {}
         self.tasks: dict[str, TaskInfo] = {}
         self.interfaces: list[InterfaceInfo] = []
+        self.remote: RemoteInfo | None = None
         self.claims: list[Claim] = []
         self.nodes: dict = {}  # distribution (checker/nodes.py)
         self.links: dict = {}
@@ -108,6 +109,8 @@ class CheckerBase:
         for module in self.modules:
             for iface in module.interfaces:
                 self.check_interface(iface)
+            for settings in module.remote:
+                self.check_remote_settings(settings)
         self.check_placement()
         self.check_claims()
         if self.diags.has_errors:
@@ -121,7 +124,8 @@ class CheckerBase:
             top_devices=self.top_devices, actor_types=self.actor_types, dataflows=self.dataflows,
             charts=self.charts, tasks=self.tasks, interfaces=self.interfaces, claims=self.claims,
             actor_type_files=self.actor_type_files, nodes=self.nodes, links=self.links,
-            task_nodes=self.task_nodes, device_nodes=self.device_nodes, exports=self.exports)
+            task_nodes=self.task_nodes, device_nodes=self.device_nodes, exports=self.exports,
+            remote=self.remote)
 
     def _decls(self, cls):
         for module in self.modules:

@@ -159,6 +159,8 @@ class DataflowRules:
             t = self.resolve_type(ref)
             if t is None:
                 return None
+            if tp.bound is not None and tp.bound not in T.BOUNDS:
+                return None  # an unknown bound: reported at the actor type
             if not T.satisfies_bound(t, tp.bound):
                 self.error(ref.span, f"'{t}' is not {with_article(tp.bound)} type, as '{atype.name}' requires of {tp.name}",
                            f"{tp.name} must be {T.BOUNDS[tp.bound]}")

@@ -11,8 +11,11 @@ from ...core import types as T
 from .. import ast
 from ..expressions import ERROR, ExprTyper, Symbol
 from ..loader import module_dir
-from ..model import Claim, DeviceDatum, DevicePort, PrimitiveDevice
-from .base import C_RESERVED, MAX_RATE, show_value, in_library
+from ..model import Claim, DeviceDatum, DevicePort, PrimitiveDevice, RemoteInfo
+from .base import C_RESERVED, MAX_RATE, show_value, in_library, whole_ms, whole_us
+
+# `remote overruns K`: the proxy counts them in a byte (docs/remote.md).
+MAX_OVERRUN_LIMIT = 255
 
 
 class DeviceRules:
@@ -79,8 +82,69 @@ class DeviceRules:
             return
         self.top_devices[decl.name] = decl
         args = self.device_args(dtype, decl.args, decl.span, self.const_typer())
-        if args is not None:
-            self._elaborate(decl.name, dtype, args, decl.span, ())
+        if args is not None and self._elaborate(decl.name, dtype, args, decl.span, ()):
+            self.check_safe_values(decl)
+
+    def check_safe_values(self, decl: ast.DeviceInstance) -> None:
+        """``safe datum = value`` after a device's arguments: a constant of
+        the datum's type, for its `in` data only, each datum once."""
+        given: dict[int, Span] = {}
+        prefix = decl.name + "."
+        for sv in decl.safe:
+            name = prefix + sv.datum.text
+            datum = self.device_data.get(name)
+            if datum is None:
+                ins = sorted(k[len(prefix):] for k, d in self.device_data.items()
+                             if k.startswith(prefix) and d.port.direction == "in")
+                self.error(sv.datum.span, f"device '{decl.name}' has no datum '{sv.datum.text}'",
+                           did_you_mean(sv.datum.text, ins) if ins else "it has no in data to give a safe value")
+                continue
+            if datum.port.direction == "out":
+                self.error(sv.datum.span, f"'{name}' is an out datum (read from the device): only in data have "
+                                          "safe values")
+                continue
+            if id(datum) in given:
+                self.error(sv.datum.span, f"the safe value of '{name}' is given twice",
+                           notes=[note(given[id(datum)], "first given here")])
+                continue
+            given[id(datum)] = sv.datum.span
+            v = self.const_typer().expect_const(sv.value, datum.type, f"the safe value of '{name}'")
+            if v.type is None:
+                continue
+            if datum.type is T.TIME and not whole_ms(v.const):
+                self.error(sv.value.span, "a run-time 'time' value counts whole milliseconds")
+                continue
+            datum.safe = v.const
+
+    def check_remote_settings(self, settings: ast.RemoteSettings) -> None:
+        """``remote watchdog T overruns K``: at most one, each setting once."""
+        if self.remote is not None:
+            self.error(settings.span, "a model has at most one 'remote' declaration",
+                       notes=[note(self.remote.decl.span, "the other one")])
+            return
+        values: dict[str, int] = {}
+        typer = self.const_typer()
+        for a in settings.attrs:
+            if a.key in values:
+                self.error(a.span, f"'{a.key}' is given twice")
+                continue
+            if a.key == "watchdog":
+                v = typer.expect_const(a.value, T.TIME, "the watchdog time")
+                if v.type is None:
+                    continue
+                if v.const <= 0 or not whole_us(v.const):
+                    self.error(a.value.span, "the watchdog time is a positive whole number of microseconds")
+                    continue
+            else:
+                v = typer.expect_const(a.value, None, "'overruns'")
+                if v.type is None:
+                    continue
+                if not (v.type.is_integer and v.type is not T.TIME) or not 1 <= v.const <= MAX_OVERRUN_LIMIT:
+                    self.error(a.value.span, f"'overruns' counts overruns in a row: 1 to {MAX_OVERRUN_LIMIT}, "
+                                             f"not {show_value(v.const, v.type)}")
+                    continue
+            values[a.key] = int(v.const)
+        self.remote = RemoteInfo(settings, values.get("watchdog"), values.get("overruns"))
 
     def device_args(self, dtype: ast.DeviceType, actuals, span: Span, typer: ExprTyper):
         values: dict[str, object] = {}
