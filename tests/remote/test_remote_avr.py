@@ -129,52 +129,75 @@ def test_lock_step_and_the_budget_at_each_baud_rate(build_cache, tmp_path):
     assert traced.read_bytes() == native.read_bytes(), err
 
 
-def test_the_actuators_reach_their_safe_values_when_the_host_dies(build_cache, tmp_path):
-    """The host is killed mid-run: the alarm LED (the host keeps it on) is
+# Link loss: (model text, MCU, the host's params keeping the actuator on,
+# the actuator datum and its pin, what applies the safe values). acquire's
+# 10 ms deadlines: K overruns in a row (40 ms) before the watchdog (100 ms);
+# a 500 ms task: the watchdog (1 s, stamped with the instant awaited when
+# the last frame came) before K overruns (1.5 s).
+LINK_LOSS = {
+    "overruns": (PT100.read_text(), "atmega2560", "alarm_high\n0,-2000", "alarm_led.level", "PB7"),
+    "watchdog": (BLINK.read_text().replace("period 1 ms", "period 500 ms"), "atmega328p", "half_period\n0,5000",
+                 "led.level", "PB5"),
+}
+
+
+@pytest.mark.parametrize("case", LINK_LOSS)
+def test_the_actuators_reach_their_safe_values_when_the_host_dies(case, build_cache, tmp_path):
+    """The host is killed mid-run: the actuator (the host keeps it on) is
     back at its safe value within the watchdog time of the last frame, on
     the pin (the harness's pin trace) and in the proxy's RAM."""
-    program, _ = lower_file(PT100)
-    model = device_model(program)
-    built = avr_proxy(build_cache, PT100, "atmega2560", 115200)
-    params = tmp_path / "params.csv"
-    params.write_text("time_us,alarm_high\n0,-2000\n")  # the alarm is on from the first activation
-    devices = device_columns(EXAMPLES / "pt100_sensor.stimulus.csv", PT100, tmp_path / "devices.csv")
+    text, mcu, params, datum, pin = LINK_LOSS[case]
+    model = tmp_path / "model.elab"
+    model.write_text(text)
+    program, _ = lower_file(model)
+    dm = device_model(program)
+    built = avr_proxy(build_cache, model, mcu, 115200)
+    host_stimulus = tmp_path / "params.csv"
+    host_stimulus.write_text(f"time_us,{params}\n")
     pins, trace = tmp_path / "pins.csv", tmp_path / "proxy.csv"
-    proxy = AvrProxy(built, tmp_path / "link", "--stimulus", str(devices), "--pins", str(pins), "--trace", str(trace))
+    devices = device_columns(EXAMPLES / "pt100_sensor.stimulus.csv", model, tmp_path / "devices.csv") \
+        if case == "overruns" else None  # the sensor's readings (blink reads no device)
+    proxy = AvrProxy(built, tmp_path / "link", "--pins", str(pins), "--trace", str(trace),
+                     *(["--stimulus", str(devices)] if devices else []))
+    period_us = program.tasks[dm.tasks[0].task].period * dm.tick_us
+    watchdog_us = dm.watchdog_ticks * dm.tick_us
     try:
-        link = Link(str(proxy.link), model)
+        link = Link(str(proxy.link), dm)
         link.connect()  # one HELLO: the proxy is up before the host comes
         link.close()
-        host = subprocess.Popen([*EASYLAB, "remote", str(PT100), "--target", str(proxy.link), "--stimulus",
-                                 str(params)], stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True,
+        host = subprocess.Popen([*EASYLAB, "remote", str(model), "--target", str(proxy.link), "--stimulus",
+                                 str(host_stimulus)], stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True,
                                 stdin=subprocess.DEVNULL)
         time.sleep(3.0)  # start-up, then the host runs for a while
         assert host.poll() is None, host.communicate()[1]
         host.kill()
         host.communicate()
-        time.sleep(0.5)  # more than the watchdog time
-        link = Link(str(proxy.link), model)
+        time.sleep((watchdog_us + period_us) / 1e6 + 0.5)
+        link = Link(str(proxy.link), dm)
         link.connect()
         counters = link.counters()
         assert link._request(K.CMD_COUNTERS)[0] == K.STATE_SAFE
         link.close()
     finally:
         proxy.end()
-    period_us = program.tasks[model.tasks[0].task].period * model.tick_us
+    if case == "overruns":
+        assert counters["overruns"] >= dm.overrun_limit and counters["watchdog"] == 0
+    else:
+        assert counters["watchdog"] == 1 and counters["overruns"] < dm.overrun_limit
     # Valid frames: our HELLO, the host's HELLO and START, its DOWN frames
     # (one per activation, from instant 0), our second HELLO and COUNTERS.
     downs = counters["frames"] - 5
-    assert downs > 20
+    assert downs >= 2
     last_frame_us = (downs - 1) * period_us  # the instant of the last DOWN (it came by that activation's deadline)
-    level = changes(trace, "alarm_led.level", 10**12)
+    level = changes(trace, datum, 10**12)
     assert [v for _, v in level] == ["0", "1", "0"]  # safe at boot, the host's value, safe again
     on_us, off_us = level[1][0], level[2][0]
-    assert 0 < off_us - last_frame_us <= model.watchdog_ticks * model.tick_us + period_us
+    assert 0 < off_us - last_frame_us <= watchdog_us + period_us
     # The pin follows at the same instants (the pin trace counts from the MCU's reset, not from START).
-    rows = [r.split(",") for r in pins.read_text().splitlines()[1:] if r.split(",")[2] == "PB7"]
+    rows = [r.split(",") for r in pins.read_text().splitlines()[1:] if r.split(",")[2] == pin]
     assert [r[3] for r in rows] == ["0", "1", "0"]
     pin_on, pin_off = int(rows[1][1]), int(rows[2][1])
-    assert abs((pin_off - pin_on) - (off_us - on_us)) <= model.tick_us
+    assert abs((pin_off - pin_on) - (off_us - on_us)) <= dm.tick_us
 
 
 def test_easylab_proxy_builds_the_avr_proxy_for_the_atmega328p(tmp_path):
