@@ -138,7 +138,8 @@ def build_proxy(program: Program, board_name: str, out_dir: Path, mcu: str | Non
     files = render_proxy(program, board, model)
     files.update(board.produce(proxy, checked, False))
     generated = write_files(out_dir, files)
-    compiled = board.compile(proxy, checked, out_dir, generated, CompileOptions(False, proxy_cflags(baud) + tuple(extra_cflags)))
+    compiled = board.compile(proxy, checked, out_dir, generated,
+                             CompileOptions(False, proxy_cflags(baud) + tuple(extra_cflags)))
     result = BuildResult(out_dir, board, compiled, generated, list(compiled.size.lines if compiled.size else []))
     result.notes += compiled.notes + [f"device model 0x{model.id:08x}"]
     if sim:
