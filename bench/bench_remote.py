@@ -1,9 +1,9 @@
 """Benchmark of remote execution (docs/remote.md): per example, the bytes
 of the frames of one release instant (UP + DOWN, on the wire), their time
 at 115200 baud and at 1 Mbaud against the earliest deadline, and the round
-trip per release instant measured in lock-step between `easylab remote
---fast` and the host board's proxy over a pty (the interpreter's share
-included: the slope between two run lengths, so start-up cancels). Then
+trip per release instant measured in lock-step between the host's
+interpreter (`easylab remote --fast`'s engine, in this process, timed from
+START: start-up excluded) and the host board's proxy over a pty. Then
 the AVR proxy in the simavr harness in real time against `easylab remote`
 at each baud rate: its CPU cycles per release instant (the slope of the
 harness's awake cycles between two run lengths), the frames' wire time in
@@ -51,35 +51,46 @@ def _device_stimulus(stimulus: Path, program, out: Path) -> Path | None:
 
 
 def _round_trip(name: str, program, work: Path, duration: str) -> tuple[int, float]:
-    """(release instants, seconds) of a lock-step run of ``duration``."""
+    """(release instants, seconds) of the interpreter in lock-step with the
+    host board's proxy over a pty for ``duration`` of logical time, timed
+    in this process from START to the last DOWN (start-up, plug-ins and
+    HELLO excluded): the host's share of a round trip, and a pty's."""
+    from easylab.interp.clock import Clock
+    from easylab.interp.plugins import PluginCache
+    from easylab.interp.stimulus import load as load_stimulus
+    from easylab.remote.host import RemoteEngine
+    from easylab.remote.link import Link
+
     exe = build_proxy(program, "host", work / "proxy").executable
-    model_path = ROOT / "examples" / f"{name}.elab"
     stimulus = ROOT / "examples" / f"{name}.stimulus.csv"
     devices = _device_stimulus(stimulus, program, work / "devices.csv")
-    link = work / "link"
-    proxy = subprocess.Popen([str(exe), "--fast", "--link", f"pty:{link}",
+    link_path = work / "link"
+    proxy = subprocess.Popen([str(exe), "--fast", "--link", f"pty:{link_path}",
                               *(["--stimulus", str(devices)] if devices else [])],
                              stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, stdin=subprocess.DEVNULL)
     try:
-        while not link.exists():
+        while not link_path.exists():
             time.sleep(0.01)
+        model = device_model(program)
+        cache = PluginCache()
+        cache.load_all(program.specs)
+        link = Link(str(link_path), model)
+        link.connect()
+        engine = RemoteEngine(program, model, link, load_stimulus(str(stimulus), program), plugin_cache=cache)
+        clock = Clock(None)
+        engine.clock = clock
+        link.start(lock_step=True)
         start = time.perf_counter()
-        subprocess.run([sys.executable, "-m", "easylab", "remote", str(model_path), "--target", str(link), "--fast",
-                        "--duration", duration, "--stimulus", str(stimulus)], check=True, stdin=subprocess.DEVNULL,
-                       capture_output=True)
+        engine.run(_us(duration), clock)
         seconds = time.perf_counter() - start
+        link.stop()
+        link.close()
+        engine.shutdown()
         proxy.wait(timeout=30)
     finally:
         if proxy.poll() is None:
             proxy.kill()
-    model = device_model(program)
-    per_hyperperiod = sum(1 for i in model.instants if i.release)
-    instants = _us(duration) // (model.hyperperiod * model.tick_us) * per_hyperperiod
-    return instants, seconds
-
-
-def _double(duration: str) -> str:
-    return f"{2 * _us(duration)}us"
+    return engine.frames, seconds
 
 
 def _us(text: str) -> int:
@@ -181,10 +192,7 @@ def main(out_dir: Path, tiny: bool = False) -> None:
             model = device_model(program)
             worst = {baud: max(link_budget(program, model, baud), key=lambda b: b.wire_us / b.deadline_us)
                      for baud in BAUDS}
-            # The slope between a run and one twice as long: start-up (Python, plug-ins, HELLO) cancels.
-            n1, t1 = _round_trip(name, program, Path(tmp) / f"{name}-1", duration)
-            n2, t2 = _round_trip(name, program, Path(tmp) / f"{name}-2", _double(duration))
-            instants, seconds = n2 - n1, t2 - t1
+            instants, seconds = _round_trip(name, program, Path(tmp) / name, duration)
             b = worst[BAUDS[0]]
             figures[name] = {
                 "bytes_per_instant": b.up_bytes + b.down_bytes, "up_bytes": b.up_bytes, "down_bytes": b.down_bytes,
