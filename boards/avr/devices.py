@@ -233,7 +233,7 @@ def _ring_sizes(mcu: Mcu, use: str) -> tuple[int, int]:
     return (32, 4)  # line camera: frames of 4 bytes, listen only
 
 
-def remote_link(program: Program, board, res: Resolved) -> list[str]:
+def remote_link(board, res: Resolved) -> list[str]:
     """A remote-execution proxy's link (avr_remote.c), on the first UART no
     device claims; only a proxy build (-DEL_REMOTE_PROXY=1, easylab proxy)
     sees it. A part whose every UART a device claims has no link."""
@@ -291,7 +291,7 @@ def config_header(program: Program, board, res: Resolved, release: bool) -> str:
         elif u["use"] == "modbus-rtu":
             lines.append(f"#define EL_AVR_MODBUS_UART {n}u")
             lines.append(f"#define EL_AVR_MODBUS_TX {tx}u")
-    lines += _i2c_config(board, res) + _spi_config(board, res) + remote_link(program, board, res)
+    lines += _i2c_config(board, res) + _spi_config(board, res) + remote_link(board, res)
     if board.sim:
         lines += ["", "#define EL_AVR_SIM 1 /* simulation build: instants reported through GPIOR0 */"]
     lines += ["", "#endif /* EL_AVR_CONFIG_H */", ""]

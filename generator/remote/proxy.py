@@ -10,9 +10,9 @@ from pathlib import Path
 
 from ..core.errors import BuildError
 from ..board.cbuild import write_files
-from ..board.simtables import item_symbol
 from ..board.contract import CompileOptions
 from ..board.registry import load_board
+from ..board.simtables import item_symbol
 from ..build import BuildResult
 from ..codegen.c_syntax import C_KIND_ENUM, C_TYPE_ENUM, c_literal
 from ..codegen.render import environment
@@ -30,6 +30,7 @@ def proxy_cflags(baud: int) -> tuple[str, ...]:
     """The proxy build's flags: PROXY_CFLAGS and the link's baud rate
     (EL_REMOTE_BAUD: a board whose link is a serial port sets it up so)."""
     return PROXY_CFLAGS + (f"-DEL_REMOTE_BAUD={int(baud)}UL",)
+
 
 _PACK = {"bool": "<B", "int8": "<b", "uint8": "<B", "int16": "<h", "uint16": "<H", "int32": "<i", "uint32": "<I",
          "float32": "<f", "time": "<I"}
