@@ -132,6 +132,7 @@ def cmd_remote(args) -> int:
     try:
         if watcher:
             watcher.start()
+        engine.boot()  # before START: the proxy's clock runs from then on, the first deadlines included
         link.start(lock_step=args.fast)
         engine.run(duration, clock)
         counters = link.counters()
