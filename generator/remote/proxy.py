@@ -4,6 +4,7 @@ contract like any firmware."""
 
 from __future__ import annotations
 
+import shlex
 import struct
 from dataclasses import dataclass
 from pathlib import Path
@@ -146,5 +147,7 @@ def build_proxy(program: Program, board_name: str, out_dir: Path, mcu: str | Non
     if sim:
         simulator = board.build_simulator(proxy, checked, out_dir, compiled)
         result.simulator = simulator.program
-        result.notes += simulator.notes + [f"simulator: {simulator.program}"]
+        # Its serial links on ptys in out_dir: `easylab remote --target` opens the link's.
+        run_it = shlex.join(board.simulator_command(out_dir, proxy))
+        result.notes += simulator.notes + [f"simulator: {simulator.program}", f"run: {run_it}"]
     return result
