@@ -260,6 +260,7 @@ void el_remote_boot(void)
     while (state != EL_RMT_STATE_RUNNING) { /* the clock starts at START */
         el_port_idle(50u);
     }
+    el_port_resync(); /* tick 0 is due now, not when the board started (an MCU's timer runs from boot) */
 }
 
 /* Real time: no valid frame for the watchdog time means the host is gone.

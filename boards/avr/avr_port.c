@@ -170,6 +170,10 @@ bool el_port_init(int argc, char **argv)
     GPIOR2 = 0u;
 #endif
 #endif
+#if defined(EL_AVR_REMOTE_UART)
+    /* A remote-execution proxy's link (avr_remote.c). */
+    el_avr_uart_open(EL_AVR_REMOTE_UART, EL_REMOTE_BAUD, EL_AVR_PARITY_NONE);
+#endif
     el_avr_reset_halt = 0u;
     ticks = 0u;
     isr_count = 0u;

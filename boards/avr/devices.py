@@ -213,7 +213,29 @@ def _ring_sizes(mcu: Mcu, use: str) -> tuple[int, int]:
         return (64, 168) if mcu.small else (192, 255)
     if use == "modbus-rtu":  # a whole ADU (256 bytes) arrives while a task may run
         return (128, 64) if mcu.small else (255, 128)
+    if use == "remote":  # a whole encoded frame (253 bytes) must fit in TX; DOWN frames arrive while an instant runs
+        return (128, 255) if mcu.small else (255, 255)
     return (32, 4)  # line camera: frames of 4 bytes, listen only
+
+
+def remote_link(board, res: Resolved) -> list[str]:
+    """A remote-execution proxy's link (avr_remote.c), on the first UART no
+    device claims; only a proxy build (-DEL_REMOTE_PROXY=1, easylab proxy)
+    sees it. A part whose every UART a device claims has no link."""
+    mcu = board.part
+    free = [n for n in sorted(mcu.uart) if n not in res.uarts]
+    lines = ["", "#if defined(EL_REMOTE_PROXY) && EL_REMOTE_PROXY"]
+    if not free:
+        users = ", ".join(f"uart{n} by {res.uarts[n].get('device', 'a device')}" for n in sorted(res.uarts))
+        lines.append(f"#error \"a remote-execution proxy needs a UART for its link: every UART of the {mcu.name} "
+                     f"is claimed ({users}); build for another --mcu\"")
+    else:
+        n = free[0]
+        rx, tx = _ring_sizes(mcu, "remote")
+        lines += [f"#define EL_AVR_REMOTE_UART {n}u /* the proxy's link: uart{n} (pins {', '.join(mcu.uart[n])}) */",
+                  f"#define EL_AVR_UART{n}_RX {rx}u", f"#define EL_AVR_UART{n}_TX {tx}u",
+                  f"#define EL_AVR_REMOTE_TX {tx}u"]
+    return lines + ["#endif"]
 
 
 def config_header(program: Program, board, res: Resolved, release: bool) -> str:
@@ -254,7 +276,7 @@ def config_header(program: Program, board, res: Resolved, release: bool) -> str:
         elif u["use"] == "modbus-rtu":
             lines.append(f"#define EL_AVR_MODBUS_UART {n}u")
             lines.append(f"#define EL_AVR_MODBUS_TX {tx}u")
-    lines += _i2c_config(board, res) + _spi_config(board, res)
+    lines += _i2c_config(board, res) + _spi_config(board, res) + remote_link(board, res)
     if board.sim:
         lines += ["", "#define EL_AVR_SIM 1 /* simulation build: instants reported through GPIOR0 */"]
     lines += ["", "#endif /* EL_AVR_CONFIG_H */", ""]

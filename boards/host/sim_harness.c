@@ -549,6 +549,8 @@ void sim_pin_record(uint16_t k, int value, uint64_t cycle)
 /* ---- the run ---- */
 
 static uint64_t start_ns;
+#define PACE_AHEAD_NS 200000u
+#define PACE_BEHIND_NS 1000000u
 static uint64_t next_service;
 
 static void on_signal(int sig)
@@ -607,9 +609,16 @@ bool sim_service(uint64_t cycle)
         if (sim_links[n].mode == SIM_LINK_PTY || sim_links[n].mode == SIM_LINK_TCP)
             sim_link_service(&sim_links[n]);
     if (!sim_opt.fast) {
+        /* At most PACE_AHEAD_NS ahead of the wall clock, and never
+         * catching up at full speed after the harness was held up (a busy
+         * machine): the simulated time then goes on from the wall clock's
+         * now. A peer on a link (a remote-execution host within a deadline
+         * of a few ms) never sees simulated time pass faster than its own. */
         uint64_t due = start_ns + cycle * 1000000000u / sim_clock_hz;
         uint64_t now = wall_ns();
-        if (due > now + 1000000u) {
+        if (now > due + PACE_BEHIND_NS)
+            start_ns += now - due;
+        else if (due > now + PACE_AHEAD_NS) {
             struct timespec ts;
             ts.tv_sec = (time_t)((due - now) / 1000000000u);
             ts.tv_nsec = (long)((due - now) % 1000000000u);

@@ -11,6 +11,7 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
+from ..remote.budget import DEFAULT_BAUD
 from .common import EXIT_OK, EXIT_USAGE, CliError, add_board_options, default_out_dir, lower_model, report_built
 from .run_command import add_debug_arguments
 
@@ -30,6 +31,9 @@ def add_parsers(sub) -> None:
     add_board_options(p)
     p.add_argument("-o", "--output", metavar="DIR", help="output folder (default: build/<model>/<board>-proxy/)")
     p.add_argument("--sim", action="store_true", help="a simulation build and the board's simulator")
+    p.add_argument("--baud", type=int, default=DEFAULT_BAUD,
+                   help=f"the link's baud rate where it is a serial port (default {DEFAULT_BAUD}; "
+                        "`easylab remote --baud` says the same)")
     p.set_defaults(func=cmd_proxy)
 
     r = sub.add_parser(
@@ -40,7 +44,8 @@ def add_parsers(sub) -> None:
     r.add_argument("file", metavar="MODEL", help="model file (.elab)")
     r.add_argument("--target", metavar="URL", required=True,
                    help="the proxy's link: a serial device, a pty, socket://HOST:PORT (as pyserial opens them)")
-    r.add_argument("--baud", type=int, default=115200, help="the link's baud rate (default 115200)")
+    r.add_argument("--baud", type=int, default=DEFAULT_BAUD,
+                   help=f"the link's baud rate, as the proxy was built (default {DEFAULT_BAUD})")
     r.add_argument("--connect-timeout", metavar="S", type=float, default=5.0,
                    help="seconds to repeat HELLO until the proxy answers (default 5: opening a serial port "
                         "resets many boards)")
@@ -72,7 +77,8 @@ def cmd_proxy(args) -> int:
     program = lower_model(args.file)
     out = Path(args.output) if args.output else default_out_dir(program, f"{args.board}-proxy")
     try:
-        built = build_proxy(program, args.board, out, mcu=args.mcu, sim=args.sim, board_path=args.board_path)
+        built = build_proxy(program, args.board, out, mcu=args.mcu, sim=args.sim, board_path=args.board_path,
+                            baud=args.baud)
     except BuildError as err:
         raise CliError(str(err)) from None
     return report_built(built)
@@ -140,6 +146,7 @@ def cmd_remote(args) -> int:
     try:
         if watcher:
             watcher.start()
+        engine.boot()  # before START: the proxy's clock runs from then on, the first deadlines included
         link.start(lock_step=args.fast)
         engine.run(duration, clock)
         counters = link.counters()

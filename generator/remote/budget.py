@@ -12,6 +12,7 @@ from .device_model import DeviceModel
 from .protocol import wire_bytes
 
 BITS_PER_BYTE = 10  # 8N1: a start and a stop bit
+DEFAULT_BAUD = 115200  # the link's baud rate unless `easylab proxy --baud` and `easylab remote --baud` say otherwise
 
 
 @dataclass

@@ -4,6 +4,7 @@ contract like any firmware."""
 
 from __future__ import annotations
 
+import shlex
 import struct
 from dataclasses import dataclass
 from pathlib import Path
@@ -12,16 +13,25 @@ from ..core.errors import BuildError
 from ..board.cbuild import write_files
 from ..board.contract import CompileOptions
 from ..board.registry import load_board
+from ..board.simtables import item_symbol
 from ..build import BuildResult
-from ..codegen.c_syntax import C_KIND_ENUM, C_TYPE_ENUM, c_literal, ident
+from ..codegen.c_syntax import C_KIND_ENUM, C_TYPE_ENUM, c_literal
 from ..codegen.render import environment
 from ..ir.program import Program
+from .budget import DEFAULT_BAUD
 from .device_model import DeviceModel, device_model, item_bytes, longest_gap, proxy_program, safe_value
 from .protocol import K
 
 # The flag every C file of a proxy build sees (runtime_c/el_remote.c, the
 # board's link).
 PROXY_CFLAGS = ("-DEL_REMOTE_PROXY=1",)
+
+
+def proxy_cflags(baud: int) -> tuple[str, ...]:
+    """The proxy build's flags: PROXY_CFLAGS and the link's baud rate
+    (EL_REMOTE_BAUD: a board whose link is a serial port sets it up so)."""
+    return PROXY_CFLAGS + (f"-DEL_REMOTE_BAUD={int(baud)}UL",)
+
 
 _PACK = {"bool": "<B", "int8": "<b", "uint8": "<B", "int16": "<h", "uint16": "<H", "int32": "<i", "uint32": "<I",
          "float32": "<f", "time": "<I"}
@@ -60,7 +70,8 @@ def _mask(tasks: list[int]) -> int:
 def view(program: Program, model: DeviceModel, board) -> _View:
     """The template's view of the proxy of ``program`` for ``board``."""
     proxy = proxy_program(program, model)
-    sym = {i.id: f"el_p{i.id}_{ident(i.name)}" for i in proxy.items}
+    # The names the boards' device tables and simulators give items (as in any firmware).
+    sym = {i.id: item_symbol(proxy, i.id) for i in proxy.items}
     items = [dict(name=i.name, sym=sym[i.id], c_type=i.type.c_name, count=i.count, kind=i.kind,
                   location=i.location, type_enum=C_TYPE_ENUM[i.type.name], kind_enum=C_KIND_ENUM[i.kind],
                   device=i.device, init=", ".join([c_literal(i.type, i.initial)] * i.count)) for i in proxy.items]
@@ -135,10 +146,12 @@ def render_proxy(program: Program, board, model: DeviceModel | None = None) -> d
 
 
 def build_proxy(program: Program, board_name: str, out_dir: Path, mcu: str | None = None, sim: bool = False,
-                board_path: list[str] | tuple[str, ...] = (), extra_cflags: tuple[str, ...] = ()) -> BuildResult:
+                board_path: list[str] | tuple[str, ...] = (), extra_cflags: tuple[str, ...] = (),
+                baud: int = DEFAULT_BAUD) -> BuildResult:
     """Generate and compile the proxy of ``program`` for a board (as
-    build.build does for firmware). BuildError when a frame of its device
-    model would not fit the protocol's largest frame."""
+    build.build does for firmware), its link at ``baud`` where the board's
+    link is a serial port. BuildError when a frame of its device model
+    would not fit the protocol's largest frame."""
     model = device_model(program)
     check_frames(program, model)
     check_watchdog(program, model)
@@ -148,11 +161,14 @@ def build_proxy(program: Program, board_name: str, out_dir: Path, mcu: str | Non
     files = render_proxy(program, board, model)
     files.update(board.produce(proxy, checked, False))
     generated = write_files(out_dir, files)
-    compiled = board.compile(proxy, checked, out_dir, generated, CompileOptions(False, PROXY_CFLAGS + tuple(extra_cflags)))
+    compiled = board.compile(proxy, checked, out_dir, generated,
+                             CompileOptions(False, proxy_cflags(baud) + tuple(extra_cflags)))
     result = BuildResult(out_dir, board, compiled, generated, list(compiled.size.lines if compiled.size else []))
     result.notes += compiled.notes + [f"device model 0x{model.id:08x}"]
     if sim:
         simulator = board.build_simulator(proxy, checked, out_dir, compiled)
         result.simulator = simulator.program
-        result.notes += simulator.notes + [f"simulator: {simulator.program}"]
+        # Its serial links on ptys in out_dir: `easylab remote --target` opens the link's.
+        run_it = shlex.join(board.simulator_command(out_dir, proxy))
+        result.notes += simulator.notes + [f"simulator: {simulator.program}", f"run: {run_it}"]
     return result

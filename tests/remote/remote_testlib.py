@@ -38,6 +38,22 @@ def device_columns(stimulus: Path, model: Path, out: Path) -> Path | None:
     return out
 
 
+def native_of(build_cache, model: Path) -> Path:
+    """The host-board firmware of ``model`` (built once per session)."""
+    from firmware_builds import build
+
+    return build_cache.get(("host", str(model)), lambda out: build(model, "host", out)).executable
+
+
+def run_native(exe: Path, trace: Path, duration: str, stimulus: Path | None) -> None:
+    """The host firmware in virtual time: the reference trace."""
+    cmd = [str(exe), "--fast", "--duration", duration, "--trace", str(trace)]
+    if stimulus is not None:
+        cmd += ["--stimulus", str(stimulus)]
+    proc = subprocess.run(cmd, capture_output=True, text=True, timeout=120, stdin=subprocess.DEVNULL)
+    assert proc.returncode == 0, proc.stderr
+
+
 def wait_for(path: Path, timeout: float = 10.0) -> None:
     deadline = time.monotonic() + timeout
     while not path.exists():

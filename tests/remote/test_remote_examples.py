@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import pytest
 
-from remote_testlib import EXAMPLES, Proxy, device_columns, proxy_of, remote
+from remote_testlib import EXAMPLES, Proxy, device_columns, native_of, proxy_of, remote, run_native
 
 DATA = EXAMPLES.parent / "tests" / "interp" / "data"
 SAFE = EXAMPLES.parent / "tests" / "remote" / "data"
@@ -22,22 +22,6 @@ CASES = {  # name: (model, stimulus or None, duration)
     # a declared safe value: the led's initial value in the firmware and at the proxy's boot
     "safe_blink": (SAFE / "safe_blink.elab", EXAMPLES / "blink.stimulus.csv", "1500ms"),
 }
-
-
-def native_of(build_cache, model):
-    from firmware_builds import build
-
-    return build_cache.get(("host", str(model)), lambda out: build(model, "host", out)).executable
-
-
-def run_native(exe, trace, duration, stimulus):
-    import subprocess
-
-    cmd = [str(exe), "--fast", "--duration", duration, "--trace", str(trace)]
-    if stimulus is not None:
-        cmd += ["--stimulus", str(stimulus)]
-    proc = subprocess.run(cmd, capture_output=True, text=True, timeout=120, stdin=subprocess.DEVNULL)
-    assert proc.returncode == 0, proc.stderr
 
 
 # CSV for every example, VCD for the two with charts (the trace writer is the

@@ -1,0 +1,229 @@
+"""The AVR proxy (boards/avr/avr_remote.c) in the simavr harness, its link
+UART on a pty, against `easylab remote`: the host-native trace in real
+time at 115200 baud and at 1 Mbaud (simavr's UART times every byte by the
+baud rate the firmware set), lock-step, the link budget's refusal, the
+actuator pins at their safe values when the host dies, and the proxy's
+flash and RAM on the ATmega328P."""
+
+from __future__ import annotations
+
+import re
+import signal
+import subprocess
+import time
+from pathlib import Path
+
+import pytest
+
+from easylab.pipeline import lower_file
+from easylab.remote.device_model import device_model
+from easylab.remote.link import Link
+from easylab.remote.protocol import K
+from easylab.remote.proxy import build_proxy
+from remote_testlib import EASYLAB, EXAMPLES, device_columns, native_of, remote, run_native, wait_for
+
+BLINK = EXAMPLES / "blink.elab"
+PT100 = EXAMPLES / "pt100_sensor.elab"
+
+
+def avr_proxy(build_cache, model: Path, mcu: str, baud: int):
+    """The simulation build of ``model``'s AVR proxy (built once per session)."""
+    def make(out: Path):
+        program, result = lower_file(model)
+        assert program is not None, result.report()
+        return build_proxy(program, "avr", out, mcu=mcu, sim=True, baud=baud)
+    return build_cache.get(("avr-proxy", str(model), mcu, baud), make)
+
+
+def link_uart(built) -> int:
+    """The UART the build's configuration gives the proxy's link."""
+    config = (built.out_dir / "el_avr_config.h").read_text()
+    return int(re.search(r"#define EL_AVR_REMOTE_UART (\d+)u", config).group(1))
+
+
+class AvrProxy:
+    """The proxy in the simavr harness (real time unless ``--fast`` is
+    given), its link UART on a pty (symlink ``link``)."""
+
+    def __init__(self, built, link: Path, *args: str):
+        self.link = link
+        self.proc = subprocess.Popen([str(built.simulator), f"--uart{link_uart(built)}", f"pty:{link}", *args],
+                                     stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True,
+                                     stdin=subprocess.DEVNULL)
+        wait_for(link)
+
+    def end(self) -> str:
+        """End the simulation (its files are complete then); its stderr."""
+        if self.proc.poll() is None:
+            self.proc.send_signal(signal.SIGTERM)
+        try:
+            _, err = self.proc.communicate(timeout=30)
+        except subprocess.TimeoutExpired:
+            self.proc.kill()
+            _, err = self.proc.communicate()
+        return err
+
+
+def changes(trace: Path, column: str, until_us: int) -> list[tuple[int, str]]:
+    """(time, value) where a CSV trace's column takes a new value, before ``until_us``."""
+    rows = trace.read_text().splitlines()
+    at = rows[0].split(",").index(column)
+    out: list[tuple[int, str]] = []
+    for row in rows[1:]:
+        cells = row.split(",")
+        if int(cells[0]) < until_us and (not out or out[-1][1] != cells[at]):
+            out.append((int(cells[0]), cells[at]))
+    return out
+
+
+# Real-time runs (10 ms deadlines): at 115200 baud; at 1 Mbaud, with a chart and a line camera on a UART of its own.
+REAL_TIME = [("pt100_sensor", "atmega2560", 115200, "1s"), ("line_follower", "atmega2560", 1_000_000, "1s")]
+
+
+@pytest.mark.parametrize("name,mcu,baud,duration", REAL_TIME)
+def test_the_avr_proxy_in_real_time_gives_the_native_trace(name, mcu, baud, duration, build_cache, tmp_path):
+    model, stimulus = EXAMPLES / f"{name}.elab", EXAMPLES / f"{name}.stimulus.csv"
+    native = tmp_path / "native.csv"
+    run_native(native_of(build_cache, model), native, duration, stimulus)
+    built = avr_proxy(build_cache, model, mcu, baud)
+    devices = device_columns(stimulus, model, tmp_path / "devices.csv")
+    proxy = AvrProxy(built, tmp_path / "link", "--stimulus", str(devices), "--trace", str(tmp_path / "proxy.csv"))
+    try:
+        traced = tmp_path / "remote.csv"
+        started = time.monotonic()
+        proc = remote(model, proxy.link, "--baud", str(baud), "--duration", duration, "--trace", str(traced),
+                      "--stimulus", str(stimulus))
+        assert proc.returncode == 0, proc.stderr
+        assert time.monotonic() - started >= 1.0  # paced by the proxy's clock
+    finally:
+        err = proxy.end()
+    assert traced.read_bytes() == native.read_bytes(), err
+    assert native.read_bytes().count(b"\n") > 20, "the stimulus should make the model move"
+    # What the proxy read and applied (its own trace, from the MCU's RAM) is
+    # the firmware's too, unless the host's values came late.
+    if "overruns" not in proc.stderr:
+        program, _ = lower_file(model)
+        for item in device_model(program).items:
+            assert changes(tmp_path / "proxy.csv", item.name, 1_000_000) == changes(native, item.name, 1_000_000)
+
+
+def test_lock_step_and_the_budget_at_each_baud_rate(build_cache, tmp_path):
+    """blink (a 1 ms deadline) is refused at 115200 baud with the budget's
+    numbers; at 1 Mbaud it fits, and in lock-step the trace is the
+    firmware's."""
+    refused = remote(BLINK, tmp_path / "link", "--baud", "115200", "--duration", "1s")
+    assert refused.returncode == 1
+    assert ("the link cannot carry the device data in time: main at tick 0: 24 bytes per instant (UP 10, DOWN 14) "
+            "take 2.083 ms at 115200 baud; the deadline is 1 ms") in refused.stderr
+    stimulus = EXAMPLES / "blink.stimulus.csv"
+    native = tmp_path / "native.csv"
+    run_native(native_of(build_cache, BLINK), native, "1s", stimulus)
+    proxy = AvrProxy(avr_proxy(build_cache, BLINK, "atmega328p", 1_000_000), tmp_path / "link", "--fast")
+    try:
+        traced = tmp_path / "remote.csv"
+        proc = remote(BLINK, proxy.link, "--baud", "1000000", "--fast", "--duration", "1s", "--trace", str(traced),
+                      "--stimulus", str(stimulus))
+        assert proc.returncode == 0, proc.stderr
+    finally:
+        err = proxy.end()
+    assert traced.read_bytes() == native.read_bytes(), err
+
+
+# Link loss: (model text, MCU, the host's params keeping the actuator on,
+# the actuator datum and its pin, what applies the safe values). acquire's
+# 10 ms deadlines: K overruns in a row (40 ms) before the watchdog (100 ms);
+# a 500 ms task: the watchdog (1 s, stamped with the instant awaited when
+# the last frame came) before K overruns (1.5 s).
+LINK_LOSS = {
+    "overruns": (None, "atmega2560", "alarm_high\n0,-2000", "alarm_led.level", "PB7"),  # pt100_sensor itself
+    "watchdog": (BLINK.read_text().replace("period 1 ms", "period 500 ms"), "atmega328p", "half_period\n0,5000",
+                 "led.level", "PB5"),
+}
+
+
+@pytest.mark.parametrize("case", LINK_LOSS)
+def test_the_actuators_reach_their_safe_values_when_the_host_dies(case, build_cache, tmp_path):
+    """The host is killed mid-run: the actuator (the host keeps it on) is
+    back at its safe value within the watchdog time of the last frame, on
+    the pin (the harness's pin trace) and in the proxy's RAM."""
+    text, mcu, params, datum, pin = LINK_LOSS[case]
+    model = PT100 if text is None else tmp_path / "model.elab"
+    if text is not None:
+        model.write_text(text)
+    program, _ = lower_file(model)
+    dm = device_model(program)
+    built = avr_proxy(build_cache, model, mcu, 115200)
+    host_stimulus = tmp_path / "params.csv"
+    host_stimulus.write_text(f"time_us,{params}\n")
+    pins, trace = tmp_path / "pins.csv", tmp_path / "proxy.csv"
+    devices = device_columns(EXAMPLES / "pt100_sensor.stimulus.csv", model, tmp_path / "devices.csv") \
+        if case == "overruns" else None  # the sensor's readings (blink reads no device)
+    proxy = AvrProxy(built, tmp_path / "link", "--pins", str(pins), "--trace", str(trace),
+                     *(["--stimulus", str(devices)] if devices else []))
+    period_us = program.tasks[dm.tasks[0].task].period * dm.tick_us
+    watchdog_us = dm.watchdog_ticks * dm.tick_us
+    try:
+        link = Link(str(proxy.link), dm)
+        link.connect()  # one HELLO: the proxy is up before the host comes
+        link.close()
+        host = subprocess.Popen([*EASYLAB, "remote", str(model), "--target", str(proxy.link), "--stimulus",
+                                 str(host_stimulus)], stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True,
+                                stdin=subprocess.DEVNULL)
+        time.sleep(3.0)  # start-up, then the host runs for a while
+        assert host.poll() is None, host.communicate()[1]
+        host.kill()
+        host.communicate()
+        time.sleep((watchdog_us + period_us) / 1e6 + 0.5)
+        link = Link(str(proxy.link), dm)
+        link.connect()
+        counters = link.counters()
+        assert link._request(K.CMD_COUNTERS)[0] == K.STATE_SAFE
+        link.close()
+    finally:
+        proxy.end()
+    if case == "overruns":
+        assert counters["overruns"] >= dm.overrun_limit and counters["watchdog"] == 0
+    else:
+        assert counters["watchdog"] == 1 and counters["overruns"] < dm.overrun_limit
+    # Valid frames: our HELLO, the host's HELLO and START, its DOWN frames
+    # (one per activation, from instant 0), our second HELLO and COUNTERS.
+    downs = counters["frames"] - 5
+    assert downs >= 2
+    last_frame_us = (downs - 1) * period_us  # the instant of the last DOWN (it came by that activation's deadline)
+    level = changes(trace, datum, 10**12)
+    assert [v for _, v in level] == ["0", "1", "0"]  # safe at boot, the host's value, safe again
+    on_us, off_us = level[1][0], level[2][0]
+    assert 0 < off_us - last_frame_us <= watchdog_us + period_us
+    # The pin follows at the same instants (the pin trace counts from the MCU's reset, not from START).
+    rows = [r.split(",") for r in pins.read_text().splitlines()[1:] if r.split(",")[2] == pin]
+    assert [r[3] for r in rows] == ["0", "1", "0"]
+    pin_on, pin_off = int(rows[1][1]), int(rows[2][1])
+    assert abs((pin_off - pin_on) - (off_us - on_us)) <= dm.tick_us
+
+
+def test_easylab_proxy_builds_the_avr_proxy_for_the_atmega328p(tmp_path):
+    """Its flash and RAM (deterministic, so a bound), its link on uart0."""
+    proc = subprocess.run([*EASYLAB, "proxy", str(BLINK), "--board", "avr", "--mcu", "atmega328p", "-o",
+                           str(tmp_path / "p")], capture_output=True, text=True, timeout=300, stdin=subprocess.DEVNULL)
+    assert proc.returncode == 0, proc.stderr
+    size = re.search(r"atmega328p: flash (\d+) of \d+ bytes .*RAM (\d+) of 2048 bytes", proc.stdout)
+    flash, ram = int(size.group(1)), int(size.group(2))
+    assert flash <= 6656 and ram <= 1536, proc.stdout
+    assert proc.stdout.splitlines()[-1] == str(tmp_path / "p" / "blink_proxy.elf")
+    assert "#define EL_AVR_REMOTE_UART 0u" in (tmp_path / "p" / "el_avr_config.h").read_text()
+
+
+def test_a_part_whose_every_uart_a_device_claims_has_no_link(tmp_path):
+    from easylab.core.errors import BuildError
+
+    model = tmp_path / "camera.elab"
+    model.write_text(EXAMPLES.joinpath("blink.elab").read_text().replace(
+        'device led: DigitalOut(pin = "PB5")', 'device led: DigitalOut(pin = "PB5")\n'
+        'device type Cam() {\n    claims uart[0]\n    out line: int16\n    driver "line_camera"\n}\n'
+        'device cam: Cam()').replace("debug on uart0 baud 115200", ""))
+    program, result = lower_file(model)
+    assert program is not None, result.report()
+    with pytest.raises(BuildError) as err:
+        build_proxy(program, "avr", tmp_path / "p", mcu="atmega328p")
+    assert ("a remote-execution proxy needs a UART for its link: every UART of the atmega328p is claimed "
+            "(uart0 by cam); build for another --mcu") in str(err.value)
