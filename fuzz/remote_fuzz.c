@@ -120,6 +120,12 @@ el_tick_t el_now_tick(void)
     return now;
 }
 
+void el_port_resync(void)
+{
+    /* The target's clock is its count of the dispatcher's instants: tick 0
+     * is due when START has come, as a board's resync makes it. */
+}
+
 void el_port_idle(uint16_t max_ms)
 {
     (void)max_ms;
