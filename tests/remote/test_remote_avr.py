@@ -80,6 +80,13 @@ def changes(trace: Path, column: str, until_us: int) -> list[tuple[int, str]]:
 REAL_TIME = [("pt100_sensor", "atmega2560", 115200, "1s"), ("line_follower", "atmega2560", 1_000_000, "1s")]
 
 
+# A run whose host a loaded machine delays past K deadlines in a row ends
+# in the proxy's safe state, as it must (and says so): such a run is tried
+# again, at most this many times in all; a wrong trace never is.
+REAL_TIME_ATTEMPTS = 3
+LATE_HOST = "the proxy applied its safe values"
+
+
 @pytest.mark.parametrize("name,mcu,baud,duration", REAL_TIME)
 def test_the_avr_proxy_in_real_time_gives_the_native_trace(name, mcu, baud, duration, build_cache, tmp_path):
     model, stimulus = EXAMPLES / f"{name}.elab", EXAMPLES / f"{name}.stimulus.csv"
@@ -87,16 +94,27 @@ def test_the_avr_proxy_in_real_time_gives_the_native_trace(name, mcu, baud, dura
     run_native(native_of(build_cache, model), native, duration, stimulus)
     built = avr_proxy(build_cache, model, mcu, baud)
     devices = device_columns(stimulus, model, tmp_path / "devices.csv")
-    proxy = AvrProxy(built, tmp_path / "link", "--stimulus", str(devices), "--trace", str(tmp_path / "proxy.csv"))
-    try:
-        traced = tmp_path / "remote.csv"
-        started = time.monotonic()
-        proc = remote(model, proxy.link, "--baud", str(baud), "--duration", duration, "--trace", str(traced),
-                      "--stimulus", str(stimulus))
-        assert proc.returncode == 0, proc.stderr
-        assert time.monotonic() - started >= 1.0  # paced by the proxy's clock
-    finally:
-        err = proxy.end()
+    late = []
+    for attempt in range(REAL_TIME_ATTEMPTS):
+        run_dir = tmp_path / f"run{attempt}"
+        run_dir.mkdir()
+        proxy = AvrProxy(built, run_dir / "link", "--stimulus", str(devices), "--trace", str(run_dir / "proxy.csv"))
+        try:
+            traced = run_dir / "remote.csv"
+            started = time.monotonic()
+            proc = remote(model, proxy.link, "--baud", str(baud), "--duration", duration, "--trace", str(traced),
+                          "--stimulus", str(stimulus))
+            elapsed = time.monotonic() - started
+        finally:
+            err = proxy.end()
+        if proc.returncode != 0 and LATE_HOST in proc.stderr:
+            late.append(proc.stderr.strip())
+            continue
+        break
+    else:
+        pytest.fail(f"the host was late in every one of {REAL_TIME_ATTEMPTS} runs:\n" + "\n".join(late))
+    assert proc.returncode == 0, proc.stderr
+    assert elapsed >= 1.0  # paced by the proxy's clock
     assert traced.read_bytes() == native.read_bytes(), err
     assert native.read_bytes().count(b"\n") > 20, "the stimulus should make the model move"
     # What the proxy read and applied (its own trace, from the MCU's RAM) is
@@ -104,7 +122,7 @@ def test_the_avr_proxy_in_real_time_gives_the_native_trace(name, mcu, baud, dura
     if "overruns" not in proc.stderr:
         program, _ = lower_file(model)
         for item in device_model(program).items:
-            assert changes(tmp_path / "proxy.csv", item.name, 1_000_000) == changes(native, item.name, 1_000_000)
+            assert changes(run_dir / "proxy.csv", item.name, 1_000_000) == changes(native, item.name, 1_000_000)
 
 
 def test_lock_step_and_the_budget_at_each_baud_rate(build_cache, tmp_path):
