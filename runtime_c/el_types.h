@@ -103,6 +103,17 @@ EL_CMP_FN(u32, uint32_t)
      (op)[0] == '>' ? ((op)[1] == '=' ? (a) >= (b) : (a) > (b)) : \
      (op)[0] == '=' ? (a) == (b) : (a) != (b))
 
+/* A function kept out of its callers: a hot loop then has the registers to
+ * itself (avr-gcc otherwise inlines a static function called once and
+ * spills the loop's variables to the stack). */
+#ifndef EL_NOINLINE
+#if defined(__GNUC__)
+#define EL_NOINLINE __attribute__((noinline))
+#else
+#define EL_NOINLINE
+#endif
+#endif
+
 /* Read-only tables: in flash where the board can read it from there. */
 #ifndef EL_ROM
 #define EL_ROM
