@@ -42,10 +42,14 @@ typedef uint32_t el_time_t;
 #define EL_TIME_MAX UINT32_MAX
 
 /* The absolute logical tick (the dispatcher's count of instants' ticks).
- * 64-bit: traces run long. Without a 64-bit type it wraps after 2^32
- * ticks (49.7 days of 1 ms ticks), which nothing in a firmware notices:
- * the port's waits and the lateness count already compare 32-bit ticks. */
-#if EL_HAS_INT64
+ * 64-bit: traces run long. Without a 64-bit type, or on a board that asks
+ * for it (EL_TICK_32: 8-bit parts, where 64-bit additions cost flash and
+ * time at every instant), it wraps after 2^32 ticks (49.7 days of 1 ms
+ * ticks), which nothing in a firmware notices: the port's waits and the
+ * lateness count compare 32-bit ticks wrap-safely (instants are less than
+ * a hyperperiod apart, which fits 32 bits), and a simulator's harness
+ * extends the ticks it reads to 64 bits (sim_tick_extend). */
+#if EL_HAS_INT64 && !(defined(EL_TICK_32) && EL_TICK_32)
 typedef uint64_t el_tick_t;
 #else
 typedef uint32_t el_tick_t;

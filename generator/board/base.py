@@ -53,6 +53,14 @@ class BoardBase:
         value = self.description.raw.get("nv_size")
         return int(value) if value is not None else None
 
+    @property
+    def service_api(self) -> bool:
+        """Whether the board's own code reads and writes service items
+        through el_service_* (board.toml `service_api`, e.g. an HMI): then
+        the service map is linked for every model with service items, not
+        only for those that serve it over Modbus or persist params."""
+        return bool(self.description.raw.get("service_api", False))
+
     # ---------------------------------------------------------------- code
 
     def device_call(self, device: Device, handler: str) -> str:
