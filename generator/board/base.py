@@ -54,6 +54,14 @@ class BoardBase:
         return int(value) if value is not None else None
 
     @property
+    def model_sized_debug_buffers(self) -> bool:
+        """Whether a debug build sizes the server's frame buffers from the
+        model (codegen/debug.py: buffer_sizes) instead of the protocol's
+        largest frame: parts short of RAM (board.toml
+        `model_sized_debug_buffers`; a backend may decide by MCU)."""
+        return bool(self.description.raw.get("model_sized_debug_buffers", False))
+
+    @property
     def service_api(self) -> bool:
         """Whether the board's own code reads and writes service items
         through el_service_* (board.toml `service_api`, e.g. an HMI): then
