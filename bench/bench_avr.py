@@ -331,6 +331,34 @@ def _rtu_frame(unit: int, pdu: bytes) -> bytes:
     return body + bytes([crc & 0xFF, crc >> 8])
 
 
+def modbus_decls() -> str:
+    """MODBUS_DECLS with the request's RTU frame (shared with bench_pic18)."""
+    return MODBUS_DECLS.format(frame=", ".join(f"0x{b:02X}u" for b in _rtu_frame(1, bytes([4, 0, 0, 0, 125]))))
+
+
+# What the Modbus programs time: the PDU handler alone, the RTU exchange, and
+# (not timed) the RTU exchange with the reply's CRC checked by the bitwise
+# el_crc16 (0 over a frame and its CRC).
+MODBUS_BODIES = {
+    "pdu": "check += el_mb_pdu(mb_request, 5u, mb_response, false);",
+    "rtu": "check += mb_serve();",
+    "rtu_checked": "{ uint16_t len = mb_serve(); check += len + el_crc16(mb_rtu.buf, len); }",
+    "baseline": "",
+}
+MODBUS_SETUP = "el_svc_gen_boot(); /* the map */ el_mb_rtu_init(&mb_rtu, 1u, false);"
+# Bytes per answer: function, byte count, 250 data bytes; the RTU reply adds the unit and the CRC.
+MODBUS_ANSWER = {"pdu": 252, "rtu": 255, "rtu_checked": 255}
+
+
+def modbus_check(name: str, check: int, n: int) -> None:
+    """Stop when a Modbus program's answers were not what a 125-register
+    read gives (or a reply's CRC was wrong)."""
+    want = MODBUS_ANSWER.get(name)
+    if want is not None and check != n * want:
+        raise SystemExit(f"the 125-register read ({name}) answered {check / n} bytes, not {want}"
+                         " (or a reply with a wrong CRC)")
+
+
 def modbus_response(tmp: Path, runner: Path, tiny: bool = False) -> dict:
     """Cycles the slave needs to answer a 125-register read (function 04)
     on the ATmega2560: the request's PDU handled into its response (el_mb_pdu
@@ -346,23 +374,12 @@ def modbus_response(tmp: Path, runner: Path, tiny: bool = False) -> dict:
     program, board = _generate(model, work, MCU)
     extra = [p for p in work.glob("*.c") if p.name not in ("model.c",)]
     n = 1 if tiny else 10
-    decls = MODBUS_DECLS.format(frame=", ".join(f"0x{b:02X}u" for b in _rtu_frame(1, bytes([4, 0, 0, 0, 125]))))
-    bodies = {
-        "pdu": "check += el_mb_pdu(mb_request, 5u, mb_response, false);",
-        "rtu": "check += mb_serve();",
-        # Not timed: the reply's CRC checked by the bitwise el_crc16 (0 over a frame and its CRC).
-        "rtu_checked": "{ uint16_t len = mb_serve(); check += len + el_crc16(mb_rtu.buf, len); }",
-        "baseline": "",
-    }
-    setup = "el_svc_gen_boot(); /* the map */ el_mb_rtu_init(&mb_rtu, 1u, false);"
-    want = {"pdu": 252, "rtu": 255, "rtu_checked": 255}  # function, byte count, 250 data bytes; + unit and CRC
     cycles = {}
-    for name, body in bodies.items():
-        elf = _compile(board, work, f"mb_{name}", PROGRAM.format(decls=decls, body=body, n=n, setup=setup), extra)
+    for name, body in MODBUS_BODIES.items():
+        elf = _compile(board, work, f"mb_{name}",
+                       PROGRAM.format(decls=modbus_decls(), body=body, n=n, setup=MODBUS_SETUP), extra)
         cycles[name], check = _cycles(runner, elf)
-        if name in want and check != n * want[name]:
-            raise SystemExit(f"the 125-register read ({name}) answered {check / n} bytes, not {want[name]}"
-                             " (or a reply with a wrong CRC)")
+        modbus_check(name, check, n)
     pdu = (cycles["pdu"] - cycles["baseline"]) / n
     frame = (cycles["rtu"] - cycles["baseline"]) / n
     return {"mcu": MCU, "registers": 125, "pdu_cycles": round(pdu), "pdu_and_crc_cycles": round(frame),
