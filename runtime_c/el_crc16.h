@@ -15,4 +15,10 @@ uint16_t el_crc16_update(uint16_t crc, const uint8_t *data, uint16_t len);
 /* The CRC of `len` bytes. */
 uint16_t el_crc16(const uint8_t *data, uint16_t len);
 
+/* el_crc16_update from a table: faster, 512 bytes more (el_crc16.c). */
+uint16_t el_crc16_fast(uint16_t crc, const uint8_t *data, uint16_t len);
+
+/* el_crc16_fast of one byte (a receiver's running CRC). */
+uint16_t el_crc16_fast_byte(uint16_t crc, uint8_t byte);
+
 #endif /* EL_CRC16_H */

@@ -31,13 +31,35 @@
 #error "el_debug_protocol.h: EL_DBG_MAX_PAYLOAD must be EL_DBG_MAX_FRAME - 4"
 #endif
 
+/* The sizes of this server (HELLO reports them): the model's (generated in
+ * el_debug_config.h on boards short of RAM), else the protocol's largest. */
+#ifndef EL_DBG_FRAME
+#define EL_DBG_FRAME EL_DBG_MAX_FRAME
+#endif
+#ifndef EL_DBG_VALUE_BYTES
+#define EL_DBG_VALUE_BYTES EL_DBG_VALUE_MAX
+#endif
+#ifndef EL_DBG_TX_ENTRIES
+#define EL_DBG_TX_ENTRIES EL_DBG_TX_MAX
+#endif
+#ifndef EL_DBG_WRITE_ENTRIES
+#define EL_DBG_WRITE_ENTRIES EL_DBG_WRITE_QUEUE
+#endif
+#ifndef EL_DBG_BP_SLOTS
+#define EL_DBG_BP_SLOTS EL_DBG_BP_MAX
+#endif
+#if EL_DBG_FRAME > EL_DBG_MAX_FRAME || EL_DBG_VALUE_BYTES > EL_DBG_VALUE_MAX || \
+    EL_DBG_TX_ENTRIES > EL_DBG_TX_MAX || EL_DBG_WRITE_ENTRIES > EL_DBG_WRITE_QUEUE || EL_DBG_BP_SLOTS > EL_DBG_BP_MAX
+#error "el_debug_config.h: a size beyond the protocol's limits"
+#endif
+
 /* ---- state ----------------------------------------------------------------- */
 
 typedef struct {
     uint16_t item;
     uint16_t elem;
     uint8_t op;                       /* EL_DBG_OP_... */
-    uint8_t value[EL_DBG_VALUE_MAX];  /* to write, or read when applied */
+    uint8_t value[EL_DBG_VALUE_BYTES]; /* to write, or read when applied */
 } entry_t;
 
 typedef struct {
@@ -53,26 +75,26 @@ typedef struct {
 #define TX_COMMITTED 2u
 #define TX_APPLIED 3u
 
-static uint8_t rx_buf[EL_DBG_MAX_FRAME];
+static uint8_t rx_buf[EL_DBG_FRAME];
 static el_cobs_decoder_t rx;
 static bool rx_ready;
-static uint8_t resp[EL_DBG_MAX_FRAME];
+static uint8_t resp[EL_DBG_FRAME];
 static uint16_t resp_len; /* bytes of resp in use (seq, cmd, status, payload) */
 static bool resp_full;     /* a put did not fit: every later put of this response fails too */
-static uint8_t wire[EL_COBS_MAX_ENCODED(EL_DBG_MAX_FRAME) + 1u];
+static uint8_t wire[EL_COBS_MAX_ENCODED(EL_DBG_FRAME) + 1u];
 static uint16_t wire_len; /* the last response as sent, for a repeated request */
 static bool have_last;
 static uint8_t last_seq;
 static uint16_t last_crc;
 static uint16_t counters[EL_DBG_C_COUNT];
 
-static entry_t wq[EL_DBG_WRITE_QUEUE];
+static entry_t wq[EL_DBG_WRITE_ENTRIES];
 static uint8_t wq_len;
-static entry_t txq[EL_DBG_TX_MAX];
+static entry_t txq[EL_DBG_TX_ENTRIES];
 static uint8_t tx_len;
 static uint8_t tx_state;
 
-static breakpoint_t bps[EL_DBG_BP_MAX];
+static breakpoint_t bps[EL_DBG_BP_SLOTS];
 static uint8_t bp_count;
 
 uint8_t el_dbg_armed;
@@ -129,7 +151,7 @@ static void zero_bytes(void *dst, uint16_t n)
 
 static bool put_u8(uint8_t v)
 {
-    if (resp_full || resp_len + 1u > EL_DBG_MAX_FRAME - EL_DBG_TRAILER) {
+    if (resp_full || resp_len + 1u > EL_DBG_FRAME - EL_DBG_TRAILER) {
         resp_full = true;
         return false;
     }
@@ -345,7 +367,7 @@ void el_debug_probe(uint8_t kind, uint16_t a, uint16_t b)
     if (el_debug_abort_halt != 0u || halted) {
         return;
     }
-    for (i = 0u; i < EL_DBG_BP_MAX; i++) {
+    for (i = 0u; i < EL_DBG_BP_SLOTS; i++) {
         breakpoint_t *bp = &bps[i];
         if (bp->used != 0u && bp->kind == kind && bp->a == a && bp->b == b) {
             if (bp->hits != UINT16_MAX) {
@@ -488,11 +510,11 @@ static uint8_t do_read(const uint8_t *p, uint16_t n)
         uint16_t needed = 0u;
         for (k = 0u; k < n; k += 2u) {
             needed = (uint16_t)(needed + el_dbg_items[get_u16(p + k)].count);
-            if (needed > EL_DBG_TX_MAX) {
+            if (needed > EL_DBG_TX_ENTRIES) {
                 return EL_DBG_E_QUEUE_FULL;
             }
         }
-        if ((uint16_t)(tx_len + needed) > EL_DBG_TX_MAX) {
+        if ((uint16_t)(tx_len + needed) > EL_DBG_TX_ENTRIES) {
             return EL_DBG_E_QUEUE_FULL;
         }
         (void)put_u8(EL_DBG_QUEUED);
@@ -511,7 +533,7 @@ static uint8_t do_read(const uint8_t *p, uint16_t n)
     for (k = 0u; k < n; k += 2u) {
         const el_dbg_item_t *it = &el_dbg_items[get_u16(p + k)];
         uint8_t size = type_size(it->type);
-        if ((uint32_t)resp_len + (uint32_t)it->count * size > (uint32_t)(EL_DBG_MAX_FRAME - EL_DBG_TRAILER)) {
+        if ((uint32_t)resp_len + (uint32_t)it->count * size > (uint32_t)(EL_DBG_FRAME - EL_DBG_TRAILER)) {
             return EL_DBG_E_TOO_BIG;
         }
         for (e = 0u; e < it->count; e++) {
@@ -552,12 +574,12 @@ static uint8_t do_write(const uint8_t *p, uint16_t n)
         return st;
     }
     if (tx_state == TX_OPEN) {
-        if (tx_len >= EL_DBG_TX_MAX) {
+        if (tx_len >= EL_DBG_TX_ENTRIES) {
             return EL_DBG_E_QUEUE_FULL;
         }
         e = &txq[tx_len];
     } else {
-        if (wq_len >= EL_DBG_WRITE_QUEUE) {
+        if (wq_len >= EL_DBG_WRITE_ENTRIES) {
             return EL_DBG_E_QUEUE_FULL;
         }
         e = &wq[wq_len];
@@ -609,13 +631,13 @@ static uint8_t do_bp_set(const uint8_t *p, uint16_t n)
     if (!valid_point(kind, a, b)) {
         return EL_DBG_E_ID;
     }
-    for (i = 0u; i < EL_DBG_BP_MAX; i++) {
+    for (i = 0u; i < EL_DBG_BP_SLOTS; i++) {
         if (bps[i].used != 0u && bps[i].kind == kind && bps[i].a == a && bps[i].b == b) {
             (void)put_u8(i); /* already set: the same slot */
             return EL_DBG_OK;
         }
     }
-    for (i = 0u; i < EL_DBG_BP_MAX; i++) {
+    for (i = 0u; i < EL_DBG_BP_SLOTS; i++) {
         if (bps[i].used == 0u) {
             bps[i].used = 1u;
             bps[i].kind = kind;
@@ -639,7 +661,7 @@ static uint8_t do_bp_clear(const uint8_t *p, uint16_t n)
     if (p[0] == EL_DBG_NONE8) {
         zero_bytes(bps, (uint16_t)(sizeof bps));
         bp_count = 0u;
-    } else if (p[0] >= EL_DBG_BP_MAX || bps[p[0]].used == 0u) {
+    } else if (p[0] >= EL_DBG_BP_SLOTS || bps[p[0]].used == 0u) {
         return EL_DBG_E_ID;
     } else {
         bps[p[0]].used = 0u;
@@ -674,16 +696,16 @@ static uint8_t dispatch(uint8_t cmd, const uint8_t *p, uint16_t n)
             return EL_DBG_E_LENGTH;
         }
         (void)put_u8(EL_DBG_PROTOCOL_VERSION);
-        (void)put_u16(EL_DBG_MAX_FRAME);
+        (void)put_u16(EL_DBG_FRAME);
         (void)put_u8(EL_DBG_WINDOW);
         (void)put_u32(el_program_id);
         (void)put_u16(el_dbg_item_count);
         (void)put_u16(el_dbg_actor_count);
         (void)put_u8(el_dbg_chart_count);
         (void)put_u8(el_task_count);
-        (void)put_u8(EL_DBG_TX_MAX);
-        (void)put_u8(EL_DBG_WRITE_QUEUE);
-        (void)put_u8(EL_DBG_BP_MAX);
+        (void)put_u8(EL_DBG_TX_ENTRIES);
+        (void)put_u8(EL_DBG_WRITE_ENTRIES);
+        (void)put_u8(EL_DBG_BP_SLOTS);
         (void)put_u8(EL_DBG_VALUE_MAX);
         return EL_DBG_OK;
     case EL_DBG_CMD_GET_PROGRAM_ID:
@@ -828,7 +850,7 @@ static uint8_t dispatch(uint8_t cmd, const uint8_t *p, uint16_t n)
             return EL_DBG_E_LENGTH;
         }
         (void)put_u8(bp_count);
-        for (i = 0u; i < EL_DBG_BP_MAX; i++) {
+        for (i = 0u; i < EL_DBG_BP_SLOTS; i++) {
             if (bps[i].used != 0u) {
                 (void)put_u8(i);
                 (void)put_u8(bps[i].kind);

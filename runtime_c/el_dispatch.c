@@ -16,6 +16,8 @@ void el_idle(void)
     el_gen_interfaces_poll();
 }
 
+/* The task masks are walked by shifting them right (bit 0 is the task at
+ * hand): no variable shifts, and a walk ends at the last task in the mask. */
 void el_run(int argc, char **argv)
 {
     el_tick_t base = 0u;
@@ -30,8 +32,7 @@ void el_run(int argc, char **argv)
     el_gen_interfaces_boot();
     for (;;) {
         for (i = 0u; i < el_instant_count; i++) {
-            uint32_t publish = EL_ROM_READ_U32(&el_instants[i].publish);
-            uint32_t release = EL_ROM_READ_U32(&el_instants[i].release);
+            uint32_t publish, release, mask;
             el_now = base + EL_ROM_READ_U32(&el_instants[i].tick);
             if (!el_port_wait_tick((uint32_t)el_now)) {
                 el_gen_shutdown();
@@ -40,32 +41,32 @@ void el_run(int argc, char **argv)
             }
             /* Outputs due now become visible before the inputs of tasks
              * released now are read. */
-            for (task = 0u; task < el_task_count; task++) {
-                uint32_t bit = (uint32_t)1u << task;
-                if ((publish & pending & bit) != 0u) {
+            publish = EL_ROM_READ_U32(&el_instants[i].publish) & pending;
+            pending &= ~publish;
+            for (task = 0u; publish != 0u; task++, publish >>= 1) {
+                if ((publish & 1u) != 0u) {
                     el_gen_publish(task);
-                    pending &= ~bit;
                 }
             }
             el_port_inputs(el_now);
             EL_DEBUG_INSTANT(); /* queued debugger writes; halts at an instant */
+            release = EL_ROM_READ_U32(&el_instants[i].release);
             if (release != 0u) {
                 el_gen_read_devices(release);
-                for (task = 0u; task < el_task_count; task++) {
-                    if ((release & ((uint32_t)1u << task)) != 0u) {
+                for (task = 0u, mask = release; mask != 0u; task++, mask >>= 1) {
+                    if ((mask & 1u) != 0u) {
                         el_gen_release(task);
                     }
                 }
             }
             el_port_instant(el_now);
-            for (task = 0u; task < el_task_count; task++) {
-                uint32_t bit = (uint32_t)1u << task;
-                if ((release & bit) != 0u) {
+            pending |= release;
+            for (task = 0u; release != 0u; task++, release >>= 1) {
+                if ((release & 1u) != 0u) {
                     uint32_t late;
                     EL_DEBUG_TASK_BEGIN(task); /* task breakpoints, step by task */
                     el_gen_body(task);
                     EL_DEBUG_TASK_END(task);
-                    pending |= bit;
                     /* Lateness never changes the published values; it is
                      * counted so that it is never silent. */
                     late = el_port_real_tick() - (uint32_t)el_now;

@@ -44,19 +44,21 @@ static const el_svc_entry_t *at(const el_svc_map_t *m, uint16_t k)
  * or NOT_FOUND. Entries of a table are sorted and never overlap. */
 static uint16_t locate(const el_svc_map_t *m, uint8_t t, uint16_t address)
 {
-    uint16_t lo = 0u, hi = m->size[t], first = m->first[t];
+    const el_svc_entry_t *entries = m->entries;
+    const uint16_t *order = m->order + m->first[t];
+    uint16_t lo = 0u, hi = m->size[t];
     const el_svc_entry_t *e;
     while (lo < hi) { /* the first entry starting above `address` */
         uint16_t mid = (uint16_t)(lo + (hi - lo) / 2u);
-        if (at(m, (uint16_t)(first + mid))->address <= address)
+        if (entries[order[mid]].address <= address)
             lo = (uint16_t)(mid + 1u);
         else
             hi = mid;
     }
     if (lo == 0u)
         return NOT_FOUND;
-    e = at(m, (uint16_t)(first + lo - 1u));
-    return (uint32_t)address < (uint32_t)e->address + span(e) ? (uint16_t)(first + lo - 1u) : NOT_FOUND;
+    e = &entries[order[lo - 1u]];
+    return (uint32_t)address < (uint32_t)e->address + span(e) ? (uint16_t)(m->first[t] + lo - 1u) : NOT_FOUND;
 }
 
 /* The entry covering `address`, the one after `k` (which covers
@@ -151,21 +153,57 @@ static uint16_t read_bits(const el_svc_map_t *m, uint8_t fc, const uint8_t *req,
 }
 
 /* ---- 03 / 04: read holding / input registers ---- */
+
+/* The fast path of most maps: from position `k` of m->order on (k < end),
+ * entries that start at consecutive addresses from `address` and hold a
+ * 16-bit item each (its own register), read straight into `out`. Returns
+ * how many registers it read, at most n. */
+EL_NOINLINE static uint16_t read_run(const el_svc_map_t *m, uint16_t k, uint16_t end, uint16_t address, uint16_t n,
+                         uint8_t *out)
+{
+    const el_svc_entry_t *entries = m->entries;
+    const uint16_t *from = m->order + k, *order = from;
+    const uint16_t *stop = m->order + ((uint16_t)(end - k) < n ? end : (uint16_t)(k + n));
+    for (; order < stop; order++, address++, out += 2) {
+        const el_svc_entry_t *e = &entries[*order];
+        uint16_t v;
+        if (e->address != address || (e->type != EL_T_I16 && e->type != EL_T_U16))
+            break;
+        v = *(const uint16_t *)e->addr; /* int16_t read as uint16_t: the register's bits */
+        out[0] = (uint8_t)(v >> 8);
+        out[1] = (uint8_t)(v & 0xFFu);
+    }
+    return (uint16_t)(order - from);
+}
+
 static uint16_t read_regs(const el_svc_map_t *m, uint8_t fc, const uint8_t *req, uint16_t len, uint8_t *resp)
 {
     uint8_t t = (uint8_t)(fc == 0x03u ? EL_SVC_HOLDING : EL_SVC_INPUT);
-    uint16_t start, qty, i, k = NOT_FOUND;
+    uint16_t start, qty, i = 0u, k, end;
     uint16_t refused = check_read(fc, req, len, EL_MB_MAX_READ_REGS, resp, &start, &qty);
     if (refused != 0u)
         return refused;
+    end = (uint16_t)(m->first[t] + m->size[t]);
+    k = locate(m, t, start);
+    while (k != NOT_FOUND) {
+        /* Entries never overlap: the one at k starts at start + i unless
+         * start + i is the second register of a 32-bit item. */
+        uint16_t run = read_run(m, k, end, (uint16_t)(start + i), (uint16_t)(qty - i), resp + 2u + 2u * i);
+        if (run > 0u) {
+            i = (uint16_t)(i + run);
+            k = (uint16_t)(k + run - 1u);
+        } else {
+            put16(resp + 2u + 2u * i, register_at(m, k, (uint16_t)(start + i)));
+            i++;
+        }
+        if (i == qty)
+            break;
+        k = next_cover(m, t, k, (uint16_t)(start + i));
+    }
+    if (k == NOT_FOUND)
+        return exception(fc, EL_MB_EX_ILLEGAL_ADDRESS, resp);
     resp[0] = fc;
     resp[1] = (uint8_t)(2u * qty);
-    for (i = 0u; i < qty; i++) {
-        k = cover(m, t, k, start, i);
-        if (k == NOT_FOUND)
-            return exception(fc, EL_MB_EX_ILLEGAL_ADDRESS, resp);
-        put16(resp + 2u + 2u * i, register_at(m, k, (uint16_t)(start + i)));
-    }
     return (uint16_t)(2u + 2u * qty);
 }
 
@@ -484,7 +522,7 @@ bool el_mb_rtu_byte(el_mb_rtu_t *rtu, uint8_t byte)
         return false;
     }
     rtu->buf[rtu->len++] = byte;
-    rtu->crc = el_crc16_update(rtu->crc, &byte, 1u);
+    rtu->crc = el_crc16_fast_byte(rtu->crc, byte);
     if ((rtu->flags & (EL_MB_RTU_EARLY | EL_MB_RTU_OVERFLOW)) != EL_MB_RTU_EARLY || rtu->len < 4u || rtu->crc != 0u)
         return false;
     want = request_length(rtu->buf, rtu->len);
@@ -524,7 +562,7 @@ uint16_t el_mb_rtu_reply(el_mb_rtu_t *rtu)
     r = el_mb_pdu(rtu->buf + 1, (uint16_t)(n - 3u), rtu->buf + 1, unit == 0u);
     if (r == 0u)
         return 0u;
-    crc = el_crc16(rtu->buf, (uint16_t)(r + 1u));
+    crc = el_crc16_fast(EL_CRC16_INIT, rtu->buf, (uint16_t)(r + 1u));
     rtu->buf[r + 1u] = (uint8_t)(crc & 0xFFu);
     rtu->buf[r + 2u] = (uint8_t)(crc >> 8);
     return (uint16_t)(r + 3u);

@@ -42,10 +42,14 @@ typedef uint32_t el_time_t;
 #define EL_TIME_MAX UINT32_MAX
 
 /* The absolute logical tick (the dispatcher's count of instants' ticks).
- * 64-bit: traces run long. Without a 64-bit type it wraps after 2^32
- * ticks (49.7 days of 1 ms ticks), which nothing in a firmware notices:
- * the port's waits and the lateness count already compare 32-bit ticks. */
-#if EL_HAS_INT64
+ * 64-bit: traces run long. Without a 64-bit type, or on a board that asks
+ * for it (EL_TICK_32: 8-bit parts, where 64-bit additions cost flash and
+ * time at every instant), it wraps after 2^32 ticks (49.7 days of 1 ms
+ * ticks), which nothing in a firmware notices: the port's waits and the
+ * lateness count compare 32-bit ticks wrap-safely (instants are less than
+ * a hyperperiod apart, which fits 32 bits), and a simulator's harness
+ * extends the ticks it reads to 64 bits (sim_tick_extend). */
+#if EL_HAS_INT64 && !(defined(EL_TICK_32) && EL_TICK_32)
 typedef uint64_t el_tick_t;
 #else
 typedef uint32_t el_tick_t;
@@ -102,6 +106,17 @@ EL_CMP_FN(u32, uint32_t)
     ((op)[0] == '<' ? ((op)[1] == '=' ? (a) <= (b) : (a) < (b)) : \
      (op)[0] == '>' ? ((op)[1] == '=' ? (a) >= (b) : (a) > (b)) : \
      (op)[0] == '=' ? (a) == (b) : (a) != (b))
+
+/* A function kept out of its callers: a hot loop then has the registers to
+ * itself (avr-gcc otherwise inlines a static function called once and
+ * spills the loop's variables to the stack). */
+#ifndef EL_NOINLINE
+#if defined(__GNUC__)
+#define EL_NOINLINE __attribute__((noinline))
+#else
+#define EL_NOINLINE
+#endif
+#endif
 
 /* Read-only tables: in flash where the board can read it from there. */
 #ifndef EL_ROM

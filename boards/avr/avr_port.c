@@ -256,11 +256,12 @@ void el_port_irq_restore(el_irq_state_t state)
 /* ---- instants ---- */
 
 #if defined(EL_AVR_SIM) && EL_AVR_SIM
-/* The instant being processed, for the harness (read from RAM). */
-volatile uint64_t el_avr_sim_tick;
+/* The instant being processed, for the harness (read from RAM; 32 bits,
+ * which the harness extends). */
+volatile el_tick_t el_avr_sim_tick;
 #endif
 
-void el_port_inputs(uint64_t tick)
+void el_port_inputs(el_tick_t tick)
 {
 #if defined(EL_AVR_SIM) && EL_AVR_SIM
     el_avr_sim_tick = tick;
@@ -274,7 +275,7 @@ void el_port_inputs(uint64_t tick)
 #endif
 }
 
-void el_port_instant(uint64_t tick)
+void el_port_instant(el_tick_t tick)
 {
 #if defined(EL_AVR_SIM) && EL_AVR_SIM
     el_avr_sim_tick = tick;

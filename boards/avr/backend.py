@@ -63,6 +63,12 @@ class AvrBoard(BoardBase):
         return self.part.eeprom if self.part else None
 
     @property
+    def model_sized_debug_buffers(self) -> bool:
+        """The ATmega328P's 2 KB: the debug server's frames as large as the
+        model needs (the ATmega2560 keeps the protocol's largest)."""
+        return bool(self.part and self.part.small)
+
+    @property
     def cflags(self) -> list[str]:
         return [f"-mmcu={self.part.name}", f"-DF_CPU={self.clock_hz}UL", *self.description.toolchain.cflags]
 
@@ -179,7 +185,8 @@ class AvrBoard(BoardBase):
                         f"{buffer_bytes(biggest)} bytes of tokens: try --schedule min-buffer (smaller buffers, a "
                         f"longer schedule)")
             if not options.release and any(i.kind == "debug" for i in program.interfaces):
-                msg += "; the debug interface's buffers take about 1 KB: a --release build has none"
+                size = "a few hundred bytes" if self.model_sized_debug_buffers else "about 1 KB"
+                msg += f"; the debug interface's buffers take {size}: a --release build has none"
         size = (lambda m: m.flash) if region == "text" else (lambda m: m.ram)
         bigger = [m for m in self.all_mcus.values() if size(m) > size(mcu)]
         if bigger:

@@ -268,8 +268,17 @@ def config_header(program: Program, board, res: Resolved, release: bool) -> str:
             lines.append(f"/* uart{n}: the debug interface, absent from release builds */")
             continue
         rx, tx = _ring_sizes(mcu, u["use"])
-        lines.append(f"#define EL_AVR_UART{n}_RX {rx}u /* uart{n}: {u['use']} */")
-        lines.append(f"#define EL_AVR_UART{n}_TX {tx}u")
+        if u["use"] == "debug" and board.model_sized_debug_buffers:
+            # An encoded frame of the model's size (el_debug_config.h) and its delimiter each way
+            # (the host sends one request at a time and waits for its response: WINDOW 1); a ring
+            # of n bytes holds n - 1.
+            ring = "(EL_DBG_FRAME + EL_DBG_FRAME / 254u + 3u)"
+            lines.append(f'#include "el_debug_config.h" /* uart{n}: debug; EL_DBG_FRAME */')
+            lines.append(f"#define EL_AVR_UART{n}_RX {ring}")
+            lines.append(f"#define EL_AVR_UART{n}_TX {ring}")
+        else:
+            lines.append(f"#define EL_AVR_UART{n}_RX {rx}u /* uart{n}: {u['use']} */")
+            lines.append(f"#define EL_AVR_UART{n}_TX {tx}u")
         if u["use"] == "debug":
             lines.append(f"#define EL_AVR_DEBUG_UART {n}u")
             lines.append(f"#define EL_AVR_DEBUG_BAUD {int(u.get('baud', 115200))}UL")

@@ -389,6 +389,13 @@ static void mirror_from_mcu(unsigned kinds, bool charts)
                 sim_ram_read(sim_chart_addr[c].addr, (void *)el_charts[c].active, sim_chart_addr[c].size);
 }
 
+uint64_t sim_tick_extend(uint32_t tick)
+{
+    static uint64_t last;
+    last += (uint32_t)(tick - (uint32_t)last);
+    return last;
+}
+
 void sim_instant_inputs(uint64_t tick)
 {
     static unsigned char *before;

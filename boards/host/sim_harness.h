@@ -147,6 +147,11 @@ extern int sim_exit_status;
 extern volatile sig_atomic_t sim_stop_signal;
 extern uint64_t el_sim_now_us;  /* the logical time of the instant the firmware is at */
 
+/* The 64-bit tick of an instant from the 32 bits a firmware counts (it
+ * wraps after 2^32 ticks; instants come in order, less than 2^32 ticks
+ * apart). */
+uint64_t sim_tick_extend(uint32_t tick);
+
 /* At the firmware's inputs mark of `tick`: end the run at --duration, else
  * apply the stimulus due (params and vars into RAM, device `out` data onto
  * the hardware through sim_drive_hardware). */

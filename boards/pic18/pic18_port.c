@@ -102,24 +102,23 @@ void el_port_irq_restore(el_irq_state_t state)
 /* ---- instants ---- */
 
 #if defined(EL_PIC18_SIM) && EL_PIC18_SIM
-/* The instant being processed (low word first), its marks and the
- * harness's busy flag: read and written by the harness, at the addresses
- * the linker gives them. */
-volatile uint32_t el_pic18_sim_tick[2];
+/* The instant being processed (32 bits, EL_TICK_32: the harness extends
+ * it), its marks and the harness's busy flag: read and written by the
+ * harness, at the addresses the linker gives them. */
+volatile uint32_t el_pic18_sim_tick;
 volatile uint8_t el_pic18_sim_mark;
 volatile uint8_t el_pic18_sim_busy;
 
 /* The tick first, in a function of its own: the mark is written after the
  * call returns (sdcc 4.2 moved a mark passed as a parameter in front of
  * the tick's stores, volatile or not). */
-static void sim_tick_store(uint64_t tick)
+static void sim_tick_store(el_tick_t tick)
 {
-    el_pic18_sim_tick[0] = (uint32_t)tick;
-    el_pic18_sim_tick[1] = (uint32_t)(tick >> 32);
+    el_pic18_sim_tick = (uint32_t)tick;
 }
 #endif
 
-void el_port_inputs(uint64_t tick)
+void el_port_inputs(el_tick_t tick)
 {
 #if defined(EL_PIC18_SIM) && EL_PIC18_SIM
     el_pic18_sim_busy = 0u;
@@ -133,7 +132,7 @@ void el_port_inputs(uint64_t tick)
 #endif
 }
 
-void el_port_instant(uint64_t tick)
+void el_port_instant(el_tick_t tick)
 {
 #if defined(EL_PIC18_SIM) && EL_PIC18_SIM
     sim_tick_store(tick);

@@ -7,7 +7,10 @@ program's portable C parsed (lower64.py needs it anyway), so it drops the
 functions that nothing reaches from the roots: `main`, the interrupt
 handler, whatever the hardware files name, and every function a data
 object's initializer names (tables of function pointers). Data objects are
-all kept (a simulation traces items no code reads).
+kept (a simulation traces items no code reads), but for a file's own
+read-only tables (`static const`) that nothing left in the file reads: a
+runtime file's table for code the model does not use (el_crc16.c's tables
+without a Modbus slave).
 """
 
 from __future__ import annotations
@@ -32,6 +35,19 @@ def _refs(node: c_ast.Node | None) -> set[str]:
 
 def _static(decl: c_ast.Decl) -> bool:
     return "static" in (decl.storage or [])
+
+
+def is_const(decl: c_ast.Decl) -> bool:
+    """A declaration of a const object (or an array of const elements)."""
+    node = decl.type
+    while isinstance(node, c_ast.ArrayDecl):
+        node = node.type
+    return "const" in (getattr(node, "quals", None) or [])
+
+
+def _unread_table(decl: c_ast.Node, used: set[str]) -> bool:
+    return isinstance(decl, c_ast.Decl) and not isinstance(decl.type, c_ast.FuncDecl) and _static(decl) \
+        and is_const(decl) and decl.name is not None and decl.name not in used
 
 
 def prune(units: dict[str, c_ast.FileAST], roots: set[str]) -> list[str]:
@@ -77,5 +93,6 @@ def prune(units: dict[str, c_ast.FileAST], roots: set[str]) -> list[str]:
                     removed.append(ext.decl.name)
                     continue
             kept.append(ext)
-        ast.ext = kept
+        used = _refs(c_ast.FileAST(kept))
+        ast.ext = [ext for ext in kept if not _unread_table(ext, used)]
     return sorted(removed)

@@ -28,16 +28,10 @@ import re
 from pycparser import c_ast
 
 from .ctypes64 import Target, TypeEnv
+from .prune import is_const
 
 BANK_BYTES = 256
 FIRST_BANK = 0x080  # RAM below is the access bank (sdcc's registers, small objects)
-
-
-def _is_const(decl: c_ast.Decl) -> bool:
-    node = decl.type
-    while isinstance(node, c_ast.ArrayDecl):
-        node = node.type
-    return "const" in (getattr(node, "quals", None) or [])
 
 
 def _objects(ast: c_ast.FileAST, target: Target):
@@ -67,7 +61,7 @@ def place_big_objects(units: dict[str, c_ast.FileAST], target: Target, ram_end: 
         dead = set()
         for decl, t, env in _objects(ast, target):
             size = env.size(t)
-            if decl.name and "extern" not in (decl.storage or []) and not _is_const(decl) and size is not None \
+            if decl.name and "extern" not in (decl.storage or []) and not is_const(decl) and size is not None \
                     and size > BANK_BYTES:
                 if "static" in (decl.storage or []) and decl.name not in used:
                     dead.add(decl.name)  # no code left reads it (prune.py): sdcc would declare it, not define it
@@ -172,7 +166,7 @@ def fix_initializers(units: dict[str, c_ast.FileAST], target: Target) -> set[str
         for decl, _t, env in _objects(ast, target):
             if decl.init is not None:
                 _ArrayMembers(env).visit(decl.init)
-            if decl.name and not _is_const(decl):
+            if decl.name and not is_const(decl):
                 in_ram.add(decl.name)
     return in_ram
 

@@ -53,6 +53,22 @@ class BoardBase:
         value = self.description.raw.get("nv_size")
         return int(value) if value is not None else None
 
+    @property
+    def model_sized_debug_buffers(self) -> bool:
+        """Whether a debug build sizes the server's frame buffers from the
+        model (codegen/debug.py: buffer_sizes) instead of the protocol's
+        largest frame: parts short of RAM (board.toml
+        `model_sized_debug_buffers`; a backend may decide by MCU)."""
+        return bool(self.description.raw.get("model_sized_debug_buffers", False))
+
+    @property
+    def service_api(self) -> bool:
+        """Whether the board's own code reads and writes service items
+        through el_service_* (board.toml `service_api`, e.g. an HMI): then
+        the service map is linked for every model with service items, not
+        only for those that serve it over Modbus or persist params."""
+        return bool(self.description.raw.get("service_api", False))
+
     # ---------------------------------------------------------------- code
 
     def device_call(self, device: Device, handler: str) -> str:

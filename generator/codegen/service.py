@@ -273,8 +273,12 @@ def _uart_index(resource: str | None) -> int:
     return int(m.group(1)) if m else 0
 
 
-def c_view(smap: ServiceMap, view) -> dict:
-    """What templates/service_tables.c.j2 prints."""
+def c_view(smap: ServiceMap, view, service_api: bool = False) -> dict:
+    """What templates/service_tables.c.j2 prints. The map itself (its
+    entries, the persist state, el_service_init at boot) only when something
+    uses it: a Modbus interface, a persist param (loaded at boot), or the
+    board's own code (``service_api``); otherwise a firmware links none of
+    the service layer."""
     p = smap.program
     items_by_id = {iv.item.id: iv for iv in view.items}
     entries = []
@@ -310,6 +314,7 @@ def c_view(smap: ServiceMap, view) -> dict:
         "title": _c_string(p.title or p.name), "easylab": _c_string(__version__),
         "program_text": _c_string(f"0x{p.program_id:08x}"), "program_id": f"0x{p.program_id:08x}UL",
         "rtu": rtu, "tcp": tcp,
+        "map_used": rtu is not None or tcp is not None or smap.nv_count > 0 or service_api,
     }
 
 
@@ -322,7 +327,8 @@ def produce(program: Program, board, env, view, release: bool) -> dict[str, str]
         smap = build_map(program, board.nv_size)
     except ServiceMapError as err:
         raise BuildError(str(err)) from None
-    text = env.get_template("service_tables.c.j2").render(s=c_view(smap, view), release=release)
+    service_api = bool(getattr(board, "service_api", False))  # BoardBase's; False for a board without it
+    text = env.get_template("service_tables.c.j2").render(s=c_view(smap, view, service_api), release=release)
     return {
         "service_map.json": json.dumps(map_json(smap), indent=2) + "\n",
         "service_map.csv": map_csv(smap),

@@ -50,7 +50,8 @@ def test_every_example_builds_for_the_atmega2560(sim_builds, name):
 def test_release_builds_leave_out_the_debug_interface(tmp_path):
     debug = sizes(avr_build(ROOT / "examples/blink.elab", tmp_path / "d"))
     release = sizes(avr_build(ROOT / "examples/blink.elab", tmp_path / "r", "--release"))
-    assert release["flash"] < debug["flash"] - 2000 and release["ram"] < debug["ram"] - 500
+    # The 328P's debug server has buffers sized from the model: blink's take 374 bytes of RAM.
+    assert release["flash"] < debug["flash"] - 2000 and release["ram"] < debug["ram"] - 300
 
 
 def test_blink_builds_for_the_atmega328p_by_default(tmp_path):
@@ -61,7 +62,9 @@ def test_blink_builds_for_the_atmega328p_by_default(tmp_path):
 
 
 def test_cd_to_dat_does_not_fit_the_atmega328p_with_its_own_schedule(tmp_path):
-    built = avr_build(ROOT / "examples/cd_to_dat.elab", tmp_path / "c", "--release", ok=False)
+    # A debug build: the release build fits since it links no service map
+    # (cd_to_dat has no Modbus interface), 1,760 bytes of RAM.
+    built = avr_build(ROOT / "examples/cd_to_dat.elab", tmp_path / "c", ok=False)
     err = built.proc.stderr
     assert "does not fit the atmega328p's 2048 bytes of RAM" in err
     assert "--schedule min-buffer" in err and "dataflow 'Convert'" in err
@@ -79,7 +82,8 @@ def test_cd_to_dat_fits_the_atmega328p_with_min_buffer_schedules(tmp_path):
 
 
 def test_a_debug_build_that_does_not_fit_points_at_release_builds(tmp_path):
-    built = avr_build(ROOT / "examples/cd_to_dat.elab", tmp_path / "c", "--schedule", "min-buffer", ok=False)
+    # With its own schedule: the min-buffer debug build fits the 328P (tests/avr/test_avr_footprint.py).
+    built = avr_build(ROOT / "examples/cd_to_dat.elab", tmp_path / "c", ok=False)
     assert "a --release build has none" in built.proc.stderr
     assert "or build for --mcu atmega2560" in built.proc.stderr
 

@@ -98,15 +98,12 @@ void sim_ram_write(uint16_t addr, const void *src, size_t n)
     memcpy(avr->data + addr, src, n);
 }
 
+/* The instant's tick: el_avr_sim_tick, 32 bits (EL_TICK_32), little-endian. */
 static uint64_t read_tick(void)
 {
-    uint8_t b[8];
-    uint64_t t = 0;
-    int i;
+    uint8_t b[4];
     sim_ram_read(sim_tick_addr, b, sizeof b);
-    for (i = 7; i >= 0; i--)
-        t = t << 8 | b[i];
-    return t;
+    return sim_tick_extend((uint32_t)b[0] | (uint32_t)b[1] << 8 | (uint32_t)b[2] << 16 | (uint32_t)b[3] << 24);
 }
 
 /* ---- hardware behind device data ---- */

@@ -280,14 +280,12 @@ RxPump rx_pump;
 
 /* ---- instants ---- */
 
+/* The instant's tick: el_pic18_sim_tick, 32 bits (EL_TICK_32), little-endian. */
 uint64_t read_tick()
 {
-    uint8_t b[8];
-    uint64_t t = 0;
+    uint8_t b[4];
     sim_ram_read(sim_tick_addr, b, sizeof b);
-    for (int i = 7; i >= 0; i--)
-        t = t << 8 | b[i];
-    return t;
+    return sim_tick_extend((uint32_t)b[0] | (uint32_t)b[1] << 8 | (uint32_t)b[2] << 16 | (uint32_t)b[3] << 24);
 }
 
 /* ---- the software stack's guard ---- */
