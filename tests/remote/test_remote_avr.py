@@ -173,32 +173,43 @@ def test_the_actuators_reach_their_safe_values_when_the_host_dies(case, build_ca
     built = avr_proxy(build_cache, model, mcu, 115200)
     host_stimulus = tmp_path / "params.csv"
     host_stimulus.write_text(f"time_us,{params}\n")
-    pins, trace = tmp_path / "pins.csv", tmp_path / "proxy.csv"
     devices = device_columns(EXAMPLES / "pt100_sensor.stimulus.csv", model, tmp_path / "devices.csv") \
         if case == "overruns" else None  # the sensor's readings (blink reads no device)
-    proxy = AvrProxy(built, tmp_path / "link", "--pins", str(pins), "--trace", str(trace),
-                     *(["--stimulus", str(devices)] if devices else []))
     period_us = program.tasks[dm.tasks[0].task].period * dm.tick_us
     watchdog_us = dm.watchdog_ticks * dm.tick_us
-    try:
-        link = Link(str(proxy.link), dm)
-        link.connect()  # one HELLO: the proxy is up before the host comes
-        link.close()
-        host = subprocess.Popen([*EASYLAB, "remote", str(model), "--target", str(proxy.link), "--stimulus",
-                                 str(host_stimulus)], stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True,
-                                stdin=subprocess.DEVNULL)
-        time.sleep(3.0)  # start-up, then the host runs for a while
-        assert host.poll() is None, host.communicate()[1]
-        host.kill()
-        host.communicate()
-        time.sleep((watchdog_us + period_us) / 1e6 + 0.5)
-        link = Link(str(proxy.link), dm)
-        link.connect()
-        counters = link.counters()
-        assert link._request(K.CMD_COUNTERS)[0] == K.STATE_SAFE
-        link.close()
-    finally:
-        proxy.end()
+    late = []
+    for attempt in range(REAL_TIME_ATTEMPTS):
+        run_dir = tmp_path / f"run{attempt}"
+        run_dir.mkdir()
+        pins, trace = run_dir / "pins.csv", run_dir / "proxy.csv"
+        proxy = AvrProxy(built, run_dir / "link", "--pins", str(pins), "--trace", str(trace),
+                         *(["--stimulus", str(devices)] if devices else []))
+        try:
+            link = Link(str(proxy.link), dm)
+            link.connect()  # one HELLO: the proxy is up before the host comes
+            link.close()
+            host = subprocess.Popen([*EASYLAB, "remote", str(model), "--target", str(proxy.link), "--stimulus",
+                                     str(host_stimulus)], stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
+                                    text=True, stdin=subprocess.DEVNULL)
+            time.sleep(3.0)  # start-up, then the host runs for a while
+            if host.poll() is not None:
+                err = host.communicate()[1]
+                assert LATE_HOST in err, err  # the only way the host may end by itself here
+                late.append(err.strip())
+                continue
+            host.kill()
+            host.communicate()
+            time.sleep((watchdog_us + period_us) / 1e6 + 0.5)
+            link = Link(str(proxy.link), dm)
+            link.connect()
+            counters = link.counters()
+            assert link._request(K.CMD_COUNTERS)[0] == K.STATE_SAFE
+            link.close()
+        finally:
+            proxy.end()
+        break
+    else:
+        pytest.fail(f"the host was late in every one of {REAL_TIME_ATTEMPTS} runs:\n" + "\n".join(late))
     if case == "overruns":
         assert counters["overruns"] >= dm.overrun_limit and counters["watchdog"] == 0
     else:
