@@ -13,7 +13,7 @@ from pathlib import Path
 
 from ..remote.budget import DEFAULT_BAUD
 from .common import EXIT_OK, EXIT_USAGE, CliError, add_board_options, default_out_dir, lower_model, report_built
-from .run_command import add_debug_arguments
+from .run_command import add_debug_arguments, add_service_arguments, served_interfaces
 
 EXIT_ERROR = 1
 
@@ -60,9 +60,11 @@ def add_parsers(sub) -> None:
     r.add_argument("--watch", action="store_true",
                    help="replace the running application when its files change (an edit of the device model is "
                         "refused: the proxy would have to be rebuilt)")
-    add_debug_arguments(r.add_argument_group(
-        "debug interface (the firmware's server, as `easylab run` serves it; in real time a halt lets the "
-        "proxy apply its safe values)"))
+    served = r.add_argument_group(
+        "debug and service interfaces (the firmware's servers, as `easylab run` serves them; in real time a "
+        "debugger's halt lets the proxy apply its safe values)")
+    add_debug_arguments(served)
+    add_service_arguments(served)
     r.set_defaults(func=cmd_remote)
 
 
@@ -87,7 +89,6 @@ def cmd_proxy(args) -> int:
 def cmd_remote(args) -> int:
     """Run the application against a proxy until the duration or a signal."""
     from ..interp.clock import Clock
-    from ..interp.engine import InterfaceOptions
     from ..interp.trace import TraceError, TraceWriter, columns_of
     from ..remote.budget import refusal
     from ..remote.device_model import device_model
@@ -128,10 +129,7 @@ def cmd_remote(args) -> int:
         _say(f"easylab remote: at {report.time_us / 1e6:.6f} s the program id changed from 0x{report.old_id:08x} "
              f"to 0x{report.new_id:08x} (the proxy runs on)")
 
-    interfaces = None
-    if args.debug or args.maps:
-        interfaces = InterfaceOptions(debug=args.debug, maps=Path(args.maps) if args.maps else None,
-                                      model=Path(args.file))
+    interfaces = served_interfaces(args)
     clock = Clock(None)  # virtual: the proxy's frames pace the run
     handlers = _on_signals(clock)  # before the interfaces chain their own
     engine, failed = boot_served(lambda: RemoteEngine(program, model, link, stimulus, plugin_cache=cache, trace=trace,

@@ -83,11 +83,7 @@ def add_parser(sub) -> None:
                    help="schedule kind of every dataflow (default: each dataflow's own, else sas)")
     served = p.add_argument_group("debug and service interfaces (the firmware's servers, as on the host board)")
     add_debug_arguments(served)
-    served.add_argument("--modbus-tcp", metavar="PORT", help="serve the model's `modbus tcp` interface on "
-                                                             "127.0.0.1:PORT (default: the model's port)")
-    served.add_argument("--modbus-rtu", metavar="pty:LINK", help="serve its `modbus rtu` interface on a new "
-                                                                 "pseudo-terminal")
-    served.add_argument("--nvram", metavar="FILE", help="keep `persist` params in FILE (default: in memory)")
+    add_service_arguments(served)
     p.set_defaults(func=cmd_run)
 
 
@@ -98,6 +94,28 @@ def add_debug_arguments(group) -> None:
                             "127.0.0.1:PORT; ,halt halts before the first instant")
     group.add_argument("--maps", metavar="DIR", help="write debug_map.json and service_map.* into DIR (at start "
                                                      "and at each replacement)")
+
+
+def add_service_arguments(group) -> None:
+    """``--modbus-tcp``, ``--modbus-rtu`` and ``--nvram``, as ``run`` and ``remote`` serve them."""
+    group.add_argument("--modbus-tcp", metavar="PORT", help="serve the model's `modbus tcp` interface on "
+                                                            "127.0.0.1:PORT (default: the model's port)")
+    group.add_argument("--modbus-rtu", metavar="pty:LINK", help="serve its `modbus rtu` interface on a new "
+                                                                "pseudo-terminal")
+    group.add_argument("--nvram", metavar="FILE", help="keep `persist` params in FILE (default: in memory)")
+
+
+def served_interfaces(args, schedule: str | None = None):
+    """What a run serves, from its command line: an InterfaceOptions, or
+    None for nothing."""
+    from pathlib import Path
+
+    from ..interp.engine import InterfaceOptions
+
+    if not (args.debug or args.modbus_tcp or args.modbus_rtu or args.nvram or args.maps):
+        return None
+    return InterfaceOptions(args.debug, args.modbus_tcp, args.modbus_rtu, args.nvram,
+                            Path(args.maps) if args.maps else None, Path(args.file), schedule)
 
 
 def _say(text: str) -> None:
@@ -158,7 +176,7 @@ def cmd_run(args) -> int:
     from pathlib import Path
 
     from ..interp.clock import Clock
-    from ..interp.engine import Engine, InterfaceOptions
+    from ..interp.engine import Engine
     from ..interp.trace import TraceError, TraceWriter, columns_of
     from ..interp.watch import ModelWatcher
 
@@ -200,10 +218,7 @@ def cmd_run(args) -> int:
         _say(f"easylab run: at {report.time_us / 1e6:.6f} s the program id changed from "
              f"0x{report.old_id:08x} to 0x{report.new_id:08x}" + (f" ({'; '.join(notes)})" if notes else ""))
 
-    interfaces = None
-    if args.debug or args.modbus_tcp or args.modbus_rtu or args.nvram or args.maps:
-        interfaces = InterfaceOptions(args.debug, args.modbus_tcp, args.modbus_rtu, args.nvram,
-                                      Path(args.maps) if args.maps else None, Path(args.file), args.schedule)
+    interfaces = served_interfaces(args, args.schedule)
     clock = Clock(None if args.fast else (args.pace or 1.0))
     previous_handlers = _on_signals(clock)  # before the interfaces chain their own
     engine, failed = boot_served(lambda: Engine(program, cache, stimulus, trace, on_replace=replaced,
