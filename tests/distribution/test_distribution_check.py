@@ -146,3 +146,16 @@ def test_a_device_on_the_uart_of_a_link_names_the_link():
                    "    out offset: int16\n    driver \"line_camera\"\n}\n", text)
     found = diagnostics(text)
     assert [d[2] for d in found] == ["resource uart[0] is claimed by device 'cam' and by link 'bus'"]
+
+
+def test_a_device_on_a_node_declares_its_safe_values_after_the_node():
+    """`device d: T(...) on NODE safe datum = value`: both the placement and
+    the safe value are kept (the two optional parts in their order)."""
+    text = ROBOT
+    line = next(ln for ln in text.splitlines() if ln.startswith("device m1:"))
+    text = text.replace(line, line + " safe speed = 7")
+    result = check_file("/tmp/arm.elab", text=text)
+    assert result.model is not None, result.report()
+    assert result.model.device_nodes["m1"] == "j1"
+    datum = next(d for path, d in result.model.device_data.items() if str(path).endswith("m1.speed"))
+    assert datum.safe == 7
