@@ -19,7 +19,7 @@ from .codegen.render import render
 from .core.errors import BuildError
 from .ir.program import Program
 
-__all__ = ["BuildError", "BuildResult", "build", "generate"]
+__all__ = ["BuildError", "BuildResult", "build", "build_nodes", "generate"]
 
 
 @dataclass
@@ -54,8 +54,8 @@ def build(program: Program, board_name: str, out_dir: Path, extra_cflags: list[s
     build has no debug interface; ``sim`` adds the board's simulator;
     ``check`` runs the board's further checks of the C."""
     if program.deployment is not None:
-        raise BuildError(f"model '{program.name}' has nodes: it is built node by node, which is not built yet "
-                         "(docs/distribution.md); 'easylab check' checks each node against its board")
+        raise BuildError(f"model '{program.name}' has nodes: it is built node by node (build_nodes, "
+                         "docs/distribution.md)")
     board = load_board(board_name, board_path).configure(mcu, sim)
     checked = board.check(program)
     generated = generate(program, board, out_dir, release, checked)
@@ -68,3 +68,22 @@ def build(program: Program, board_name: str, out_dir: Path, extra_cflags: list[s
         result.simulator = simulator.program
         result.notes += simulator.notes + [f"simulator: {simulator.program}"]
     return result
+
+
+def build_nodes(program: Program, out_dir: Path, extra_cflags: list[str] | None = None, release: bool = False,
+                schedule: str | None = None, board_path: list[str] | tuple[str, ...] = (),
+                check: bool = False) -> dict[str, BuildResult]:
+    """Build each node of a distributed program on its own board into
+    ``out_dir/<node>/`` (an MCU node with its board's simulator, for
+    ``easylab launch``); the builds by node name (docs/distribution.md)."""
+    from .ir.split import split
+
+    if program.deployment is None:
+        raise BuildError(f"model '{program.name}' has no nodes: build it for one board")
+    built = {}
+    for name, node in split(program).items():
+        board = load_board(node.node.board, board_path)
+        built[name] = build(node.program, node.node.board, out_dir / name, extra_cflags, None, release,
+                            node.node.mcu, sim=board.has_simulator, schedule=schedule,
+                            board_path=board_path, check=check)
+    return built
