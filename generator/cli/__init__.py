@@ -72,6 +72,8 @@ def build_parser() -> argparse.ArgumentParser:
 
     from .run_command import add_parser as add_run_parser
     add_run_parser(sub)
+    from .launch_command import add_parser as add_launch_parser
+    add_launch_parser(sub)
     from .remote_commands import add_parsers as add_remote_parsers
     add_remote_parsers(sub)
     return parser
