@@ -78,3 +78,35 @@ def test_a_model_without_nodes_is_not_built_node_by_node(tmp_path):
         pytest.fail(result.report())
     with pytest.raises(BuildError, match="model 'one' has no nodes: build it for one board"):
         build_nodes(program, tmp_path / "b")
+
+
+def test_every_node_on_the_link_gets_the_round(tmp_path):
+    run = easylab("build", str(ROBOT), "-o", str(tmp_path / "b"))
+    assert run.returncode == 0, run.stdout + run.stderr
+    master = (tmp_path / "b" / "planner" / "el_link.c").read_text()
+    slave = (tmp_path / "b" / "joint2" / "el_link.c").read_text()
+    assert "void el_round_master(uint64_t until_us, bool inclusive)" in master
+    assert 'static const char *const el_lk_nodes[2] = { "joint1", "joint2" };' in master
+    assert "int8_t el_round_gate(uint32_t tick)" in slave and "el_round_master" not in slave
+    # the table's counts: nothing in round 0, then one value a round
+    assert "= { 0, 1, 1 };" in slave
+
+
+def test_a_relay_between_two_slaves_is_not_built_yet(tmp_path):
+    import pytest
+
+    from distribution_testlib import ROBOT as TWO_SLAVES, variant
+    from easylab.build import BuildError, build_nodes
+
+    text = variant("channel pos1: int32 delay 2 over bus\n", "channel pos1: int32 delay 2 over bus\n"
+                   "channel relay: int16 delay 2 over bus\n", TWO_SLAVES)
+    text = variant("    e1 -> pos1\n", "    e1 -> pos1\n    g.y -> relay\n", text)
+    text = variant("    g.y -> m2.speed\n", "    g.y -> m2.speed\n    relay -> seen2\n", text)
+    text = variant("var seen: int32\n", "var seen: int32\nvar seen2: int16\n", text)
+    path = tmp_path / "arm.elab"
+    path.write_text(text)
+    program, result = lower_file(path)
+    assert program is not None, result.report()
+    with pytest.raises(BuildError, match="channel 'relay' goes between two slaves of link 'bus': relaying it "
+                                         "through the master is not built yet"):
+        build_nodes(program, tmp_path / "b")
