@@ -1,8 +1,8 @@
 """`easylab launch` of the robot: the planner on the host, both joints in
-simavr, the Modbus round over ptys in lock-step. Each node's trace equals,
-column by column, the single-node reference run of the same model with its
-declared delays (`easylab run`); a joint killed mid-run is reported by name
-and the others go on."""
+simavr, the Modbus round over ptys, in lock-step and in real time. Each
+node's trace equals, column by column, the single-node reference run of
+the same model with its declared delays (`easylab run`); a joint killed
+mid-run is reported by name and the others go on."""
 
 from __future__ import annotations
 
@@ -13,6 +13,8 @@ import subprocess
 import sys
 import time
 from pathlib import Path
+
+import pytest
 
 ROBOT = Path(__file__).resolve().parents[2] / "examples" / "robot" / "robot.elab"
 # the encoders move (the positions cross to the planner), the targets ramp (they cross to the joints)
@@ -54,10 +56,11 @@ def reference(tmp_path: Path, duration: str) -> list[list[str]]:
     return rows(tmp_path / "reference.csv")
 
 
-def test_each_nodes_trace_equals_the_single_node_run(tmp_path):
+@pytest.mark.parametrize("pace", [["--fast"], []], ids=["lock-step", "real-time"])
+def test_each_nodes_trace_equals_the_single_node_run(tmp_path, pace):
     (tmp_path / "stimulus.csv").write_text(STIMULUS)
     expected = reference(tmp_path, "600ms")
-    run = easylab("launch", str(ROBOT), "--fast", "--duration", "600ms", "--stimulus", "stimulus.csv",
+    run = easylab("launch", str(ROBOT), *pace, "--duration", "600ms", "--stimulus", "stimulus.csv",
                   "--trace-dir", "traces", cwd=tmp_path)
     assert run.returncode == 0, run.stdout + run.stderr
     assert "silent" not in run.stderr
