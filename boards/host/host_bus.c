@@ -28,6 +28,7 @@ typedef struct {
     const char *node;
     int fd;
     bool silent; /* reported */
+    uint32_t unanswered; /* frames not sent, or sent without their answer */
     int64_t quiet_from_us; /* the end of the line's last frame, monotonic */
 } bus_line_t;
 
@@ -88,6 +89,7 @@ static bus_line_t *line_of(const char *node)
     line->node = node;
     line->fd = -1;
     line->silent = false;
+    line->unanswered = 0u;
     line->quiet_from_us = 0;
     snprintf(name, sizeof name, "EASYLAB_BUS_%s", node);
     path = getenv(name);
@@ -117,20 +119,44 @@ static bus_line_t *line_of(const char *node)
     return line;
 }
 
+static long timeout_ms(void)
+{
+    const char *env = getenv("EASYLAB_BUS_TIMEOUT_MS");
+    return env != NULL ? atol(env) : 1000;
+}
+
+/* A frame that could not be sent or was not answered: counted, and the
+ * slave named the first time. */
+static void missed(bus_line_t *line)
+{
+    line->unanswered++;
+    if (!line->silent) {
+        line->silent = true;
+        fprintf(stderr, "easylab: node '%s' is silent on the bus (no answer within %ld ms): its values are not "
+                        "carried, the others go on\n", line->node, timeout_ms());
+    }
+}
+
 bool el_port_bus_send(const char *node, const uint8_t *frame, uint16_t len)
 {
     bus_line_t *line = line_of(node);
     uint16_t done = 0u;
-    if (line == NULL || line->fd < 0)
+    if (line == NULL)
         return false;
+    if (line->fd < 0) {
+        missed(line);
+        return false;
+    }
     keep_gap(line);
     (void)tcflush(line->fd, TCIFLUSH); /* a late answer to an earlier slot */
     while (done < len) {
         ssize_t n = write(line->fd, frame + done, (size_t)(len - done));
         if (n < 0 && errno == EINTR)
             continue;
-        if (n <= 0)
+        if (n <= 0) {
+            missed(line);
             return false;
+        }
         done = (uint16_t)(done + (uint16_t)n);
     }
     line->quiet_from_us = now_us();
@@ -145,8 +171,7 @@ static int64_t now_ms(void)
 uint16_t el_port_bus_receive(const char *node, uint8_t *buf, uint16_t want)
 {
     bus_line_t *line = line_of(node);
-    const char *env = getenv("EASYLAB_BUS_TIMEOUT_MS");
-    int64_t timeout = env != NULL ? atol(env) : 1000, end = now_ms() + timeout;
+    int64_t end = now_ms() + timeout_ms();
     uint16_t got = 0u;
     if (line == NULL || line->fd < 0)
         return 0u;
@@ -164,10 +189,17 @@ uint16_t el_port_bus_receive(const char *node, uint8_t *buf, uint16_t want)
         got = (uint16_t)(got + (uint16_t)n);
     }
     line->quiet_from_us = now_us();
-    if (got < want && !line->silent) {
-        line->silent = true;
-        fprintf(stderr, "easylab: node '%s' is silent on the bus (no answer within %ld ms): its values are not "
-                        "carried, the others go on\n", node, (long)timeout);
-    }
+    if (got < want)
+        missed(line);
     return got;
+}
+
+void el_host_bus_report(void)
+{
+    uint8_t i;
+    for (i = 0u; i < line_count; i++) {
+        if (lines[i].unanswered != 0u)
+            fprintf(stderr, "%s: bus: node '%s' left %lu frame(s) unanswered\n", el_host_prog, lines[i].node,
+                    (unsigned long)lines[i].unanswered);
+    }
 }

@@ -186,6 +186,7 @@ void el_port_shutdown(void)
                 fprintf(stderr, " %s %u", el_task_names[i] ? el_task_names[i] : "?", (unsigned)el_overruns[i]);
         fputc('\n', stderr);
     }
+    el_host_bus_report();
     fflush(stderr);
 }
 

@@ -94,6 +94,7 @@ def test_a_killed_slave_is_reported_and_the_others_go_on(tmp_path):
     assert launch.returncode == 0, out + err
     assert "easylab: node 'joint2' is silent on the bus" in err
     assert "'joint1' is silent" not in err
+    assert "robot.planner: bus: node 'joint2' left " in err and "node 'joint1' left" not in err
     # joint1 and the planner went on to the end; joint1's values do not depend on joint2
     columns = ["time_us", "kp", "motor1.speed", "encoder1.count"]
     assert rows(tmp_path / "traces" / "joint1.csv")[1:] == projected(expected, columns)
