@@ -45,7 +45,8 @@ def _pack(t: T.ValueType) -> tuple[str, str]:
     if t.name == "bool":
         return "p[0] = v[i] ? 1u : 0u;", "(p[0] != 0u)"
     if t.signed:
-        return "p[0] = (uint16_t)(int16_t)v[i];", f"({t.c_name})(int16_t)p[0]"
+        back = f"({t.c_name})p[0]" if t.bits == 16 else f"({t.c_name})(int16_t)p[0]"
+        return "p[0] = (uint16_t)(int16_t)v[i];", back
     return "p[0] = (uint16_t)v[i];", f"({t.c_name})p[0]"
 
 
@@ -72,6 +73,9 @@ def link_files(node: NodeProgram) -> dict[str, str]:
         if ch is None:
             raise BuildError(f"channel '{b.channel}' goes between two slaves of link '{table.link}': relaying it "
                              "through the master is not built yet (docs/distribution.md)")
+        if max(b.counts) > b.tokens:  # the C copies at most `tokens` values a slot
+            raise BuildError(f"channel '{b.channel}': the round table carries {max(b.counts)} values in one slot, "
+                             f"more than its block's {b.tokens}")
         pack, unpack = _pack(ch.type)
         v = BlockView(len(blocks), ch.id, ch.name, ch.type.c_name, b.offset, b.tokens, b.per_value,
                       list(b.counts), b.repeat_from, written == master, pack, unpack)
