@@ -428,9 +428,9 @@ uint16_t el_mb_pdu(const uint8_t *req, uint16_t len, uint8_t *resp, bool broadca
         return 0u;
 #if defined(__GNUC__)
     if (el_mb_round_pdu) {
-        uint16_t round = el_mb_round_pdu(req, len, resp, broadcast);
-        if (round != 0xFFFFu)
-            return round;
+        uint16_t answered = el_mb_round_pdu(req, len, resp, broadcast);
+        if (answered != 0xFFFFu)
+            return answered;
     }
 #endif
     fc = req[0];
