@@ -100,3 +100,12 @@ def test_a_killed_slave_is_reported_and_the_others_go_on(tmp_path):
     assert rows(tmp_path / "traces" / "joint1.csv")[1:] == projected(expected, columns)
     planner = rows(tmp_path / "traces" / "planner.csv")
     assert planner[1:] != projected(expected, planner[0])  # the planner kept joint2's last position
+
+
+def test_a_model_without_nodes_is_not_launched(tmp_path):
+    model = tmp_path / "one.elab"
+    model.write_text("var x: int16\ntask t period 10 ms { }\n")
+    run = easylab("launch", str(model), "--fast", "--duration", "100ms", cwd=tmp_path)
+    assert run.returncode != 0
+    assert "model 'one' has no nodes: run it with 'easylab run' or build it for a board" in run.stderr
+    assert not (tmp_path / "build").exists()
