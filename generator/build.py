@@ -19,7 +19,7 @@ from .codegen.render import render
 from .core.errors import BuildError
 from .ir.program import Program
 
-__all__ = ["BuildError", "BuildResult", "build", "generate"]
+__all__ = ["BuildError", "BuildResult", "build", "build_nodes", "generate"]
 
 
 @dataclass
@@ -37,10 +37,12 @@ class BuildResult:
 
 
 def generate(program: Program, board: Board, out_dir: Path, release: bool = False,
-             checked: object = None) -> list[Path]:
+             checked: object = None, extra_files: dict[str, str] | None = None) -> list[Path]:
     """Write the generated files (model.c, the interfaces' tables and maps,
-    the board's own files); returns their paths."""
+    the board's own files, ``extra_files``: a node's link); returns their
+    paths."""
     files = render(program, board, release=release)
+    files.update(extra_files or {})
     files.update(board.produce(program, checked, release))
     return write_files(out_dir, files)
 
@@ -48,17 +50,17 @@ def generate(program: Program, board: Board, out_dir: Path, release: bool = Fals
 def build(program: Program, board_name: str, out_dir: Path, extra_cflags: list[str] | None = None,
           cc: str | None = None, release: bool = False, mcu: str | None = None, sim: bool = False,
           schedule: str | None = None, board_path: list[str] | tuple[str, ...] = (),
-          check: bool = False) -> BuildResult:
+          check: bool = False, extra_files: dict[str, str] | None = None) -> BuildResult:
     """Generate and compile ``program`` for a board (found on the board
     path: ``board_path``, EASYLAB_BOARD_PATH, the installation). A release
     build has no debug interface; ``sim`` adds the board's simulator;
     ``check`` runs the board's further checks of the C."""
     if program.deployment is not None:
-        raise BuildError(f"model '{program.name}' has nodes: it is built node by node, which is not built yet "
-                         "(docs/distribution.md); 'easylab check' checks each node against its board")
+        raise BuildError(f"model '{program.name}' has nodes: it is built node by node (build_nodes, "
+                         "docs/distribution.md)")
     board = load_board(board_name, board_path).configure(mcu, sim)
     checked = board.check(program)
-    generated = generate(program, board, out_dir, release, checked)
+    generated = generate(program, board, out_dir, release, checked, extra_files)
     options = CompileOptions(release, tuple(extra_cflags or ()), cc, schedule, check)
     compiled = board.compile(program, checked, out_dir, generated, options)
     result = BuildResult(out_dir, board, compiled, generated, list(compiled.size.lines if compiled.size else []))
@@ -68,3 +70,23 @@ def build(program: Program, board_name: str, out_dir: Path, extra_cflags: list[s
         result.simulator = simulator.program
         result.notes += simulator.notes + [f"simulator: {simulator.program}"]
     return result
+
+
+def build_nodes(program: Program, out_dir: Path, extra_cflags: list[str] | None = None, release: bool = False,
+                schedule: str | None = None, board_path: list[str] | tuple[str, ...] = (),
+                check: bool = False) -> dict[str, BuildResult]:
+    """Build each node of a distributed program on its own board into
+    ``out_dir/<node>/`` (an MCU node with its board's simulator, for
+    ``easylab launch``); the builds by node name (docs/distribution.md)."""
+    from .codegen.link import link_files
+    from .ir.split import split
+
+    if program.deployment is None:
+        raise BuildError(f"model '{program.name}' has no nodes: build it for one board")
+    built = {}
+    for name, node in split(program).items():
+        board = load_board(node.node.board, board_path)
+        built[name] = build(node.program, node.node.board, out_dir / name, extra_cflags, None, release,
+                            node.node.mcu, sim=board.has_simulator, schedule=schedule,
+                            board_path=board_path, check=check, extra_files=link_files(node))
+    return built

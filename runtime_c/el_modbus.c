@@ -450,12 +450,27 @@ static uint16_t device_id(const el_svc_map_t *m, const uint8_t *req, uint16_t le
 
 /* ---- the PDU dispatcher ---- */
 
+#if defined(__GNUC__)
+/* A slave of a Modbus round (docs/distribution.md) answers the round's sync
+ * and function-23 slot first (the node's generated el_link.c defines it;
+ * 0xFFFF: not the round's). Other programs do not have it. */
+extern uint16_t el_mb_round_pdu(const uint8_t *req, uint16_t len, uint8_t *resp, bool broadcast)
+    __attribute__((weak));
+#endif
+
 uint16_t el_mb_pdu(const uint8_t *req, uint16_t len, uint8_t *resp, bool broadcast)
 {
     const el_svc_map_t *m = el_service_map();
     uint8_t fc;
     if (req == (const uint8_t *)0 || resp == (uint8_t *)0 || len == 0u || len > EL_MB_PDU_MAX)
         return 0u;
+#if defined(__GNUC__)
+    if (el_mb_round_pdu) {
+        uint16_t answered = el_mb_round_pdu(req, len, resp, broadcast);
+        if (answered != 0xFFFFu)
+            return answered;
+    }
+#endif
     fc = req[0];
     switch (fc) {
     case 0x05u:
@@ -509,6 +524,8 @@ static uint16_t request_length(const uint8_t *buf, uint16_t len)
         return len >= 7u ? (uint16_t)(9u + buf[6]) : 0u;
     if (fc == 0x2Bu)
         return len >= 3u ? (buf[2] == 0x0Eu ? 7u : 0xFFFFu) : 0u;
+    if (fc == 0x17u) /* a round's slot (docs/distribution.md) */
+        return len >= 11u ? (uint16_t)(13u + buf[10]) : 0u;
     return 0xFFFFu;
 }
 

@@ -183,8 +183,29 @@ bool el_port_init(int argc, char **argv)
     return true;
 }
 
+/* A slave of a Modbus round (docs/distribution.md; the node's generated
+ * el_link.c defines it): its ticks follow the master's sync, not the
+ * timer. Other programs do not have it. */
+extern int8_t el_round_gate(uint32_t tick) __attribute__((weak));
+
 bool el_port_wait_tick(uint32_t tick)
 {
+    if (el_round_gate) {
+        for (;;) {
+            wdt_reset();
+            el_idle(); /* the bus: the sync that lets the tick run */
+            cli();
+            if (el_round_gate(tick) != 0) {
+                sei();
+                return true;
+            }
+            set_sleep_mode(SLEEP_MODE_IDLE); /* until a byte or the timer */
+            sleep_enable();
+            sei();
+            sleep_cpu();
+            sleep_disable();
+        }
+    }
     for (;;) {
         wdt_reset();
         if ((int32_t)(read_ticks() - tick) >= 0) {

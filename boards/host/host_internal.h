@@ -104,6 +104,10 @@ bool el_host_parse_duration(const char *text, uint64_t *us, const char **why);
 /* Write the params and vars a stimulus sets by now (host_stimulus.c). */
 void el_host_stimulus_inputs(void);
 
+/* host_bus.c: a Modbus round's master's lines; at the end of a run, the
+ * frames each slave left unanswered (stderr). */
+void el_host_bus_report(void);
+
 /* ---- the model's tables (host_port.c) ---- */
 
 /* Bytes of one value of an EL_T_ type (0 for an unknown type). */

@@ -186,6 +186,7 @@ void el_port_shutdown(void)
                 fprintf(stderr, " %s %u", el_task_names[i] ? el_task_names[i] : "?", (unsigned)el_overruns[i]);
         fputc('\n', stderr);
     }
+    el_host_bus_report();
     fflush(stderr);
 }
 
@@ -234,6 +235,11 @@ static uint64_t mul_sat(uint64_t a, uint64_t b)
     return (b != 0u && a > UINT64_MAX / b) ? UINT64_MAX : a * b;
 }
 
+/* The master of a Modbus round (docs/distribution.md; the node's generated
+ * el_link.c defines it) runs the round's events due by each instant, and
+ * at the end of a run those before its end. */
+extern void el_round_master(uint64_t until_us, bool inclusive) __attribute__((weak));
+
 bool el_port_wait_tick(uint32_t tick)
 {
     uint64_t t64, t_us;
@@ -253,6 +259,8 @@ bool el_port_wait_tick(uint32_t tick)
     t_us = mul_sat(t64, el_tick_us);
 
     if (el_host_settings.has_duration && t_us >= el_host_settings.duration_us) {
+        if (el_round_master)
+            el_round_master(el_host_settings.duration_us, false);
         if (!el_host_settings.fast) {
             uint64_t first_us = mul_sat(first_tick64, el_tick_us);
             if (el_host_settings.duration_us > first_us)
@@ -300,7 +308,8 @@ void el_port_irq_restore(el_irq_state_t state)
 
 void el_port_inputs(uint64_t tick)
 {
-    (void)tick;
+    if (el_round_master)
+        el_round_master(mul_sat(tick, el_tick_us), true);
     el_host_stimulus_inputs();
 }
 

@@ -33,11 +33,12 @@ figures for the checker, the round table and the tests.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from fractions import Fraction
 from math import ceil
 
 from ..core import types as T
+from ..core.modbus_round import READ_BASE, SYNC_REGISTER, WRITE_BASE
 from ..core.source import Diagnostics, note
 from ..frontend.model import CheckedModel, LinkInfo
 
@@ -49,10 +50,6 @@ REQUEST_BYTES = 13  # function 23 without its data: unit, function, read start a
 RESPONSE_BYTES = 5  # function 23's response without its data: unit, function, byte count, CRC
 MAX_READ_REGISTERS = 125  # function 23's limits
 MAX_WRITE_REGISTERS = 121
-# Register addresses of the round on every slave (above the service map's usual range).
-SYNC_REGISTER = 0xE000  # the broadcast round number
-READ_BASE = 0xE100  # read block: the status register (round last taken), then the slave's outputs
-WRITE_BASE = 0xE200  # write block: the slave's inputs (the round number when it has none)
 
 
 def character_us(baud: int) -> Fraction:
@@ -139,6 +136,17 @@ class RegisterBlock:
     registers: int
     tokens: int
     per_value: int
+    # Values the slot carries in round r: counts[r] up to the end, then the
+    # counts from repeat_from on again (see carry_counts).
+    counts: tuple[int, ...] = ()
+    repeat_from: int = 0
+
+    def carried(self, round_number: int) -> int:
+        """How many values this block carries in round ``round_number``."""
+        if round_number < len(self.counts):
+            return self.counts[round_number]
+        cycle = len(self.counts) - self.repeat_from
+        return self.counts[self.repeat_from + (round_number - self.repeat_from) % cycle]
 
 
 @dataclass(frozen=True)
@@ -200,6 +208,50 @@ class LinkPlan:
 def _tokens_per_round(round_us: int, period_us, tokens: int) -> int:
     """The most values a producer of ``period_us`` publishes within one round."""
     return ceil(Fraction(round_us) / Fraction(period_us)) * tokens
+
+
+def carry_counts(timing: RoundTiming, carriage: Carriage, slot_node: str, first_us, period_us,
+                 tokens: int) -> tuple[tuple[int, ...], int]:
+    """The values a slot of ``slot_node`` carries in each round, for a
+    producer that publishes ``tokens`` values at ``first_us + k *
+    period_us``: (counts, repeat_from), the counts of rounds 0, 1, ...
+    whose tail from ``repeat_from`` on repeats. A value from a slave is
+    carried by the first slot of its node that starts at or after its
+    publication + E; a value for a slave by the first slot of that slave
+    that starts at or after the value is at the master (Carriage.arrival)."""
+    period_us, first_us = Fraction(period_us), Fraction(first_us)
+    slot = timing.slot(slot_node)
+    cycle = int(_lcm_fraction(Fraction(timing.period_us), period_us) / timing.period_us)
+    rounds: dict[int, int] = {}
+    first_round = None
+    k = 0
+    while True:
+        d = first_us + k * period_us
+        if slot_node == carriage.producer_node:  # read from the producer
+            start = next_start(d + timing.error_us, slot.start_us, timing.period_us)
+        else:  # written to the consumer, once at the master
+            at_master = d
+            if carriage.producer_node != carriage.master:
+                src = timing.slot(carriage.producer_node)
+                at_master = next_start(d + timing.error_us, src.start_us, timing.period_us) + src.length_us
+            start = next_start(at_master, slot.start_us, timing.period_us)
+        r = int((start - slot.start_us) / timing.period_us)
+        first_round = r if first_round is None else first_round
+        if r >= first_round + 3 * cycle:
+            break
+        rounds[r] = rounds.get(r, 0) + tokens
+        k += 1
+    repeat_from = first_round + cycle
+    counts = tuple(rounds.get(r, 0) for r in range(repeat_from + cycle))
+    return counts, repeat_from
+
+
+def _lcm_fraction(a: Fraction, b: Fraction) -> Fraction:
+    """The least common multiple of two positive rationals."""
+    from math import gcd
+    num = a.numerator * b.denominator, b.numerator * a.denominator
+    den = a.denominator * b.denominator
+    return Fraction(num[0] * num[1] // gcd(num[0], num[1]), den)
 
 
 def plan_links(model: CheckedModel, diags: Diagnostics) -> LinkPlan | None:
@@ -284,8 +336,23 @@ def _round_table(model: CheckedModel, link: LinkInfo, crossing: list, diags: Dia
                                          "cannot carry its channels",
                     "lengthen the round, raise the baud rate or carry fewer values")
         return None
-    slots = tuple(SlotTable(m.node.name, m.unit, str(m.uart), tuple(writes[m.node.name]), tuple(reads[m.node.name]))
-                  for m in slaves)
+    producers = {}
+    for ch in crossing:
+        df = next(df for df in model.dataflows.values() if ch.producers[0] in df.edges)
+        producers[ch.name] = (df.task.offset_us + df.task.deadline_us, df.task.period_us,
+                              df.analysis.result.repetitions["out:" + ch.name], Carriage(
+                                  ch.name, link.name, *_ends(model, ch), timing, master))
+
+    def scheduled(node: str, blocks: list[RegisterBlock]) -> tuple[RegisterBlock, ...]:
+        out = []
+        for b in blocks:
+            first, period, tokens, carriage = producers[b.channel]
+            counts, repeat_from = carry_counts(timing, carriage, node, first, period, tokens)
+            out.append(replace(b, counts=counts, repeat_from=repeat_from))
+        return tuple(out)
+
+    slots = tuple(SlotTable(m.node.name, m.unit, str(m.uart), scheduled(m.node.name, writes[m.node.name]),
+                            scheduled(m.node.name, reads[m.node.name])) for m in slaves)
     return RoundTable(link.name, master, slots, timing)
 
 
@@ -340,7 +407,7 @@ def worst_latency_us(carriage: Carriage, publications) -> int:
     return max((ceil(carriage.arrival(d) - d) for d in publications), default=0)
 
 
-__all__ = ["Carriage", "LinkPlan", "RoundTable", "RoundTiming", "SlotTable", "SlotTiming", "character_us",
+__all__ = ["Carriage", "LinkPlan", "RegisterBlock", "carry_counts", "RoundTable", "RoundTiming", "SlotTable", "SlotTiming", "character_us",
            "frame_us", "next_start", "plan_links", "registers_per_value", "render_round", "round_summary", "round_timing",
            "silence_us",
            "worst_latency_us"]

@@ -53,7 +53,9 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("build", help="generate C for a board and compile it",
                        description="Generate C from a model for a board and compile it with the board's "
                                    "toolchain into build/<model>/<board>/ (or -o DIR). The path of the "
-                                   "program built is printed on the last line.")
+                                   "program built is printed on the last line. A model of nodes is built "
+                                   "node by node, each on its own board, into build/<model>/<node>/, with "
+                                   "its round tables in build/<model>/rounds.json.")
     p.add_argument("file", metavar="FILE", help="model file (.elab)")
     add_board_options(p, "the board's MCU (default: the board's own; `easylab boards` lists them)")
     p.add_argument("--release", action="store_true", help="a release build: no debug interface")
@@ -72,6 +74,8 @@ def build_parser() -> argparse.ArgumentParser:
 
     from .run_command import add_parser as add_run_parser
     add_run_parser(sub)
+    from .launch_command import add_parser as add_launch_parser
+    add_launch_parser(sub)
     from .remote_commands import add_parsers as add_remote_parsers
     add_remote_parsers(sub)
     return parser

@@ -125,6 +125,8 @@ def cmd_build(args) -> int:
     from ..build import BuildError, build
 
     program = lower_model(args.file, args.schedule)
+    if program.deployment is not None:
+        return _build_nodes(program, args)
     out = Path(args.output) if args.output else default_out_dir(program, args.board)
     try:
         built = build(program, args.board, out, extra_cflags=shlex.split(args.cflags or ""), cc=args.cc,
@@ -133,3 +135,32 @@ def cmd_build(args) -> int:
     except BuildError as err:
         raise CliError(str(err)) from None
     return report_built(built)
+
+
+def _build_nodes(program, args) -> int:
+    """A model of nodes: every node on its own board (--board and --mcu are
+    the model's), into build/<model>/<node>/, and the round tables of its
+    Modbus links in rounds.json beside them."""
+    import shlex
+
+    from ..analysis.distribution import round_summary
+    from ..build import BuildError, build_nodes
+
+    out = Path(args.output) if args.output else Path("build") / program.name
+    try:
+        built = build_nodes(program, out, extra_cflags=shlex.split(args.cflags or ""), release=args.release,
+                            schedule=args.schedule, board_path=args.board_path, check=args.check)
+    except BuildError as err:
+        raise CliError(str(err)) from None
+    for name, node in built.items():
+        for note in node.notes:
+            print(f"{name}: {note}")
+        print(f"{name}: {node.executable}")
+    rounds = out / "rounds.json"
+    deployment = program.deployment
+    rounds.write_text(json.dumps({"model": program.name,
+                                  "nodes": {n.name: {"board": n.board, "mcu": n.mcu} for n in deployment.nodes},
+                                  "rounds": [round_summary(t) for t in deployment.rounds.values()]},
+                                 indent=2) + "\n")
+    print(rounds)
+    return 0

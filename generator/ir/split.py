@@ -102,8 +102,11 @@ def _node_program(program: Program, node: NodeSpec) -> NodeProgram:
     new_dataflows = [_dataflow(df, dataflows, instances, items, channels, tasks)
                      for df in dataflows.kept(program.dataflows)]
     new_charts = [_chart(c, charts, dataflows, items, tasks, expr) for c in charts.kept(program.charts)]
+    # The initial tokens of a crossing channel are its consumer's: an output end starts empty.
     new_channels = [replace(c, id=channels(c.id), producer_task=tasks(c.producer_task),
-                            consumer_task=tasks(c.consumer_task)) for c in channels.kept(program.channels)]
+                            consumer_task=tasks(c.consumer_task),
+                            initial=c.initial if c.consumer_task in tasks else [])
+                    for c in channels.kept(program.channels)]
     new_tasks = [_task(t, tasks, dataflows, charts, items, channels) for t in tasks.kept(program.tasks)]
     tick, hyper, instants = _dispatch(program, new_tasks, tasks)
     new_tasks = [replace(t, period=t.period * program.tick_us // tick, offset=t.offset * program.tick_us // tick,

@@ -147,3 +147,28 @@ def test_a_dds_channel_waits_for_its_latency():
     assert [f[2] for f in found] == ["channel 'goal2' runs dry: it crosses link 'lan' from node 'pc' to node "
                                      "'pc2', where a value reaches task 'c2' up to 25000 us after task 'plan' "
                                      "publishes it; it needs 1 more initial token(s)"]
+
+
+def test_the_values_each_slot_carries_round_by_round():
+    from easylab.analysis.distribution import RegisterBlock, carry_counts
+
+    r = two_slaves()
+    # a slave's output published every 20 ms at its deadline (20 ms): the first at 20 ms is read in round 1
+    up = Carriage("pos", "bus", "j1", "pc", r, "pc")
+    assert carry_counts(r, up, "j1", 20000, 20000, 1) == ((0, 1, 1), 2)
+    # every 10 ms: two values a round from round 1 on (10 and 20 ms are both before round 1's slot)
+    assert carry_counts(r, up, "j1", 10000, 10000, 1) == ((0, 2, 2), 2)
+    # published just before the slot, within the sync error: the value waits one round
+    late = carry_counts(r, up, "j1", 20000 + r.slots[0].start_us - 1, 20000, 1)
+    assert late == ((0, 0, 1, 1), 3)
+    # to a slave from the master: written in the first slot of that slave at or after its publication
+    down = Carriage("goal", "bus", "pc", "j2", r, "pc")
+    assert carry_counts(r, down, "j2", 20000, 20000, 1) == ((0, 1, 1), 2)
+    # the master's values every 30 ms over 20 ms rounds: a pattern of three rounds that repeats
+    counts, repeat_from = carry_counts(r, down, "j2", 30000, 30000, 1)
+    block = RegisterBlock("goal", 0, 2, 2, 1, counts, repeat_from)
+    carried = [block.carried(n) for n in range(20)]
+    # j2's slot starts 10.5 ms into the round: 30 ms -> round 1, 60 -> 3, 90 -> 4, 120 -> 6, 150 -> 7, ...
+    assert carried[:8] == [0, 1, 0, 1, 1, 0, 1, 1]
+    assert all(carried[n] == carried[n + 3] for n in range(1, 17))
+    assert sum(carried[:11]) == 7  # every value published up to 210 ms, before round 10's slot

@@ -1,0 +1,113 @@
+"""`easylab launch` of the robot: the planner on the host, both joints in
+simavr, the Modbus round over ptys, in lock-step and in real time. Each
+node's trace equals, column by column, the single-node reference run of
+the same model with its declared delays (`easylab run`); a joint killed
+mid-run is reported by name and the others go on."""
+
+from __future__ import annotations
+
+import csv
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+ROBOT = Path(__file__).resolve().parents[2] / "examples" / "robot" / "robot.elab"
+# the encoders move (the positions cross to the planner), the targets ramp (they cross to the joints)
+STIMULUS = """time_us,encoder1.count,encoder2.count
+0,0,0
+100000,50,10
+240000,120,-30
+400000,-20,200
+"""
+
+
+def easylab(*args: str, cwd: Path) -> subprocess.CompletedProcess:
+    return subprocess.run([sys.executable, "-m", "easylab", *args], capture_output=True, text=True, timeout=600,
+                          cwd=cwd)
+
+
+def rows(path: Path) -> list[list[str]]:
+    with path.open(newline="") as f:
+        return list(csv.reader(f))
+
+
+def projected(reference: list[list[str]], columns: list[str]) -> list[list[str]]:
+    """The reference trace's rows for some of its columns, a row where one
+    of them changes (the traces' rule)."""
+    at = [reference[0].index(c) for c in columns]
+    out, last = [], None
+    for row in reference[1:]:
+        values = [row[i] for i in at]
+        if values[1:] != last:
+            out.append(values)
+            last = values[1:]
+    return out
+
+
+def reference(tmp_path: Path, duration: str) -> list[list[str]]:
+    run = easylab("run", str(ROBOT), "--fast", "--duration", duration, "--stimulus", "stimulus.csv",
+                  "--trace", "reference.csv", cwd=tmp_path)
+    assert run.returncode == 0, run.stderr
+    return rows(tmp_path / "reference.csv")
+
+
+@pytest.mark.parametrize("pace", [["--fast"], []], ids=["lock-step", "real-time"])
+def test_each_nodes_trace_equals_the_single_node_run(tmp_path, pace):
+    (tmp_path / "stimulus.csv").write_text(STIMULUS)
+    expected = reference(tmp_path, "600ms")
+    run = easylab("launch", str(ROBOT), *pace, "--duration", "600ms", "--stimulus", "stimulus.csv",
+                  "--trace-dir", "traces", cwd=tmp_path)
+    assert run.returncode == 0, run.stdout + run.stderr
+    assert "silent" not in run.stderr
+    assert run.stdout.splitlines()[-3:] == ["planner: traces/planner.csv", "joint1: traces/joint1.csv",
+                                            "joint2: traces/joint2.csv"]
+    for node, columns in (("planner", ["time_us", "amplitude", "spread"]),
+                          ("joint1", ["time_us", "kp", "motor1.speed", "encoder1.count"]),
+                          ("joint2", ["time_us", "kp", "motor2.speed", "encoder2.count"])):
+        trace = rows(tmp_path / "traces" / f"{node}.csv")
+        assert trace[0] == columns
+        assert trace[1:] == projected(expected, columns), node
+    # the values crossed: the planner saw both joints move, each joint followed the planner's ramp
+    assert [r[2] for r in rows(tmp_path / "traces" / "planner.csv")[1:]] == ["0", "40", "150", "-220"]
+
+
+def test_a_killed_slave_is_reported_and_the_others_go_on(tmp_path):
+    # the encoders move until the end, so that the planner misses joint2's last moves whenever it dies
+    (tmp_path / "stimulus.csv").write_text(STIMULUS + "".join(f"{t * 1000000},{t * 10},{-t * 20}\n"
+                                                              for t in range(1, 10)))
+    expected = reference(tmp_path, "10s")
+    launch = subprocess.Popen([sys.executable, "-m", "easylab", "launch", str(ROBOT), "--fast", "--duration", "10s",
+                               "--stimulus", "stimulus.csv", "--trace-dir", "traces"], cwd=tmp_path,
+                              stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    pid_file = tmp_path / "traces" / "joint2.pid"
+    deadline = time.monotonic() + 300
+    while not pid_file.exists():
+        assert launch.poll() is None and time.monotonic() < deadline, launch.communicate()
+        time.sleep(0.01)
+    time.sleep(1.0)  # some rounds on
+    assert launch.poll() is None, "the run ended before joint2 could be stopped mid-run"
+    os.kill(int(pid_file.read_text()), signal.SIGKILL)  # dead: its pty closes
+    out, err = launch.communicate(timeout=600)
+    assert launch.returncode == 0, out + err
+    assert "easylab: node 'joint2' is silent on the bus" in err
+    assert "'joint1' is silent" not in err
+    assert "robot.planner: bus: node 'joint2' left " in err and "node 'joint1' left" not in err
+    # joint1 and the planner went on to the end; joint1's values do not depend on joint2
+    columns = ["time_us", "kp", "motor1.speed", "encoder1.count"]
+    assert rows(tmp_path / "traces" / "joint1.csv")[1:] == projected(expected, columns)
+    planner = rows(tmp_path / "traces" / "planner.csv")
+    assert planner[1:] != projected(expected, planner[0])  # the planner kept joint2's last position
+
+
+def test_a_model_without_nodes_is_not_launched(tmp_path):
+    model = tmp_path / "one.elab"
+    model.write_text("var x: int16\ntask t period 10 ms { }\n")
+    run = easylab("launch", str(model), "--fast", "--duration", "100ms", cwd=tmp_path)
+    assert run.returncode != 0
+    assert "model 'one' has no nodes: run it with 'easylab run' or build it for a board" in run.stderr
+    assert not (tmp_path / "build").exists()
