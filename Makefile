@@ -71,8 +71,11 @@ $(VENV)/.installed: pyproject.toml setup.py
 # fixtures build once); firmware several modules need is built once per run.
 TEST_JOBS ?= auto
 
+# Tests marked `realtime` (a host answering a simulated board's deadlines
+# against the wall clock) run alone afterwards: parallel tests would starve them.
 test: setup
-	$(PY) -m pytest -q -n $(TEST_JOBS) --dist loadfile
+	$(PY) -m pytest -q -n $(TEST_JOBS) --dist loadfile -m "not realtime"
+	$(PY) -m pytest -q -n 0 -m realtime
 
 demo: setup
 	$(PY) -m easylab.demo

@@ -56,7 +56,7 @@ def reference(tmp_path: Path, duration: str) -> list[list[str]]:
     return rows(tmp_path / "reference.csv")
 
 
-@pytest.mark.parametrize("pace", [["--fast"], []], ids=["lock-step", "real-time"])
+@pytest.mark.parametrize("pace", [["--fast"], pytest.param([], marks=pytest.mark.realtime)], ids=["lock-step", "real-time"])
 def test_each_nodes_trace_equals_the_single_node_run(tmp_path, pace):
     (tmp_path / "stimulus.csv").write_text(STIMULUS)
     expected = reference(tmp_path, "600ms")

@@ -87,6 +87,7 @@ REAL_TIME_ATTEMPTS = 3
 LATE_HOST = "the proxy applied its safe values"
 
 
+@pytest.mark.realtime
 @pytest.mark.parametrize("name,mcu,baud,duration", REAL_TIME)
 def test_the_avr_proxy_in_real_time_gives_the_native_trace(name, mcu, baud, duration, build_cache, tmp_path):
     model, stimulus = EXAMPLES / f"{name}.elab", EXAMPLES / f"{name}.stimulus.csv"
@@ -159,6 +160,7 @@ LINK_LOSS = {
 }
 
 
+@pytest.mark.realtime
 @pytest.mark.parametrize("case", LINK_LOSS)
 def test_the_actuators_reach_their_safe_values_when_the_host_dies(case, build_cache, tmp_path):
     """The host is killed mid-run: the actuator (the host keeps it on) is

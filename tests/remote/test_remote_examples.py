@@ -78,6 +78,7 @@ def test_a_tcp_link_gives_the_pty_links_trace(build_cache, tmp_path):
     assert traces[True].read_bytes() == traces[False].read_bytes() == native.read_bytes()
 
 
+@pytest.mark.realtime
 def test_real_time_paced_by_the_proxy(build_cache, tmp_path):
     """Without --fast the proxy's clock paces the run (the proxy does not
     wait for the host); the trace is the same."""
