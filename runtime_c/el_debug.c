@@ -27,6 +27,14 @@
 
 #if defined(EL_DEBUG_SERVER) && EL_DEBUG_SERVER
 
+/* GCC's loop-invariant motion keeps table addresses and sizes in registers
+ * that 8-bit parts then save and restore around every call: smaller
+ * without it (about 100 bytes on the ATmega328P), as fast where it matters
+ * (the server handles a request in a few hundred instructions). */
+#if defined(__GNUC__) && !defined(__clang__)
+#pragma GCC optimize("no-move-loop-invariants")
+#endif
+
 #include "el_debug_cobs.h"
 #include "el_crc16.h"
 #include "el_dispatch.h"
@@ -160,6 +168,11 @@ static void put8(uint8_t v)
     put(v, 1u);
 }
 
+static void put16(uint16_t v)
+{
+    put(v, 2u);
+}
+
 /* ---- values ------------------------------------------------------------------ */
 
 static const uint16_t one16 = 1u;
@@ -188,6 +201,26 @@ static uint32_t le32(const uint8_t *in, uint8_t size)
         v = (v << 8) | in[--size];
     }
     return v;
+}
+
+/* Copy an entry of the debug tables (EL_ROM) into RAM. */
+static void rom_copy(void *dst, const void *rom, uint8_t n)
+{
+    uint8_t i;
+    for (i = 0u; i < n; i++) {
+        ((uint8_t *)dst)[i] = EL_ROM_READ_U8((const uint8_t *)rom + i);
+    }
+}
+
+/* The item with this id into *it; false when there is none (an id from
+ * outside). */
+static bool load_item(uint16_t id, el_dbg_item_t *it)
+{
+    if (id >= el_dbg_item_count) {
+        return false;
+    }
+    rom_copy(it, &el_dbg_items[id], (uint8_t)sizeof *it);
+    return true;
 }
 
 /* A 32-bit key of a value of `type` (its bits in u, a range bound's or a
@@ -220,26 +253,29 @@ static uint32_t order_key(uint8_t type, uint32_t u)
     }
 }
 
+/* The item's range into *r; false when writes are not checked. */
+static bool load_range(const el_dbg_item_t *it, el_dbg_range_t *r)
+{
+    if ((it->flags & EL_DBG_F_RANGE) == 0u || it->range == EL_DBG_NONE16) {
+        return false;
+    }
+    rom_copy(r, &el_dbg_ranges[it->range], (uint8_t)sizeof *r);
+    return true;
+}
+
 /* Is `in` (type_size bytes, little-endian) an acceptable value of the item? */
 static uint8_t check_value(const el_dbg_item_t *it, const uint8_t *in)
 {
-    const el_dbg_range_t *r;
+    el_dbg_range_t r;
     uint32_t key;
     if (it->type == EL_DBG_T_BOOL && in[0] > 1u) {
         return EL_DBG_E_VALUE;
     }
-    if ((it->flags & EL_DBG_F_RANGE) == 0u || it->range == EL_DBG_NONE16) {
+    if (!load_range(it, &r)) {
         return EL_DBG_OK;
     }
-    r = &el_dbg_ranges[it->range];
     key = order_key(it->type, le32(in, type_size(it->type)));
-    return (key >= order_key(it->type, r->lo.u) && key <= order_key(it->type, r->hi.u)) ? EL_DBG_OK : EL_DBG_E_RANGE;
-}
-
-/* The item with this id, or none (an id from outside). */
-static const el_dbg_item_t *item_at(uint16_t id)
-{
-    return id < el_dbg_item_count ? &el_dbg_items[id] : (const el_dbg_item_t *)0;
+    return (key >= order_key(it->type, r.lo.u) && key <= order_key(it->type, r.hi.u)) ? EL_DBG_OK : EL_DBG_E_RANGE;
 }
 
 /* The element's bytes in memory. */
@@ -250,9 +286,11 @@ static uint8_t *elem_addr(const el_dbg_item_t *it, uint16_t elem)
 
 static void apply(entry_t *e)
 {
-    const el_dbg_item_t *it = item_at(e->item & (uint16_t)~ENTRY_WRITE);
-    uint8_t *mem = elem_addr(it, e->elem);
-    uint8_t size = type_size(it->type);
+    el_dbg_item_t it;
+    uint8_t *mem, size;
+    (void)load_item(e->item & (uint16_t)~ENTRY_WRITE, &it); /* a queued id: checked */
+    mem = elem_addr(&it, e->elem);
+    size = type_size(it.type);
     if ((e->item & ENTRY_WRITE) != 0u) {
         move_value(mem, e->value, size);
     } else {
@@ -355,7 +393,7 @@ void el_debug_probe_actor(const void *self)
 {
     uint16_t i;
     for (i = 0u; i < el_dbg_actor_count; i++) {
-        if (el_dbg_actors[i] == self) {
+        if (EL_ROM_READ_PTR(&el_dbg_actors[i]) == self) {
             el_debug_probe(EL_DBG_P_ACTOR, i, 0u);
             return;
         }
@@ -414,7 +452,9 @@ static bool valid_point(uint8_t kind, uint16_t a, uint16_t b)
     case EL_DBG_P_TRANSITION:
         a_limit = el_dbg_chart_count;
         if (a < a_limit && kind != EL_DBG_P_CHART) {
-            b_limit = kind == EL_DBG_P_STEP ? el_dbg_charts[a].step_count : el_dbg_charts[a].transition_count;
+            el_dbg_chart_t c;
+            rom_copy(&c, &el_dbg_charts[a], (uint8_t)sizeof c);
+            b_limit = kind == EL_DBG_P_STEP ? c.step_count : c.transition_count;
         }
         break;
     default:
@@ -428,15 +468,18 @@ static void put_location(void)
     put8(halted ? 1u : 0u);
     put8(halt_why);
     put8(loc_kind);
-    put(loc_a, 2u);
-    put(loc_b, 2u);
+    put16(loc_a);
+    put16(loc_b);
     put8(loc_bp);
 }
 
 /* A read entry's value, as on the wire. */
 static void put_value(const entry_t *e)
 {
-    uint8_t k, size = type_size(item_at(e->item)->type);
+    el_dbg_item_t it;
+    uint8_t k, size;
+    (void)load_item(e->item, &it); /* a queued id: checked */
+    size = type_size(it.type);
     for (k = 0u; k < size; k++) {
         put8(e->value[k]);
     }
@@ -459,100 +502,96 @@ static entry_t *tx_entry(void)
     return tx_len < EL_DBG_TX_ENTRIES ? &txq[tx_len++] : (entry_t *)0;
 }
 
-/* Every element of the items p[n] (ids): now into the response, or queued
- * in the open transaction (one entry per element, values come with the
- * commit; all of the request or none of it). */
-static uint8_t do_read(const uint8_t *p, uint16_t n)
+/* One element's read or write, the one path of READ, WRITE and
+ * transactions: queued in the open transaction; a write queued for the
+ * next instant, or applied at once at a halted instant; a read into the
+ * response. */
+static uint8_t submit(entry_t *e)
 {
-    uint16_t k, e;
-    uint8_t first = tx_len;
-    bool queue = tx_state == TX_OPEN;
-    entry_t now;
-    if (n == 0u || (n & 1u) != 0u) {
-        return EL_DBG_E_LENGTH;
-    }
-    for (k = 0u; k < n; k += 2u) {
-        if (item_at(get_u16(p + k)) == (const el_dbg_item_t *)0) {
-            return EL_DBG_E_ID;
-        }
-    }
-    if (queue) {
+    entry_t *q = (entry_t *)0;
+    bool write = (e->item & ENTRY_WRITE) != 0u;
+    if (tx_state == TX_OPEN) {
+        q = tx_entry();
+    } else if (write && !at_instant()) {
+        q = wq_len < EL_DBG_WRITE_ENTRIES ? &wq[wq_len++] : (entry_t *)0;
         put8(EL_DBG_QUEUED);
-        put8(first);
-    }
-    for (k = 0u; k < n; k += 2u) {
-        uint16_t id = get_u16(p + k);
-        for (e = 0u; e < item_at(id)->count && !resp_full; e++) {
-            entry_t *q = queue ? tx_entry() : &now;
-            if (q == (entry_t *)0) {
-                tx_len = first;
-                return EL_DBG_E_QUEUE_FULL;
-            }
-            q->item = id;
-            q->elem = e;
-            if (!queue) {
-                apply(q);
-                put_value(q);
-            }
+    } else {
+        apply(e);
+        if (write) {
+            put8(EL_DBG_APPLIED);
+        } else {
+            put_value(e);
         }
+        return EL_DBG_OK;
     }
+    if (q == (entry_t *)0) {
+        return EL_DBG_E_QUEUE_FULL;
+    }
+    *q = *e;
     return EL_DBG_OK;
 }
 
-static uint8_t do_write(const uint8_t *p, uint16_t n)
+/* READ (p[n]: item ids, every element of each) and WRITE (p[n]: id, element,
+ * value). In an open transaction the response is QUEUED and the index of
+ * the first entry; a READ queues all of its elements or none. */
+static uint8_t do_access(bool write, const uint8_t *p, uint16_t n)
 {
-    uint16_t id, elem;
-    const el_dbg_item_t *it;
-    uint8_t size, st;
-    entry_t *e;
-    if (n < 5u) {
+    uint16_t k;
+    uint8_t first = tx_len, size, st = EL_DBG_OK;
+    el_dbg_item_t it;
+    entry_t e;
+    if (n < (write ? 5u : 2u) || (!write && (n & 1u) != 0u)) {
         return EL_DBG_E_LENGTH;
     }
-    id = get_u16(p);
-    elem = get_u16(p + 2);
-    it = item_at(id);
-    if (it == (const el_dbg_item_t *)0) {
-        return EL_DBG_E_ID;
+    for (k = 0u; k < n; k += 2u) {
+        if (!load_item(get_u16(p + k), &it)) {
+            return EL_DBG_E_ID;
+        }
+        if (write) {
+            break;
+        }
     }
-    size = type_size(it->type);
-    if (n != 4u + size) {
-        return EL_DBG_E_LENGTH;
-    }
-    if ((it->flags & EL_DBG_F_WRITE) == 0u) {
-        return EL_DBG_E_READ_ONLY;
-    }
-    if (elem >= it->count) {
-        return EL_DBG_E_VALUE;
-    }
-    st = check_value(it, p + 4);
-    if (st != EL_DBG_OK) {
-        return st;
+    if (write) {
+        e.elem = get_u16(p + 2);
+        size = type_size(it.type);
+        if (n != 4u + size) {
+            return EL_DBG_E_LENGTH;
+        }
+        if ((it.flags & EL_DBG_F_WRITE) == 0u) {
+            return EL_DBG_E_READ_ONLY;
+        }
+        if (e.elem >= it.count) {
+            return EL_DBG_E_VALUE;
+        }
+        st = check_value(&it, p + 4);
+        if (st != EL_DBG_OK) {
+            return st;
+        }
+        for (k = 0u; k < size; k++) {
+            e.value[k] = p[4u + k]; /* the wire's order: apply moves it to memory */
+        }
+        n = 2u; /* one element of one item */
     }
     if (tx_state == TX_OPEN) {
         put8(EL_DBG_QUEUED);
-        put8(tx_len);
-        e = tx_entry();
-    } else {
-        e = wq_len < EL_DBG_WRITE_ENTRIES ? &wq[wq_len] : (entry_t *)0;
+        put8(first);
     }
-    if (e == (entry_t *)0) {
-        return EL_DBG_E_QUEUE_FULL;
-    }
-    e->item = (uint16_t)(id | ENTRY_WRITE);
-    e->elem = elem;
-    for (st = 0u; st < size; st++) {
-        e->value[st] = p[4u + st]; /* the wire's order: apply moves it to memory */
-    }
-    if (tx_state != TX_OPEN) {
-        if (at_instant()) {
-            apply(e);
-            put8(EL_DBG_APPLIED);
+    for (k = 0u; k < n && st == EL_DBG_OK; k += 2u) {
+        e.item = get_u16(p + k);
+        (void)load_item(e.item, &it); /* checked above */
+        if (write) {
+            e.item |= ENTRY_WRITE;
+            st = submit(&e);
         } else {
-            wq_len++;
-            put8(EL_DBG_QUEUED);
+            for (e.elem = 0u; e.elem < it.count && st == EL_DBG_OK && !resp_full; e.elem++) {
+                st = submit(&e);
+            }
         }
     }
-    return EL_DBG_OK;
+    if (st != EL_DBG_OK) {
+        tx_len = first;
+    }
+    return st;
 }
 
 static uint8_t do_bp_set(const uint8_t *p)
@@ -600,12 +639,14 @@ static void put_stack(void)
     put((uint32_t)el_now_tick(), 4u);
     put_location();
     put8(running_task);
-    put(halted && loc_kind == EL_DBG_P_ACTOR ? loc_a : EL_DBG_NONE16, 2u);
+    put16(halted && loc_kind == EL_DBG_P_ACTOR ? loc_a : EL_DBG_NONE16);
     put8(el_dbg_chart_count);
     for (c = 0u; c < el_dbg_chart_count; c++) {
-        put8(el_dbg_charts[c].slot_count);
-        for (s = 0u; s < el_dbg_charts[c].slot_count; s++) {
-            put8(el_dbg_charts[c].slots[s]);
+        el_dbg_chart_t chart;
+        rom_copy(&chart, &el_dbg_charts[c], (uint8_t)sizeof chart);
+        put8(chart.slot_count);
+        for (s = 0u; s < chart.slot_count; s++) {
+            put8(chart.slots[s]);
         }
     }
 }
@@ -613,11 +654,11 @@ static void put_stack(void)
 static void put_hello(void)
 {
     put8(EL_DBG_PROTOCOL_VERSION);
-    put(EL_DBG_FRAME, 2u);
+    put16(EL_DBG_FRAME);
     put8(EL_DBG_WINDOW);
     put(el_program_id, 4u);
-    put(el_dbg_item_count, 2u);
-    put(el_dbg_actor_count, 2u);
+    put16(el_dbg_item_count);
+    put16(el_dbg_actor_count);
     put8(el_dbg_chart_count);
     put8(el_task_count);
     put8(EL_DBG_TX_ENTRIES);
@@ -648,91 +689,115 @@ static void put_flags(void)
 #error "put_flags: the transaction's status flags must follow each other"
 #endif
 
-static void put_item_info(const el_dbg_item_t *it)
+static uint8_t put_item_info(uint16_t id)
 {
-    uint8_t i;
-    put8(it->type);
-    put8(it->kind);
-    put8(it->flags);
-    put(it->count, 2u);
-    for (i = 0u; i < 2u; i++) {
-        const el_dbg_range_t *r = &el_dbg_ranges[it->range];
-        bool ranged = (it->flags & EL_DBG_F_RANGE) != 0u && it->range != EL_DBG_NONE16;
-        put(ranged ? (i == 0u ? r->lo.u : r->hi.u) : 0u, 4u);
+    el_dbg_item_t it;
+    el_dbg_range_t r;
+    if (!load_item(id, &it)) {
+        return EL_DBG_E_ID;
     }
+    if (!load_range(&it, &r)) {
+        r.lo.u = r.hi.u = 0u;
+    }
+    put8(it.type);
+    put8(it.kind);
+    put8(it.flags);
+    put16(it.count);
+    put(r.lo.u, 4u);
+    put(r.hi.u, 4u);
+    return EL_DBG_OK;
 }
 
-/* The payload length a request must have; EL_DBG_NONE8: its handler checks. */
-static uint8_t request_length(uint8_t cmd)
-{
-    switch (cmd) {
-    case EL_DBG_CMD_ITEM_INFO:
-        return 2u;
-    case EL_DBG_CMD_STEP:
-    case EL_DBG_CMD_BP_CLEAR:
-        return 1u;
-    case EL_DBG_CMD_BP_SET:
-        return 5u;
-    case EL_DBG_CMD_HELLO:
-    case EL_DBG_CMD_GET_PROGRAM_ID:
-    case EL_DBG_CMD_GET_FLAGS:
-    case EL_DBG_CMD_GET_COUNTERS:
-    case EL_DBG_CMD_TX_BEGIN:
-    case EL_DBG_CMD_TX_COMMIT:
-    case EL_DBG_CMD_TX_ABORT:
-    case EL_DBG_CMD_TX_RESULT:
-    case EL_DBG_CMD_GET_STACK:
-    case EL_DBG_CMD_RUN:
-    case EL_DBG_CMD_BREAK:
-    case EL_DBG_CMD_BP_LIST:
-        return 0u;
-    default: /* READ, WRITE, RESET, board and unknown commands */
-        return EL_DBG_NONE8;
-    }
-}
+/* The requests: command byte and the payload length it must have
+ * (ANY_LENGTH: its handler checks), in the order of enum request. */
+#define ANY_LENGTH 0xFFu
+static const uint8_t requests[][2] EL_ROM = {
+    {EL_DBG_CMD_HELLO, 0u},
+    {EL_DBG_CMD_GET_PROGRAM_ID, 0u},
+    {EL_DBG_CMD_GET_FLAGS, 0u},
+    {EL_DBG_CMD_GET_COUNTERS, 0u},
+    {EL_DBG_CMD_ITEM_INFO, 2u},
+    {EL_DBG_CMD_READ, ANY_LENGTH},
+    {EL_DBG_CMD_WRITE, ANY_LENGTH},
+    {EL_DBG_CMD_TX_BEGIN, 0u},
+    {EL_DBG_CMD_TX_COMMIT, 0u},
+    {EL_DBG_CMD_TX_ABORT, 0u},
+    {EL_DBG_CMD_TX_RESULT, 0u},
+    {EL_DBG_CMD_GET_STACK, 0u},
+    {EL_DBG_CMD_RUN, 0u},
+    {EL_DBG_CMD_BREAK, 0u},
+    {EL_DBG_CMD_STEP, 1u},
+    {EL_DBG_CMD_RESET, ANY_LENGTH},
+    {EL_DBG_CMD_BP_SET, 5u},
+    {EL_DBG_CMD_BP_CLEAR, 1u},
+    {EL_DBG_CMD_BP_LIST, 0u},
+};
+enum request {
+    REQ_HELLO,
+    REQ_GET_PROGRAM_ID,
+    REQ_GET_FLAGS,
+    REQ_GET_COUNTERS,
+    REQ_ITEM_INFO,
+    REQ_READ,
+    REQ_WRITE,
+    REQ_TX_BEGIN,
+    REQ_TX_COMMIT,
+    REQ_TX_ABORT,
+    REQ_TX_RESULT,
+    REQ_GET_STACK,
+    REQ_RUN,
+    REQ_BREAK,
+    REQ_STEP,
+    REQ_RESET,
+    REQ_BP_SET,
+    REQ_BP_CLEAR,
+    REQ_BP_LIST,
+    REQ_COUNT
+};
+typedef char requests_match_their_enum[sizeof requests / sizeof requests[0] == REQ_COUNT ? 1 : -1];
 
 /* Run one request (cmd, payload p[n]); the response's status byte is at
  * resp[2], its payload follows. Returns the status. */
 static uint8_t dispatch(uint8_t cmd, const uint8_t *p, uint16_t n)
 {
-    uint8_t i, want = request_length(cmd);
-    if (want != EL_DBG_NONE8 && n != want) {
-        return EL_DBG_E_LENGTH;
+    uint8_t i, req, want;
+    for (req = 0u; req < REQ_COUNT && EL_ROM_READ_U8(&requests[req][0]) != cmd; req++) {
     }
-    switch (cmd) {
-    case EL_DBG_CMD_HELLO:
+    if (req < REQ_COUNT) {
+        want = EL_ROM_READ_U8(&requests[req][1]);
+        if (want != ANY_LENGTH && n != want) {
+            return EL_DBG_E_LENGTH;
+        }
+    }
+    switch (req) {
+    case REQ_HELLO:
         put_hello();
         break;
-    case EL_DBG_CMD_GET_PROGRAM_ID:
+    case REQ_GET_PROGRAM_ID:
         put(el_program_id, 4u);
         break;
-    case EL_DBG_CMD_GET_FLAGS:
+    case REQ_GET_FLAGS:
         put_flags();
         break;
-    case EL_DBG_CMD_GET_COUNTERS:
+    case REQ_GET_COUNTERS:
         put8(EL_DBG_C_COUNT);
         for (i = 0u; i < EL_DBG_C_COUNT; i++) {
-            put(counters[i], 2u);
+            put16(counters[i]);
         }
         break;
-    case EL_DBG_CMD_ITEM_INFO:
-        if (item_at(get_u16(p)) == (const el_dbg_item_t *)0) {
-            return EL_DBG_E_ID;
-        }
-        put_item_info(item_at(get_u16(p)));
-        break;
-    case EL_DBG_CMD_READ:
-        return do_read(p, n);
-    case EL_DBG_CMD_WRITE:
-        return do_write(p, n);
-    case EL_DBG_CMD_TX_BEGIN:
+    case REQ_ITEM_INFO:
+        return put_item_info(get_u16(p));
+    case REQ_READ:
+    case REQ_WRITE:
+        return do_access(req == REQ_WRITE, p, n);
+    case REQ_TX_BEGIN:
         if (tx_state == TX_OPEN || tx_state == TX_COMMITTED) {
             return EL_DBG_E_TX_BUSY;
         }
         tx_state = TX_OPEN;
         tx_len = 0u;
         break;
-    case EL_DBG_CMD_TX_COMMIT:
+    case REQ_TX_COMMIT:
         if (tx_state != TX_OPEN) {
             return EL_DBG_E_NO_TX;
         }
@@ -745,36 +810,36 @@ static uint8_t dispatch(uint8_t cmd, const uint8_t *p, uint16_t n)
         put8(EL_DBG_APPLIED);
         put_tx_reads();
         break;
-    case EL_DBG_CMD_TX_ABORT:
+    case REQ_TX_ABORT:
         if (tx_state != TX_OPEN && tx_state != TX_COMMITTED) {
             return EL_DBG_E_NO_TX;
         }
         tx_state = TX_NONE;
         tx_len = 0u;
         break;
-    case EL_DBG_CMD_TX_RESULT:
+    case REQ_TX_RESULT:
         put8(tx_state);
         if (tx_state == TX_APPLIED) {
             put_tx_reads();
         }
         break;
-    case EL_DBG_CMD_GET_STACK:
+    case REQ_GET_STACK:
         put_stack();
         break;
-    case EL_DBG_CMD_RUN:
+    case REQ_RUN:
         halt_request = false;
         step_unit = 0u;
         halted = false;
         update_armed();
         break;
-    case EL_DBG_CMD_BREAK:
+    case REQ_BREAK:
         if (!halted) {
             halt_request = true;
             halt_why = EL_DBG_WHY_BREAK;
             update_armed();
         }
         break;
-    case EL_DBG_CMD_STEP:
+    case REQ_STEP:
         if (p[0] != EL_DBG_STEP_TASK && p[0] != EL_DBG_STEP_CHART && p[0] != EL_DBG_STEP_ACTOR
             && p[0] != EL_DBG_STEP_INSTANT) {
             return EL_DBG_E_VALUE;
@@ -786,26 +851,26 @@ static uint8_t dispatch(uint8_t cmd, const uint8_t *p, uint16_t n)
         halted = false;
         update_armed();
         break;
-    case EL_DBG_CMD_RESET:
+    case REQ_RESET:
         if (n > 1u) {
             return EL_DBG_E_LENGTH;
         }
         reset_pending = true;
         reset_flags = n == 1u ? p[0] : 0u;
         break;
-    case EL_DBG_CMD_BP_SET:
+    case REQ_BP_SET:
         return do_bp_set(p);
-    case EL_DBG_CMD_BP_CLEAR:
+    case REQ_BP_CLEAR:
         return do_bp_clear(p[0]);
-    case EL_DBG_CMD_BP_LIST:
+    case REQ_BP_LIST:
         put8(bp_count);
         for (i = 0u; i < EL_DBG_BP_SLOTS; i++) {
             if (bps[i].kind != EL_DBG_P_NONE) {
                 put8(i);
                 put8(bps[i].kind);
-                put(bps[i].a, 2u);
-                put(bps[i].b, 2u);
-                put(bps[i].hits, 2u);
+                put16(bps[i].a);
+                put16(bps[i].b);
+                put16(bps[i].hits);
             }
         }
         break;
