@@ -19,7 +19,7 @@
  * Small on 8-bit parts (docs/benchmarks.md, "Footprint goals"): values move
  * as bytes (one path for reads, writes and transactions), range checks
  * compare order-preserving 32-bit keys (no float arithmetic), every
- * response is built by one bounded `put` and checked for size once, and
+ * response is built by one bounded `put8` and checked for size once, and
  * the response is COBS-encoded in place in the buffer that keeps it for a
  * repeated request.
  */
@@ -29,8 +29,8 @@
 
 /* GCC's loop-invariant motion keeps table addresses and sizes in registers
  * that 8-bit parts then save and restore around every call: smaller
- * without it (about 100 bytes on the ATmega328P), as fast where it matters
- * (the server handles a request in a few hundred instructions). */
+ * without it (about 75 bytes on the ATmega328P); the server's loops are
+ * short. */
 #if defined(__GNUC__) && !defined(__clang__)
 #pragma GCC optimize("no-move-loop-invariants")
 #endif
@@ -102,7 +102,7 @@ static bool rx_ready;
 static uint8_t out[EL_DBG_FRAME + 2u];
 #define resp (out + 1)
 static uint8_t resp_len;  /* bytes of resp in use (seq, cmd, status, payload) */
-static bool resp_full;    /* a put did not fit: the response is EL_DBG_E_TOO_BIG */
+static bool resp_full;    /* a put8 did not fit: the response is EL_DBG_E_TOO_BIG */
 static uint8_t wire_len;  /* the last response as sent (0: none) */
 static bool have_last;
 static uint8_t last_seq;
@@ -149,28 +149,34 @@ static uint16_t get_u16(const uint8_t *p)
     return (uint16_t)((uint16_t)p[0] | (uint16_t)((uint16_t)p[1] << 8));
 }
 
-/* Append `size` bytes of v, low byte first; a response that would outgrow
- * the frame becomes EL_DBG_E_TOO_BIG (handle_frame). */
-static void put(uint32_t v, uint8_t size)
-{
-    while (size-- != 0u) {
-        if (resp_len >= EL_DBG_FRAME - EL_DBG_TRAILER) {
-            resp_full = true;
-            return;
-        }
-        resp[resp_len++] = (uint8_t)v;
-        v >>= 8;
-    }
-}
-
+/* Append a byte; a response that would outgrow the frame becomes
+ * EL_DBG_E_TOO_BIG (handle_frame). Wider values low byte first. */
 static void put8(uint8_t v)
 {
-    put(v, 1u);
+    if (resp_len >= EL_DBG_FRAME - EL_DBG_TRAILER) {
+        resp_full = true;
+    } else {
+        resp[resp_len++] = v;
+    }
 }
 
 static void put16(uint16_t v)
 {
-    put(v, 2u);
+    put8((uint8_t)(v & 0xFFu));
+    put8((uint8_t)(v >> 8));
+}
+
+static void put32(uint32_t v)
+{
+    put16((uint16_t)(v & 0xFFFFu));
+    put16((uint16_t)(v >> 16));
+}
+
+static void put_bytes(const uint8_t *p, uint8_t n)
+{
+    while (n-- != 0u) {
+        put8(*p++);
+    }
 }
 
 /* ---- values ------------------------------------------------------------------ */
@@ -284,18 +290,24 @@ static uint8_t *elem_addr(const el_dbg_item_t *it, uint16_t elem)
     return (uint8_t *)it->addr + elem * type_size(it->type);
 }
 
-static void apply(entry_t *e)
+/* Move one element of item `it` between memory and its entry. */
+static void apply_item(const el_dbg_item_t *it, entry_t *e)
 {
-    el_dbg_item_t it;
-    uint8_t *mem, size;
-    (void)load_item(e->item & (uint16_t)~ENTRY_WRITE, &it); /* a queued id: checked */
-    mem = elem_addr(&it, e->elem);
-    size = type_size(it.type);
+    uint8_t *mem = elem_addr(it, e->elem);
+    uint8_t size = type_size(it->type);
     if ((e->item & ENTRY_WRITE) != 0u) {
         move_value(mem, e->value, size);
     } else {
         move_value(e->value, mem, size);
     }
+}
+
+/* The same for a queued entry. */
+static void apply(entry_t *e)
+{
+    el_dbg_item_t it;
+    (void)load_item(e->item & (uint16_t)~ENTRY_WRITE, &it); /* checked when queued */
+    apply_item(&it, e);
 }
 
 static bool at_instant(void)
@@ -473,61 +485,48 @@ static void put_location(void)
     put8(loc_bp);
 }
 
-/* A read entry's value, as on the wire. */
-static void put_value(const entry_t *e)
-{
-    el_dbg_item_t it;
-    uint8_t k, size;
-    (void)load_item(e->item, &it); /* a queued id: checked */
-    size = type_size(it.type);
-    for (k = 0u; k < size; k++) {
-        put8(e->value[k]);
-    }
-}
-
 /* The values of the applied transaction's reads. */
 static void put_tx_reads(void)
 {
     uint8_t i;
     for (i = 0u; i < tx_len; i++) {
         if ((txq[i].item & ENTRY_WRITE) == 0u) {
-            put_value(&txq[i]);
+            el_dbg_item_t it;
+            (void)load_item(txq[i].item, &it); /* a queued id: checked */
+            put_bytes(txq[i].value, type_size(it.type));
         }
     }
-}
-
-/* The next entry of the open transaction, or none when it is full. */
-static entry_t *tx_entry(void)
-{
-    return tx_len < EL_DBG_TX_ENTRIES ? &txq[tx_len++] : (entry_t *)0;
 }
 
 /* One element's read or write, the one path of READ, WRITE and
  * transactions: queued in the open transaction; a write queued for the
  * next instant, or applied at once at a halted instant; a read into the
  * response. */
-static uint8_t submit(entry_t *e)
+static uint8_t submit(const el_dbg_item_t *it, entry_t *e)
 {
-    entry_t *q = (entry_t *)0;
     bool write = (e->item & ENTRY_WRITE) != 0u;
+    entry_t *q;
     if (tx_state == TX_OPEN) {
-        q = tx_entry();
+        if (tx_len >= EL_DBG_TX_ENTRIES) {
+            return EL_DBG_E_QUEUE_FULL;
+        }
+        q = &txq[tx_len++];
+        *q = *e;
     } else if (write && !at_instant()) {
-        q = wq_len < EL_DBG_WRITE_ENTRIES ? &wq[wq_len++] : (entry_t *)0;
+        if (wq_len >= EL_DBG_WRITE_ENTRIES) {
+            return EL_DBG_E_QUEUE_FULL;
+        }
+        q = &wq[wq_len++];
+        *q = *e;
         put8(EL_DBG_QUEUED);
     } else {
-        apply(e);
+        apply_item(it, e);
         if (write) {
             put8(EL_DBG_APPLIED);
         } else {
-            put_value(e);
+            put_bytes(e->value, type_size(it->type));
         }
-        return EL_DBG_OK;
     }
-    if (q == (entry_t *)0) {
-        return EL_DBG_E_QUEUE_FULL;
-    }
-    *q = *e;
     return EL_DBG_OK;
 }
 
@@ -581,10 +580,10 @@ static uint8_t do_access(bool write, const uint8_t *p, uint16_t n)
         (void)load_item(e.item, &it); /* checked above */
         if (write) {
             e.item |= ENTRY_WRITE;
-            st = submit(&e);
+            st = submit(&it, &e);
         } else {
             for (e.elem = 0u; e.elem < it.count && st == EL_DBG_OK && !resp_full; e.elem++) {
-                st = submit(&e);
+                st = submit(&it, &e);
             }
         }
     }
@@ -636,7 +635,7 @@ static uint8_t do_bp_clear(uint8_t slot)
 static void put_stack(void)
 {
     uint8_t c, s;
-    put((uint32_t)el_now_tick(), 4u);
+    put32((uint32_t)el_now_tick());
     put_location();
     put8(running_task);
     put16(halted && loc_kind == EL_DBG_P_ACTOR ? loc_a : EL_DBG_NONE16);
@@ -656,7 +655,7 @@ static void put_hello(void)
     put8(EL_DBG_PROTOCOL_VERSION);
     put16(EL_DBG_FRAME);
     put8(EL_DBG_WINDOW);
-    put(el_program_id, 4u);
+    put32(el_program_id);
     put16(el_dbg_item_count);
     put16(el_dbg_actor_count);
     put8(el_dbg_chart_count);
@@ -681,7 +680,7 @@ static void put_flags(void)
     }
     put8(f);
     put_location();
-    put((uint32_t)el_now_tick(), 4u);
+    put32((uint32_t)el_now_tick());
     put8(wq_len);
     put8(tx_len);
 }
@@ -703,8 +702,8 @@ static uint8_t put_item_info(uint16_t id)
     put8(it.kind);
     put8(it.flags);
     put16(it.count);
-    put(r.lo.u, 4u);
-    put(r.hi.u, 4u);
+    put32(r.lo.u);
+    put32(r.hi.u);
     return EL_DBG_OK;
 }
 
@@ -774,7 +773,7 @@ static uint8_t dispatch(uint8_t cmd, const uint8_t *p, uint16_t n)
         put_hello();
         break;
     case REQ_GET_PROGRAM_ID:
-        put(el_program_id, 4u);
+        put32(el_program_id);
         break;
     case REQ_GET_FLAGS:
         put_flags();
