@@ -22,13 +22,13 @@ static struct { uint8_t el_unused; } actor1, actor2;
 static uint8_t slots0[1] = {0xFFu};
 static uint8_t slots1[2] = {0u, 2u};
 
-const el_dbg_range_t el_dbg_ranges[3] = {
+const el_dbg_range_t el_dbg_ranges[3] EL_ROM = {
     { { .i = -100L }, { .i = 100L } },
     { { .f = -1.5f }, { .f = 2.5f } },
     { { .u = 100UL }, { .u = 10000UL } },
 };
 
-const el_dbg_item_t el_dbg_items[14] = {
+const el_dbg_item_t el_dbg_items[14] EL_ROM = {
     { (void *)&b0, 1u, EL_DBG_NONE16, EL_DBG_T_BOOL, EL_DBG_K_VAR, EL_DBG_F_READ | EL_DBG_F_WRITE },
     { (void *)&i8, 1u, EL_DBG_NONE16, EL_DBG_T_I8, EL_DBG_K_VAR, EL_DBG_F_READ | EL_DBG_F_WRITE },
     { (void *)&u8, 1u, EL_DBG_NONE16, EL_DBG_T_U8, EL_DBG_K_PARAM, EL_DBG_F_READ | EL_DBG_F_WRITE },
@@ -45,9 +45,9 @@ const el_dbg_item_t el_dbg_items[14] = {
     { (void *)&u32, 1u, EL_DBG_NONE16, EL_DBG_T_U32, EL_DBG_K_VAR, EL_DBG_F_READ | EL_DBG_F_WRITE },
 };
 const uint16_t el_dbg_item_count = 14u;
-const void *const el_dbg_actors[3] = { &actor0, &actor1, &actor2 };
+const void *const el_dbg_actors[3] EL_ROM = { &actor0, &actor1, &actor2 };
 const uint16_t el_dbg_actor_count = 3u;
-const el_dbg_chart_t el_dbg_charts[2] = {
+const el_dbg_chart_t el_dbg_charts[2] EL_ROM = {
     { slots0, 1u, 3u, 2u },
     { slots1, 2u, 4u, 3u },
 };

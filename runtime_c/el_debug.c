@@ -15,10 +15,25 @@
  * A halt loops on el_port_idle inside the probe that halted (logical time
  * stands still, the interfaces are served) and calls el_port_resync when
  * it ends, so real time resumes without catching up.
+ *
+ * Small on 8-bit parts (docs/benchmarks.md, "Footprint goals"): values move
+ * as bytes (one path for reads, writes and transactions), range checks
+ * compare order-preserving 32-bit keys (no float arithmetic), every
+ * response is built by one bounded `put8` and checked for size once, and
+ * the response is COBS-encoded in place in the buffer that keeps it for a
+ * repeated request.
  */
 #include "el_debug.h"
 
 #if defined(EL_DEBUG_SERVER) && EL_DEBUG_SERVER
+
+/* GCC's loop-invariant motion keeps table addresses and sizes in registers
+ * that 8-bit parts then save and restore around every call: smaller
+ * without it (about 75 bytes on the ATmega328P); the server's loops are
+ * short. */
+#if defined(__GNUC__) && !defined(__clang__)
+#pragma GCC optimize("no-move-loop-invariants")
+#endif
 
 #include "el_debug_cobs.h"
 #include "el_crc16.h"
@@ -52,37 +67,43 @@
     EL_DBG_TX_ENTRIES > EL_DBG_TX_MAX || EL_DBG_WRITE_ENTRIES > EL_DBG_WRITE_QUEUE || EL_DBG_BP_SLOTS > EL_DBG_BP_MAX
 #error "el_debug_config.h: a size beyond the protocol's limits"
 #endif
+/* The in-place encoding below needs no COBS block of 254 bytes or more. */
+#if EL_DBG_FRAME > 253u
+#error "el_debug.c: a frame of more than 253 bytes needs a COBS encoder with long blocks"
+#endif
 
 /* ---- state ----------------------------------------------------------------- */
 
+/* A queued read or write of one element. */
 typedef struct {
-    uint16_t item;
+    uint16_t item;                     /* id, EL_DBG_OP_WRITE in bit 15 for a write */
     uint16_t elem;
-    uint8_t op;                       /* EL_DBG_OP_... */
     uint8_t value[EL_DBG_VALUE_BYTES]; /* to write, or read when applied */
 } entry_t;
+#define ENTRY_WRITE 0x8000u
 
 typedef struct {
-    uint8_t used;
-    uint8_t kind;
+    uint8_t kind; /* EL_DBG_P_...; EL_DBG_P_NONE: a free slot */
     uint16_t a;
     uint16_t b;
     uint16_t hits;
 } breakpoint_t;
 
 #define TX_NONE 0u
-#define TX_OPEN 1u
+#define TX_OPEN 1u      /* TX_RESULT reports these numbers as they are */
 #define TX_COMMITTED 2u
 #define TX_APPLIED 3u
 
 static uint8_t rx_buf[EL_DBG_FRAME];
 static el_cobs_decoder_t rx;
 static bool rx_ready;
-static uint8_t resp[EL_DBG_FRAME];
-static uint16_t resp_len; /* bytes of resp in use (seq, cmd, status, payload) */
-static bool resp_full;     /* a put did not fit: every later put of this response fails too */
-static uint8_t wire[EL_COBS_MAX_ENCODED(EL_DBG_FRAME) + 1u];
-static uint16_t wire_len; /* the last response as sent, for a repeated request */
+/* The response: [0] COBS code, then seq, cmd, status, payload, CRC, then
+ * the delimiter; encoded in place, kept for a repeated request. */
+static uint8_t out[EL_DBG_FRAME + 2u];
+#define resp (out + 1)
+static uint8_t resp_len;  /* bytes of resp in use (seq, cmd, status, payload) */
+static bool resp_full;    /* a put8 did not fit: the response is EL_DBG_E_TOO_BIG */
+static uint8_t wire_len;  /* the last response as sent (0: none) */
 static bool have_last;
 static uint8_t last_seq;
 static uint16_t last_crc;
@@ -123,190 +144,170 @@ static void update_armed(void)
     el_dbg_armed = (uint8_t)((halt_request || step_unit != 0u || bp_count != 0u) && el_debug_abort_halt == 0u);
 }
 
-/* ---- little-endian fields --------------------------------------------------- */
-
 static uint16_t get_u16(const uint8_t *p)
 {
     return (uint16_t)((uint16_t)p[0] | (uint16_t)((uint16_t)p[1] << 8));
 }
 
-/* Byte copies of our own: the runtime needs no C library (some targets'
- * front ends have none). */
-static void copy_bytes(void *dst, const void *src, uint16_t n)
+/* Append a byte; a response that would outgrow the frame becomes
+ * EL_DBG_E_TOO_BIG (handle_frame). Wider values low byte first. */
+static void put8(uint8_t v)
 {
-    uint8_t *d = (uint8_t *)dst;
-    const uint8_t *s = (const uint8_t *)src;
-    while (n-- > 0u) {
-        *d++ = *s++;
-    }
-}
-
-static void zero_bytes(void *dst, uint16_t n)
-{
-    uint8_t *d = (uint8_t *)dst;
-    while (n-- > 0u) {
-        *d++ = 0u;
-    }
-}
-
-static bool put_u8(uint8_t v)
-{
-    if (resp_full || resp_len + 1u > EL_DBG_FRAME - EL_DBG_TRAILER) {
+    if (resp_len >= EL_DBG_FRAME - EL_DBG_TRAILER) {
         resp_full = true;
-        return false;
+    } else {
+        resp[resp_len++] = v;
     }
-    resp[resp_len++] = v;
-    return true;
 }
 
-static bool put_u16(uint16_t v)
+static void put16(uint16_t v)
 {
-    return put_u8((uint8_t)(v & 0xFFu)) && put_u8((uint8_t)(v >> 8));
+    put8((uint8_t)(v & 0xFFu));
+    put8((uint8_t)(v >> 8));
 }
 
-static bool put_u32(uint32_t v)
+static void put32(uint32_t v)
 {
-    return put_u16((uint16_t)(v & 0xFFFFu)) && put_u16((uint16_t)(v >> 16));
+    put16((uint16_t)(v & 0xFFFFu));
+    put16((uint16_t)(v >> 16));
 }
 
-/* ---- items --------------------------------------------------------------- */
+static void put_bytes(const uint8_t *p, uint8_t n)
+{
+    while (n-- != 0u) {
+        put8(*p++);
+    }
+}
+
+/* ---- values ------------------------------------------------------------------ */
+
+static const uint16_t one16 = 1u;
+/* The wire is little-endian; memory is the target's order. */
+#define NATIVE_LE (*(const uint8_t *)&one16 == 1u)
 
 static uint8_t type_size(uint8_t type)
 {
-    switch (type) {
-    case EL_DBG_T_BOOL:
-    case EL_DBG_T_I8:
-    case EL_DBG_T_U8:
-        return 1u;
-    case EL_DBG_T_I16:
-    case EL_DBG_T_U16:
-        return 2u;
-    case EL_DBG_T_I32:
-    case EL_DBG_T_U32:
-    case EL_DBG_T_F32:
-    case EL_DBG_T_TIME:
-        return 4u;
-    default:
-        return 0u;
-    }
+    return type <= EL_DBG_T_U8 ? 1u : type <= EL_DBG_T_U16 ? 2u : 4u;
 }
 
-/* Element `elem` of an item as little-endian bytes (type_size of them). */
-static void get_elem(const el_dbg_item_t *it, uint16_t elem, uint8_t *out)
+/* Copy one value between memory and the wire (the same move both ways:
+ * reversing the bytes is its own inverse). */
+static void move_value(uint8_t *dst, const uint8_t *src, uint8_t size)
 {
-    uint16_t v16;
-    uint32_t v32;
-    float f;
-    switch (it->type) {
-    case EL_DBG_T_BOOL:
-        out[0] = ((const bool *)it->addr)[elem] ? 1u : 0u;
-        break;
-    case EL_DBG_T_I8:
-    case EL_DBG_T_U8:
-        out[0] = ((const uint8_t *)it->addr)[elem];
-        break;
-    case EL_DBG_T_I16:
-    case EL_DBG_T_U16:
-        v16 = ((const uint16_t *)it->addr)[elem];
-        out[0] = (uint8_t)(v16 & 0xFFu);
-        out[1] = (uint8_t)(v16 >> 8);
-        break;
-    case EL_DBG_T_F32:
-        f = ((const float *)it->addr)[elem];
-        copy_bytes(&v32, &f, (uint16_t)(sizeof v32));
-        out[0] = (uint8_t)(v32 & 0xFFu);
-        out[1] = (uint8_t)((v32 >> 8) & 0xFFu);
-        out[2] = (uint8_t)((v32 >> 16) & 0xFFu);
-        out[3] = (uint8_t)(v32 >> 24);
-        break;
-    default: /* 32-bit integers and time */
-        v32 = ((const uint32_t *)it->addr)[elem];
-        out[0] = (uint8_t)(v32 & 0xFFu);
-        out[1] = (uint8_t)((v32 >> 8) & 0xFFu);
-        out[2] = (uint8_t)((v32 >> 16) & 0xFFu);
-        out[3] = (uint8_t)(v32 >> 24);
-        break;
+    uint8_t i;
+    for (i = 0u; i < size; i++) {
+        dst[i] = src[NATIVE_LE ? i : (uint8_t)(size - 1u - i)];
     }
 }
 
 static uint32_t le32(const uint8_t *in, uint8_t size)
 {
     uint32_t v = 0u;
-    uint8_t i;
-    for (i = size; i > 0u; i--) {
-        v = (v << 8) | in[i - 1u];
+    while (size != 0u) {
+        v = (v << 8) | in[--size];
     }
     return v;
 }
 
-static void set_elem(const el_dbg_item_t *it, uint16_t elem, const uint8_t *in)
+/* Copy an entry of the debug tables (EL_ROM) into RAM. */
+static void rom_copy(void *dst, const void *rom, uint8_t n)
 {
-    uint32_t v32 = le32(in, type_size(it->type));
-    float f;
-    switch (it->type) {
-    case EL_DBG_T_BOOL:
-        ((bool *)it->addr)[elem] = in[0] != 0u;
-        break;
-    case EL_DBG_T_I8:
-    case EL_DBG_T_U8:
-        ((uint8_t *)it->addr)[elem] = in[0];
-        break;
-    case EL_DBG_T_I16:
-    case EL_DBG_T_U16:
-        ((uint16_t *)it->addr)[elem] = (uint16_t)v32;
-        break;
-    case EL_DBG_T_F32:
-        copy_bytes(&f, &v32, (uint16_t)(sizeof f));
-        ((float *)it->addr)[elem] = f;
-        break;
-    default:
-        ((uint32_t *)it->addr)[elem] = v32;
-        break;
+    uint8_t i;
+    for (i = 0u; i < n; i++) {
+        ((uint8_t *)dst)[i] = EL_ROM_READ_U8((const uint8_t *)rom + i);
     }
 }
 
-/* Is `in` (type_size bytes) an acceptable value of the item? */
+/* The item with this id into *it; false when there is none (an id from
+ * outside). */
+static bool load_item(uint16_t id, el_dbg_item_t *it)
+{
+    if (id >= el_dbg_item_count) {
+        return false;
+    }
+    rom_copy(it, &el_dbg_items[id], (uint8_t)sizeof *it);
+    return true;
+}
+
+/* A 32-bit key of a value of `type` (its bits in u, a range bound's or a
+ * written value's) that orders as the values do: signed integers
+ * sign-extended with the sign bit flipped, floats by their IEEE bits (-0
+ * as +0; a NaN orders beyond the infinities, so it is out of any finite
+ * range as a float comparison has it). */
+static uint32_t order_key(uint8_t type, uint32_t u)
+{
+    switch (type) {
+    case EL_DBG_T_I8:
+        if ((u & 0x80u) != 0u) {
+            u |= 0xFFFFFF00uL;
+        }
+        return u ^ 0x80000000uL;
+    case EL_DBG_T_I16:
+        if ((u & 0x8000u) != 0u) {
+            u |= 0xFFFF0000uL;
+        }
+        return u ^ 0x80000000uL;
+    case EL_DBG_T_I32:
+        return u ^ 0x80000000uL;
+    case EL_DBG_T_F32:
+        if (u == 0x80000000uL) {
+            u = 0u;
+        }
+        return (u & 0x80000000uL) != 0u ? ~u : (u | 0x80000000uL);
+    default: /* unsigned, time, bool */
+        return u;
+    }
+}
+
+/* The item's range into *r; false when writes are not checked. */
+static bool load_range(const el_dbg_item_t *it, el_dbg_range_t *r)
+{
+    if ((it->flags & EL_DBG_F_RANGE) == 0u || it->range == EL_DBG_NONE16) {
+        return false;
+    }
+    rom_copy(r, &el_dbg_ranges[it->range], (uint8_t)sizeof *r);
+    return true;
+}
+
+/* Is `in` (type_size bytes, little-endian) an acceptable value of the item? */
 static uint8_t check_value(const el_dbg_item_t *it, const uint8_t *in)
 {
-    uint8_t size = type_size(it->type);
-    uint32_t u = le32(in, size);
-    int32_t s;
-    const el_dbg_range_t *r;
-    float f;
+    el_dbg_range_t r;
+    uint32_t key;
     if (it->type == EL_DBG_T_BOOL && in[0] > 1u) {
         return EL_DBG_E_VALUE;
     }
-    if ((it->flags & EL_DBG_F_RANGE) == 0u || it->range == EL_DBG_NONE16) {
+    if (!load_range(it, &r)) {
         return EL_DBG_OK;
     }
-    r = &el_dbg_ranges[it->range];
-    switch (it->type) {
-    case EL_DBG_T_I8:
-        s = (int32_t)(int8_t)(uint8_t)u;
-        break;
-    case EL_DBG_T_I16:
-        s = (int32_t)(int16_t)(uint16_t)u;
-        break;
-    case EL_DBG_T_I32:
-        s = u > 0x7FFFFFFFuL ? -(int32_t)(0xFFFFFFFFuL - u) - 1 : (int32_t)u;
-        break;
-    case EL_DBG_T_F32:
-        copy_bytes(&f, &u, (uint16_t)(sizeof f));
-        return (f >= r->lo.f && f <= r->hi.f) ? EL_DBG_OK : EL_DBG_E_RANGE;
-    default: /* unsigned, time, bool */
-        return (u >= r->lo.u && u <= r->hi.u) ? EL_DBG_OK : EL_DBG_E_RANGE;
-    }
-    return (s >= r->lo.i && s <= r->hi.i) ? EL_DBG_OK : EL_DBG_E_RANGE;
+    key = order_key(it->type, le32(in, type_size(it->type)));
+    return (key >= order_key(it->type, r.lo.u) && key <= order_key(it->type, r.hi.u)) ? EL_DBG_OK : EL_DBG_E_RANGE;
 }
 
+/* The element's bytes in memory. */
+static uint8_t *elem_addr(const el_dbg_item_t *it, uint16_t elem)
+{
+    return (uint8_t *)it->addr + elem * type_size(it->type);
+}
+
+/* Move one element of item `it` between memory and its entry. */
+static void apply_item(const el_dbg_item_t *it, entry_t *e)
+{
+    uint8_t *mem = elem_addr(it, e->elem);
+    uint8_t size = type_size(it->type);
+    if ((e->item & ENTRY_WRITE) != 0u) {
+        move_value(mem, e->value, size);
+    } else {
+        move_value(e->value, mem, size);
+    }
+}
+
+/* The same for a queued entry. */
 static void apply(entry_t *e)
 {
-    const el_dbg_item_t *it = &el_dbg_items[e->item];
-    if (e->op == EL_DBG_OP_WRITE) {
-        set_elem(it, e->elem, e->value);
-    } else {
-        get_elem(it, e->elem, e->value);
-    }
+    el_dbg_item_t it;
+    (void)load_item(e->item & (uint16_t)~ENTRY_WRITE, &it); /* checked when queued */
+    apply_item(&it, e);
 }
 
 static bool at_instant(void)
@@ -332,6 +333,15 @@ static void apply_queues(void)
 
 /* ---- halting ---------------------------------------------------------------- */
 
+static void clear_bps(void)
+{
+    uint8_t i;
+    for (i = 0u; i < EL_DBG_BP_SLOTS; i++) {
+        bps[i].kind = EL_DBG_P_NONE;
+    }
+    bp_count = 0u;
+}
+
 static void halt_here(uint8_t why, uint8_t kind, uint16_t a, uint16_t b, uint8_t bp)
 {
     halted = true;
@@ -354,11 +364,22 @@ static void halt_here(uint8_t why, uint8_t kind, uint16_t a, uint16_t b, uint8_t
     if (el_debug_abort_halt != 0u) {
         halt_request = false;
         step_unit = 0u;
-        bp_count = 0u;
-        zero_bytes(bps, (uint16_t)(sizeof bps));
+        clear_bps();
     }
     update_armed();
     el_port_resync();
+}
+
+/* The slot of the breakpoint at (kind, a, b), or EL_DBG_NONE8. */
+static uint8_t find_bp(uint8_t kind, uint16_t a, uint16_t b)
+{
+    uint8_t i;
+    for (i = 0u; i < EL_DBG_BP_SLOTS; i++) {
+        if (bps[i].kind == kind && bps[i].a == a && bps[i].b == b) {
+            return i;
+        }
+    }
+    return EL_DBG_NONE8;
 }
 
 void el_debug_probe(uint8_t kind, uint16_t a, uint16_t b)
@@ -367,17 +388,13 @@ void el_debug_probe(uint8_t kind, uint16_t a, uint16_t b)
     if (el_debug_abort_halt != 0u || halted) {
         return;
     }
-    for (i = 0u; i < EL_DBG_BP_SLOTS; i++) {
-        breakpoint_t *bp = &bps[i];
-        if (bp->used != 0u && bp->kind == kind && bp->a == a && bp->b == b) {
-            if (bp->hits != UINT16_MAX) {
-                bp->hits++;
-            }
-            halt_here(EL_DBG_WHY_BREAKPOINT, kind, a, b, i);
-            return;
+    i = find_bp(kind, a, b);
+    if (i != EL_DBG_NONE8) {
+        if (bps[i].hits != UINT16_MAX) {
+            bps[i].hits++;
         }
-    }
-    if (step_unit == kind) {
+        halt_here(EL_DBG_WHY_BREAKPOINT, kind, a, b, i);
+    } else if (step_unit == kind) {
         halt_here(EL_DBG_WHY_STEP, kind, a, b, EL_DBG_NONE8);
     } else if (halt_request && kind == EL_DBG_P_INSTANT) {
         halt_here(halt_why == EL_DBG_WHY_START ? EL_DBG_WHY_START : EL_DBG_WHY_BREAK, kind, a, b, EL_DBG_NONE8);
@@ -388,7 +405,7 @@ void el_debug_probe_actor(const void *self)
 {
     uint16_t i;
     for (i = 0u; i < el_dbg_actor_count; i++) {
-        if (el_dbg_actors[i] == self) {
+        if (EL_ROM_READ_PTR(&el_dbg_actors[i]) == self) {
             el_debug_probe(EL_DBG_P_ACTOR, i, 0u);
             return;
         }
@@ -431,36 +448,229 @@ void el_debug_halt_at_start(void)
 /* Is (kind, a, b) a probe point of this program? */
 static bool valid_point(uint8_t kind, uint16_t a, uint16_t b)
 {
+    uint16_t a_limit, b_limit = 1u;
     switch (kind) {
     case EL_DBG_P_INSTANT:
-        return a == 0u && b == 0u;
+        a_limit = 1u;
+        break;
     case EL_DBG_P_TASK:
-        return a < el_task_count && b == 0u;
-    case EL_DBG_P_CHART:
-        return a < el_dbg_chart_count && b == 0u;
-    case EL_DBG_P_STEP:
-        return a < el_dbg_chart_count && b < el_dbg_charts[a].step_count;
-    case EL_DBG_P_TRANSITION:
-        return a < el_dbg_chart_count && b < el_dbg_charts[a].transition_count;
+        a_limit = el_task_count;
+        break;
     case EL_DBG_P_ACTOR:
-        return a < el_dbg_actor_count && b == 0u;
+        a_limit = el_dbg_actor_count;
+        break;
+    case EL_DBG_P_CHART:
+    case EL_DBG_P_STEP:
+    case EL_DBG_P_TRANSITION:
+        a_limit = el_dbg_chart_count;
+        if (a < a_limit && kind != EL_DBG_P_CHART) {
+            el_dbg_chart_t c;
+            rom_copy(&c, &el_dbg_charts[a], (uint8_t)sizeof c);
+            b_limit = kind == EL_DBG_P_STEP ? c.step_count : c.transition_count;
+        }
+        break;
     default:
         return false;
     }
+    return a < a_limit && b < b_limit;
 }
 
-static uint8_t status_flags(void)
+static void put_location(void)
 {
-    uint8_t f = 0u;
-    if (halted) {
-        f |= EL_DBG_S_HALTED;
+    put8(halted ? 1u : 0u);
+    put8(halt_why);
+    put8(loc_kind);
+    put16(loc_a);
+    put16(loc_b);
+    put8(loc_bp);
+}
+
+/* The values of the applied transaction's reads. */
+static void put_tx_reads(void)
+{
+    uint8_t i;
+    for (i = 0u; i < tx_len; i++) {
+        if ((txq[i].item & ENTRY_WRITE) == 0u) {
+            el_dbg_item_t it;
+            (void)load_item(txq[i].item, &it); /* a queued id: checked */
+            put_bytes(txq[i].value, type_size(it.type));
+        }
+    }
+}
+
+/* One element's read or write, the one path of READ, WRITE and
+ * transactions: queued in the open transaction; a write queued for the
+ * next instant, or applied at once at a halted instant; a read into the
+ * response. */
+static uint8_t submit(const el_dbg_item_t *it, entry_t *e)
+{
+    bool write = (e->item & ENTRY_WRITE) != 0u;
+    entry_t *q;
+    if (tx_state == TX_OPEN) {
+        if (tx_len >= EL_DBG_TX_ENTRIES) {
+            return EL_DBG_E_QUEUE_FULL;
+        }
+        q = &txq[tx_len++];
+        *q = *e;
+    } else if (write && !at_instant()) {
+        if (wq_len >= EL_DBG_WRITE_ENTRIES) {
+            return EL_DBG_E_QUEUE_FULL;
+        }
+        q = &wq[wq_len++];
+        *q = *e;
+        put8(EL_DBG_QUEUED);
+    } else {
+        apply_item(it, e);
+        if (write) {
+            put8(EL_DBG_APPLIED);
+        } else {
+            put_bytes(e->value, type_size(it->type));
+        }
+    }
+    return EL_DBG_OK;
+}
+
+/* READ (p[n]: item ids, every element of each) and WRITE (p[n]: id, element,
+ * value). In an open transaction the response is QUEUED and the index of
+ * the first entry; a READ queues all of its elements or none. */
+static uint8_t do_access(bool write, const uint8_t *p, uint16_t n)
+{
+    uint16_t k;
+    uint8_t first = tx_len, size, st = EL_DBG_OK;
+    el_dbg_item_t it;
+    entry_t e;
+    if (n < (write ? 5u : 2u) || (!write && (n & 1u) != 0u)) {
+        return EL_DBG_E_LENGTH;
+    }
+    for (k = 0u; k < n; k += 2u) {
+        if (!load_item(get_u16(p + k), &it)) {
+            return EL_DBG_E_ID;
+        }
+        if (write) {
+            break;
+        }
+    }
+    if (write) {
+        e.elem = get_u16(p + 2);
+        size = type_size(it.type);
+        if (n != 4u + size) {
+            return EL_DBG_E_LENGTH;
+        }
+        if ((it.flags & EL_DBG_F_WRITE) == 0u) {
+            return EL_DBG_E_READ_ONLY;
+        }
+        if (e.elem >= it.count) {
+            return EL_DBG_E_VALUE;
+        }
+        st = check_value(&it, p + 4);
+        if (st != EL_DBG_OK) {
+            return st;
+        }
+        for (k = 0u; k < size; k++) {
+            e.value[k] = p[4u + k]; /* the wire's order: apply moves it to memory */
+        }
+        n = 2u; /* one element of one item */
     }
     if (tx_state == TX_OPEN) {
-        f |= EL_DBG_S_TX_OPEN;
-    } else if (tx_state == TX_COMMITTED) {
-        f |= EL_DBG_S_TX_COMMITTED;
-    } else if (tx_state == TX_APPLIED) {
-        f |= EL_DBG_S_TX_APPLIED;
+        put8(EL_DBG_QUEUED);
+        put8(first);
+    }
+    for (k = 0u; k < n && st == EL_DBG_OK; k += 2u) {
+        e.item = get_u16(p + k);
+        (void)load_item(e.item, &it); /* checked above */
+        if (write) {
+            e.item |= ENTRY_WRITE;
+            st = submit(&it, &e);
+        } else {
+            for (e.elem = 0u; e.elem < it.count && st == EL_DBG_OK && !resp_full; e.elem++) {
+                st = submit(&it, &e);
+            }
+        }
+    }
+    if (st != EL_DBG_OK) {
+        tx_len = first;
+    }
+    return st;
+}
+
+static uint8_t do_bp_set(const uint8_t *p)
+{
+    uint8_t kind = p[0], i;
+    uint16_t a = get_u16(p + 1), b = get_u16(p + 3);
+    if (!valid_point(kind, a, b)) {
+        return EL_DBG_E_ID;
+    }
+    i = find_bp(kind, a, b); /* already set: the same slot */
+    if (i == EL_DBG_NONE8) {
+        for (i = 0u; i < EL_DBG_BP_SLOTS && bps[i].kind != EL_DBG_P_NONE; i++) {
+        }
+        if (i == EL_DBG_BP_SLOTS) {
+            return EL_DBG_E_BP_FULL;
+        }
+        bps[i].kind = kind;
+        bps[i].a = a;
+        bps[i].b = b;
+        bps[i].hits = 0u;
+        bp_count++;
+        update_armed();
+    }
+    put8(i);
+    return EL_DBG_OK;
+}
+
+static uint8_t do_bp_clear(uint8_t slot)
+{
+    if (slot == EL_DBG_NONE8) {
+        clear_bps();
+    } else if (slot >= EL_DBG_BP_SLOTS || bps[slot].kind == EL_DBG_P_NONE) {
+        return EL_DBG_E_ID;
+    } else {
+        bps[slot].kind = EL_DBG_P_NONE;
+        bp_count--;
+    }
+    update_armed();
+    return EL_DBG_OK;
+}
+
+static void put_stack(void)
+{
+    uint8_t c, s;
+    put32((uint32_t)el_now_tick());
+    put_location();
+    put8(running_task);
+    put16(halted && loc_kind == EL_DBG_P_ACTOR ? loc_a : EL_DBG_NONE16);
+    put8(el_dbg_chart_count);
+    for (c = 0u; c < el_dbg_chart_count; c++) {
+        el_dbg_chart_t chart;
+        rom_copy(&chart, &el_dbg_charts[c], (uint8_t)sizeof chart);
+        put8(chart.slot_count);
+        for (s = 0u; s < chart.slot_count; s++) {
+            put8(chart.slots[s]);
+        }
+    }
+}
+
+static void put_hello(void)
+{
+    put8(EL_DBG_PROTOCOL_VERSION);
+    put16(EL_DBG_FRAME);
+    put8(EL_DBG_WINDOW);
+    put32(el_program_id);
+    put16(el_dbg_item_count);
+    put16(el_dbg_actor_count);
+    put8(el_dbg_chart_count);
+    put8(el_task_count);
+    put8(EL_DBG_TX_ENTRIES);
+    put8(EL_DBG_WRITE_ENTRIES);
+    put8(EL_DBG_BP_SLOTS);
+    put8(EL_DBG_VALUE_MAX);
+}
+
+static void put_flags(void)
+{
+    uint8_t f = halted ? EL_DBG_S_HALTED : 0u;
+    if (tx_state != TX_NONE) {
+        f |= (uint8_t)(EL_DBG_S_TX_OPEN << (tx_state - TX_OPEN)); /* OPEN, COMMITTED, APPLIED in a row */
     }
     if (wq_len != 0u) {
         f |= EL_DBG_S_WRITES_PENDING;
@@ -468,361 +678,167 @@ static uint8_t status_flags(void)
     if (halt_request || step_unit != 0u) {
         f |= EL_DBG_S_HALT_PENDING;
     }
-    return f;
+    put8(f);
+    put_location();
+    put32((uint32_t)el_now_tick());
+    put8(wq_len);
+    put8(tx_len);
 }
+#if EL_DBG_S_TX_COMMITTED != EL_DBG_S_TX_OPEN << 1 || EL_DBG_S_TX_APPLIED != EL_DBG_S_TX_OPEN << 2
+#error "put_flags: the transaction's status flags must follow each other"
+#endif
 
-static bool put_location(void)
+static uint8_t put_item_info(uint16_t id)
 {
-    return put_u8(halted ? 1u : 0u) && put_u8(halt_why) && put_u8(loc_kind) && put_u16(loc_a) && put_u16(loc_b)
-        && put_u8(loc_bp);
-}
-
-/* The values of the applied transaction's reads. */
-static uint8_t put_tx_reads(void)
-{
-    uint8_t i, k;
-    for (i = 0u; i < tx_len; i++) {
-        if (txq[i].op == EL_DBG_OP_READ) {
-            uint8_t size = type_size(el_dbg_items[txq[i].item].type);
-            for (k = 0u; k < size; k++) {
-                if (!put_u8(txq[i].value[k])) {
-                    return EL_DBG_E_TOO_BIG;
-                }
-            }
-        }
-    }
-    return EL_DBG_OK;
-}
-
-static uint8_t do_read(const uint8_t *p, uint16_t n)
-{
-    uint16_t k, e;
-    if (n == 0u || (n & 1u) != 0u) {
-        return EL_DBG_E_LENGTH;
-    }
-    for (k = 0u; k < n; k += 2u) {
-        if (get_u16(p + k) >= el_dbg_item_count) {
-            return EL_DBG_E_ID;
-        }
-    }
-    if (tx_state == TX_OPEN) {
-        /* Queued: one entry per element, values come with the commit. */
-        uint16_t needed = 0u;
-        for (k = 0u; k < n; k += 2u) {
-            needed = (uint16_t)(needed + el_dbg_items[get_u16(p + k)].count);
-            if (needed > EL_DBG_TX_ENTRIES) {
-                return EL_DBG_E_QUEUE_FULL;
-            }
-        }
-        if ((uint16_t)(tx_len + needed) > EL_DBG_TX_ENTRIES) {
-            return EL_DBG_E_QUEUE_FULL;
-        }
-        (void)put_u8(EL_DBG_QUEUED);
-        (void)put_u8(tx_len);
-        for (k = 0u; k < n; k += 2u) {
-            uint16_t id = get_u16(p + k);
-            for (e = 0u; e < el_dbg_items[id].count; e++) {
-                txq[tx_len].item = id;
-                txq[tx_len].elem = e;
-                txq[tx_len].op = EL_DBG_OP_READ;
-                tx_len++;
-            }
-        }
-        return EL_DBG_OK;
-    }
-    for (k = 0u; k < n; k += 2u) {
-        const el_dbg_item_t *it = &el_dbg_items[get_u16(p + k)];
-        uint8_t size = type_size(it->type);
-        if ((uint32_t)resp_len + (uint32_t)it->count * size > (uint32_t)(EL_DBG_FRAME - EL_DBG_TRAILER)) {
-            return EL_DBG_E_TOO_BIG;
-        }
-        for (e = 0u; e < it->count; e++) {
-            get_elem(it, e, resp + resp_len);
-            resp_len = (uint16_t)(resp_len + size);
-        }
-    }
-    return EL_DBG_OK;
-}
-
-static uint8_t do_write(const uint8_t *p, uint16_t n)
-{
-    uint16_t id, elem;
-    const el_dbg_item_t *it;
-    uint8_t size, st;
-    entry_t *e;
-    if (n < 5u) {
-        return EL_DBG_E_LENGTH;
-    }
-    id = get_u16(p);
-    elem = get_u16(p + 2);
-    if (id >= el_dbg_item_count) {
+    el_dbg_item_t it;
+    el_dbg_range_t r;
+    if (!load_item(id, &it)) {
         return EL_DBG_E_ID;
     }
-    it = &el_dbg_items[id];
-    size = type_size(it->type);
-    if (n != 4u + size) {
-        return EL_DBG_E_LENGTH;
+    if (!load_range(&it, &r)) {
+        r.lo.u = r.hi.u = 0u;
     }
-    if ((it->flags & EL_DBG_F_WRITE) == 0u) {
-        return EL_DBG_E_READ_ONLY;
-    }
-    if (elem >= it->count) {
-        return EL_DBG_E_VALUE;
-    }
-    st = check_value(it, p + 4);
-    if (st != EL_DBG_OK) {
-        return st;
-    }
-    if (tx_state == TX_OPEN) {
-        if (tx_len >= EL_DBG_TX_ENTRIES) {
-            return EL_DBG_E_QUEUE_FULL;
-        }
-        e = &txq[tx_len];
-    } else {
-        if (wq_len >= EL_DBG_WRITE_ENTRIES) {
-            return EL_DBG_E_QUEUE_FULL;
-        }
-        e = &wq[wq_len];
-    }
-    e->item = id;
-    e->elem = elem;
-    e->op = EL_DBG_OP_WRITE;
-    zero_bytes(e->value, (uint16_t)(sizeof e->value));
-    copy_bytes(e->value, p + 4, (uint16_t)(size));
-    if (tx_state == TX_OPEN) {
-        (void)put_u8(EL_DBG_QUEUED);
-        (void)put_u8(tx_len);
-        tx_len++;
-    } else if (at_instant()) {
-        apply(e);
-        (void)put_u8(EL_DBG_APPLIED);
-    } else {
-        wq_len++;
-        (void)put_u8(EL_DBG_QUEUED);
-    }
+    put8(it.type);
+    put8(it.kind);
+    put8(it.flags);
+    put16(it.count);
+    put32(r.lo.u);
+    put32(r.hi.u);
     return EL_DBG_OK;
 }
 
-static uint8_t do_commit(void)
-{
-    if (tx_state != TX_OPEN) {
-        return EL_DBG_E_NO_TX;
-    }
-    tx_state = TX_COMMITTED;
-    if (at_instant()) {
-        apply_queues();
-        (void)put_u8(EL_DBG_APPLIED);
-        return put_tx_reads();
-    }
-    (void)put_u8(EL_DBG_QUEUED);
-    return EL_DBG_OK;
-}
-
-static uint8_t do_bp_set(const uint8_t *p, uint16_t n)
-{
-    uint8_t kind, i;
-    uint16_t a, b;
-    if (n != 5u) {
-        return EL_DBG_E_LENGTH;
-    }
-    kind = p[0];
-    a = get_u16(p + 1);
-    b = get_u16(p + 3);
-    if (!valid_point(kind, a, b)) {
-        return EL_DBG_E_ID;
-    }
-    for (i = 0u; i < EL_DBG_BP_SLOTS; i++) {
-        if (bps[i].used != 0u && bps[i].kind == kind && bps[i].a == a && bps[i].b == b) {
-            (void)put_u8(i); /* already set: the same slot */
-            return EL_DBG_OK;
-        }
-    }
-    for (i = 0u; i < EL_DBG_BP_SLOTS; i++) {
-        if (bps[i].used == 0u) {
-            bps[i].used = 1u;
-            bps[i].kind = kind;
-            bps[i].a = a;
-            bps[i].b = b;
-            bps[i].hits = 0u;
-            bp_count++;
-            update_armed();
-            (void)put_u8(i);
-            return EL_DBG_OK;
-        }
-    }
-    return EL_DBG_E_BP_FULL;
-}
-
-static uint8_t do_bp_clear(const uint8_t *p, uint16_t n)
-{
-    if (n != 1u) {
-        return EL_DBG_E_LENGTH;
-    }
-    if (p[0] == EL_DBG_NONE8) {
-        zero_bytes(bps, (uint16_t)(sizeof bps));
-        bp_count = 0u;
-    } else if (p[0] >= EL_DBG_BP_SLOTS || bps[p[0]].used == 0u) {
-        return EL_DBG_E_ID;
-    } else {
-        bps[p[0]].used = 0u;
-        bp_count--;
-    }
-    update_armed();
-    return EL_DBG_OK;
-}
-
-static uint8_t do_stack(void)
-{
-    uint8_t c, s;
-    bool ok = put_u32((uint32_t)el_now_tick()) && put_location() && put_u8(running_task)
-        && put_u16(halted && loc_kind == EL_DBG_P_ACTOR ? loc_a : EL_DBG_NONE16) && put_u8(el_dbg_chart_count);
-    for (c = 0u; ok && c < el_dbg_chart_count; c++) {
-        ok = put_u8(el_dbg_charts[c].slot_count);
-        for (s = 0u; ok && s < el_dbg_charts[c].slot_count; s++) {
-            ok = put_u8(el_dbg_charts[c].slots[s]);
-        }
-    }
-    return ok ? EL_DBG_OK : EL_DBG_E_TOO_BIG;
-}
+/* The requests: command byte and the payload length it must have
+ * (ANY_LENGTH: its handler checks), in the order of enum request. */
+#define ANY_LENGTH 0xFFu
+static const uint8_t requests[][2] EL_ROM = {
+    {EL_DBG_CMD_HELLO, 0u},
+    {EL_DBG_CMD_GET_PROGRAM_ID, 0u},
+    {EL_DBG_CMD_GET_FLAGS, 0u},
+    {EL_DBG_CMD_GET_COUNTERS, 0u},
+    {EL_DBG_CMD_ITEM_INFO, 2u},
+    {EL_DBG_CMD_READ, ANY_LENGTH},
+    {EL_DBG_CMD_WRITE, ANY_LENGTH},
+    {EL_DBG_CMD_TX_BEGIN, 0u},
+    {EL_DBG_CMD_TX_COMMIT, 0u},
+    {EL_DBG_CMD_TX_ABORT, 0u},
+    {EL_DBG_CMD_TX_RESULT, 0u},
+    {EL_DBG_CMD_GET_STACK, 0u},
+    {EL_DBG_CMD_RUN, 0u},
+    {EL_DBG_CMD_BREAK, 0u},
+    {EL_DBG_CMD_STEP, 1u},
+    {EL_DBG_CMD_RESET, ANY_LENGTH},
+    {EL_DBG_CMD_BP_SET, 5u},
+    {EL_DBG_CMD_BP_CLEAR, 1u},
+    {EL_DBG_CMD_BP_LIST, 0u},
+};
+enum request {
+    REQ_HELLO,
+    REQ_GET_PROGRAM_ID,
+    REQ_GET_FLAGS,
+    REQ_GET_COUNTERS,
+    REQ_ITEM_INFO,
+    REQ_READ,
+    REQ_WRITE,
+    REQ_TX_BEGIN,
+    REQ_TX_COMMIT,
+    REQ_TX_ABORT,
+    REQ_TX_RESULT,
+    REQ_GET_STACK,
+    REQ_RUN,
+    REQ_BREAK,
+    REQ_STEP,
+    REQ_RESET,
+    REQ_BP_SET,
+    REQ_BP_CLEAR,
+    REQ_BP_LIST,
+    REQ_COUNT
+};
+typedef char requests_match_their_enum[sizeof requests / sizeof requests[0] == REQ_COUNT ? 1 : -1];
 
 /* Run one request (cmd, payload p[n]); the response's status byte is at
  * resp[2], its payload follows. Returns the status. */
 static uint8_t dispatch(uint8_t cmd, const uint8_t *p, uint16_t n)
 {
-    uint8_t i;
-    switch (cmd) {
-    case EL_DBG_CMD_HELLO:
-        if (n != 0u) {
-            return EL_DBG_E_LENGTH;
-        }
-        (void)put_u8(EL_DBG_PROTOCOL_VERSION);
-        (void)put_u16(EL_DBG_FRAME);
-        (void)put_u8(EL_DBG_WINDOW);
-        (void)put_u32(el_program_id);
-        (void)put_u16(el_dbg_item_count);
-        (void)put_u16(el_dbg_actor_count);
-        (void)put_u8(el_dbg_chart_count);
-        (void)put_u8(el_task_count);
-        (void)put_u8(EL_DBG_TX_ENTRIES);
-        (void)put_u8(EL_DBG_WRITE_ENTRIES);
-        (void)put_u8(EL_DBG_BP_SLOTS);
-        (void)put_u8(EL_DBG_VALUE_MAX);
-        return EL_DBG_OK;
-    case EL_DBG_CMD_GET_PROGRAM_ID:
-        if (n != 0u) {
-            return EL_DBG_E_LENGTH;
-        }
-        (void)put_u32(el_program_id);
-        return EL_DBG_OK;
-    case EL_DBG_CMD_GET_FLAGS:
-        if (n != 0u) {
-            return EL_DBG_E_LENGTH;
-        }
-        (void)put_u8(status_flags());
-        (void)put_location();
-        (void)put_u32((uint32_t)el_now_tick());
-        (void)put_u8(wq_len);
-        (void)put_u8(tx_len);
-        return EL_DBG_OK;
-    case EL_DBG_CMD_GET_COUNTERS:
-        if (n != 0u) {
-            return EL_DBG_E_LENGTH;
-        }
-        (void)put_u8(EL_DBG_C_COUNT);
-        for (i = 0u; i < EL_DBG_C_COUNT; i++) {
-            (void)put_u16(counters[i]);
-        }
-        return EL_DBG_OK;
-    case EL_DBG_CMD_ITEM_INFO: {
-        const el_dbg_item_t *it;
-        uint8_t lo[4], hi[4];
-        if (n != 2u) {
-            return EL_DBG_E_LENGTH;
-        }
-        if (get_u16(p) >= el_dbg_item_count) {
-            return EL_DBG_E_ID;
-        }
-        it = &el_dbg_items[get_u16(p)];
-        zero_bytes(lo, (uint16_t)(sizeof lo));
-        zero_bytes(hi, (uint16_t)(sizeof hi));
-        if ((it->flags & EL_DBG_F_RANGE) != 0u && it->range != EL_DBG_NONE16) {
-            uint32_t l, h;
-            copy_bytes(&l, &el_dbg_ranges[it->range].lo, (uint16_t)(sizeof l));
-            copy_bytes(&h, &el_dbg_ranges[it->range].hi, (uint16_t)(sizeof h));
-            for (i = 0u; i < 4u; i++) {
-                lo[i] = (uint8_t)((l >> (8u * i)) & 0xFFu);
-                hi[i] = (uint8_t)((h >> (8u * i)) & 0xFFu);
-            }
-        }
-        (void)put_u8(it->type);
-        (void)put_u8(it->kind);
-        (void)put_u8(it->flags);
-        (void)put_u16(it->count);
-        for (i = 0u; i < 4u; i++) {
-            (void)put_u8(lo[i]);
-        }
-        for (i = 0u; i < 4u; i++) {
-            (void)put_u8(hi[i]);
-        }
-        return EL_DBG_OK;
+    uint8_t i, req, want;
+    for (req = 0u; req < REQ_COUNT && EL_ROM_READ_U8(&requests[req][0]) != cmd; req++) {
     }
-    case EL_DBG_CMD_READ:
-        return do_read(p, n);
-    case EL_DBG_CMD_WRITE:
-        return do_write(p, n);
-    case EL_DBG_CMD_TX_BEGIN:
-        if (n != 0u) {
+    if (req < REQ_COUNT) {
+        want = EL_ROM_READ_U8(&requests[req][1]);
+        if (want != ANY_LENGTH && n != want) {
             return EL_DBG_E_LENGTH;
         }
+    }
+    switch (req) {
+    case REQ_HELLO:
+        put_hello();
+        break;
+    case REQ_GET_PROGRAM_ID:
+        put32(el_program_id);
+        break;
+    case REQ_GET_FLAGS:
+        put_flags();
+        break;
+    case REQ_GET_COUNTERS:
+        put8(EL_DBG_C_COUNT);
+        for (i = 0u; i < EL_DBG_C_COUNT; i++) {
+            put16(counters[i]);
+        }
+        break;
+    case REQ_ITEM_INFO:
+        return put_item_info(get_u16(p));
+    case REQ_READ:
+    case REQ_WRITE:
+        return do_access(req == REQ_WRITE, p, n);
+    case REQ_TX_BEGIN:
         if (tx_state == TX_OPEN || tx_state == TX_COMMITTED) {
             return EL_DBG_E_TX_BUSY;
         }
         tx_state = TX_OPEN;
         tx_len = 0u;
-        return EL_DBG_OK;
-    case EL_DBG_CMD_TX_COMMIT:
-        return n != 0u ? EL_DBG_E_LENGTH : do_commit();
-    case EL_DBG_CMD_TX_ABORT:
-        if (n != 0u) {
-            return EL_DBG_E_LENGTH;
+        break;
+    case REQ_TX_COMMIT:
+        if (tx_state != TX_OPEN) {
+            return EL_DBG_E_NO_TX;
         }
+        tx_state = TX_COMMITTED;
+        if (!at_instant()) {
+            put8(EL_DBG_QUEUED);
+            break;
+        }
+        apply_queues();
+        put8(EL_DBG_APPLIED);
+        put_tx_reads();
+        break;
+    case REQ_TX_ABORT:
         if (tx_state != TX_OPEN && tx_state != TX_COMMITTED) {
             return EL_DBG_E_NO_TX;
         }
         tx_state = TX_NONE;
         tx_len = 0u;
-        return EL_DBG_OK;
-    case EL_DBG_CMD_TX_RESULT:
-        if (n != 0u) {
-            return EL_DBG_E_LENGTH;
+        break;
+    case REQ_TX_RESULT:
+        put8(tx_state);
+        if (tx_state == TX_APPLIED) {
+            put_tx_reads();
         }
-        (void)put_u8(tx_state == TX_OPEN ? 1u : tx_state == TX_COMMITTED ? 2u : tx_state == TX_APPLIED ? 3u : 0u);
-        return tx_state == TX_APPLIED ? put_tx_reads() : EL_DBG_OK;
-    case EL_DBG_CMD_GET_STACK:
-        return n != 0u ? EL_DBG_E_LENGTH : do_stack();
-    case EL_DBG_CMD_RUN:
-        if (n != 0u) {
-            return EL_DBG_E_LENGTH;
-        }
+        break;
+    case REQ_GET_STACK:
+        put_stack();
+        break;
+    case REQ_RUN:
         halt_request = false;
         step_unit = 0u;
         halted = false;
         update_armed();
-        return EL_DBG_OK;
-    case EL_DBG_CMD_BREAK:
-        if (n != 0u) {
-            return EL_DBG_E_LENGTH;
-        }
+        break;
+    case REQ_BREAK:
         if (!halted) {
             halt_request = true;
             halt_why = EL_DBG_WHY_BREAK;
             update_armed();
         }
-        return EL_DBG_OK;
-    case EL_DBG_CMD_STEP:
-        if (n != 1u) {
-            return EL_DBG_E_LENGTH;
-        }
+        break;
+    case REQ_STEP:
         if (p[0] != EL_DBG_STEP_TASK && p[0] != EL_DBG_STEP_CHART && p[0] != EL_DBG_STEP_ACTOR
             && p[0] != EL_DBG_STEP_INSTANT) {
             return EL_DBG_E_VALUE;
@@ -833,33 +849,30 @@ static uint8_t dispatch(uint8_t cmd, const uint8_t *p, uint16_t n)
         step_unit = p[0];
         halted = false;
         update_armed();
-        return EL_DBG_OK;
-    case EL_DBG_CMD_RESET:
+        break;
+    case REQ_RESET:
         if (n > 1u) {
             return EL_DBG_E_LENGTH;
         }
         reset_pending = true;
         reset_flags = n == 1u ? p[0] : 0u;
-        return EL_DBG_OK;
-    case EL_DBG_CMD_BP_SET:
-        return do_bp_set(p, n);
-    case EL_DBG_CMD_BP_CLEAR:
-        return do_bp_clear(p, n);
-    case EL_DBG_CMD_BP_LIST:
-        if (n != 0u) {
-            return EL_DBG_E_LENGTH;
-        }
-        (void)put_u8(bp_count);
+        break;
+    case REQ_BP_SET:
+        return do_bp_set(p);
+    case REQ_BP_CLEAR:
+        return do_bp_clear(p[0]);
+    case REQ_BP_LIST:
+        put8(bp_count);
         for (i = 0u; i < EL_DBG_BP_SLOTS; i++) {
-            if (bps[i].used != 0u) {
-                (void)put_u8(i);
-                (void)put_u8(bps[i].kind);
-                (void)put_u16(bps[i].a);
-                (void)put_u16(bps[i].b);
-                (void)put_u16(bps[i].hits);
+            if (bps[i].kind != EL_DBG_P_NONE) {
+                put8(i);
+                put8(bps[i].kind);
+                put16(bps[i].a);
+                put16(bps[i].b);
+                put16(bps[i].hits);
             }
         }
-        return EL_DBG_OK;
+        break;
     default:
 #if defined(EL_DEBUG_BOARD_COMMANDS) && EL_DEBUG_BOARD_COMMANDS
         if (cmd >= EL_DBG_CMD_BOARD_FIRST && cmd <= EL_DBG_CMD_BOARD_LAST) {
@@ -868,28 +881,41 @@ static uint8_t dispatch(uint8_t cmd, const uint8_t *p, uint16_t n)
 #endif
         return EL_DBG_E_UNKNOWN_CMD;
     }
+    return EL_DBG_OK;
 }
 
 #if defined(EL_DEBUG_BOARD_COMMANDS) && EL_DEBUG_BOARD_COMMANDS
 bool el_debug_put(const uint8_t *data, uint16_t n)
 {
     uint16_t i;
-    for (i = 0u; i < n; i++) {
-        if (!put_u8(data[i])) {
-            return false;
-        }
+    for (i = 0u; i < n && !resp_full; i++) {
+        put8(data[i]);
     }
-    return true;
+    return !resp_full;
 }
 #endif
 
+/* Send the response in out[]: its CRC, then COBS in place. With frames of
+ * fewer than 254 bytes every block is short: each zero byte (and the code
+ * byte before the frame) becomes the distance to the next zero or the
+ * delimiter. */
 static void send_response(void)
 {
     uint16_t crc = el_crc16(resp, resp_len);
+    uint8_t j, next;
     resp[resp_len++] = (uint8_t)(crc & 0xFFu);
     resp[resp_len++] = (uint8_t)(crc >> 8);
-    wire_len = el_cobs_encode(resp, resp_len, wire, (uint16_t)sizeof wire);
-    if (wire_len == 0u || !el_debug_port_write(wire, wire_len)) {
+    next = (uint8_t)(resp_len + 1u);
+    out[next] = EL_DBG_DELIMITER;
+    for (j = resp_len; j > 0u; j--) {
+        if (out[j] == 0u) {
+            out[j] = (uint8_t)(next - j);
+            next = j;
+        }
+    }
+    out[0] = next;
+    wire_len = (uint8_t)(resp_len + 2u);
+    if (!el_debug_port_write(out, wire_len)) {
         count(EL_DBG_C_TX_DROPPED);
     }
 }
@@ -920,7 +946,7 @@ static void handle_frame(uint16_t len)
             /* The host repeats a request whose response it lost: resend,
              * do not run it twice. */
             count(EL_DBG_C_DUPLICATES);
-            if (!el_debug_port_write(wire, wire_len)) {
+            if (!el_debug_port_write(out, wire_len)) {
                 count(EL_DBG_C_TX_DROPPED);
             }
             return;
@@ -934,39 +960,36 @@ static void handle_frame(uint16_t len)
     last_crc = crc;
     resp[0] = seq;
     resp[1] = (uint8_t)(cmd | EL_DBG_RESPONSE);
-    resp[2] = EL_DBG_OK;
     resp_len = 3u;
     resp_full = false;
     status = dispatch(cmd, rx_buf + EL_DBG_HEADER, (uint16_t)(len - EL_DBG_HEADER - EL_DBG_TRAILER));
+    if (status == EL_DBG_OK && resp_full) {
+        status = EL_DBG_E_TOO_BIG;
+    }
+    resp[2] = status;
     if (status != EL_DBG_OK) {
-        resp[2] = status;
         resp_len = 3u;
-    resp_full = false;
         count(status == EL_DBG_E_UNKNOWN_CMD ? EL_DBG_C_UNKNOWN : EL_DBG_C_ERRORS);
     }
     send_response();
 }
 
-static void rx_byte(uint8_t byte)
-{
-    uint8_t r = el_cobs_decode_byte(&rx, byte);
-    if (r == EL_COBS_FRAME) {
-        handle_frame(rx.len);
-    } else if (r == EL_COBS_OVERSIZE) {
-        count(EL_DBG_C_OVERSIZE);
-    } else if (r == EL_COBS_BAD) {
-        count(EL_DBG_C_TRUNCATED);
-    }
-}
-
 void el_debug_rx(const uint8_t *data, uint16_t len)
 {
     uint16_t i;
+    uint8_t r;
     if (!rx_ready) {
         el_debug_boot();
     }
     for (i = 0u; i < len; i++) {
-        rx_byte(data[i]);
+        r = el_cobs_decode_byte(&rx, data[i]);
+        if (r == EL_COBS_FRAME) {
+            handle_frame(rx.len);
+        } else if (r == EL_COBS_OVERSIZE) {
+            count(EL_DBG_C_OVERSIZE);
+        } else if (r == EL_COBS_BAD) {
+            count(EL_DBG_C_TRUNCATED);
+        }
     }
 }
 

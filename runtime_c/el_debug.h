@@ -73,6 +73,8 @@ typedef struct {
     uint8_t transition_count;
 } el_dbg_chart_t;
 
+/* The arrays are read-only tables (EL_ROM: in flash where the board keeps
+ * them there); the server reads them through EL_ROM_READ_U8. */
 extern const el_dbg_item_t el_dbg_items[];
 extern const uint16_t el_dbg_item_count;
 extern const el_dbg_range_t el_dbg_ranges[];

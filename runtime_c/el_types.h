@@ -131,6 +131,9 @@ EL_CMP_FN(u32, uint32_t)
 #ifndef EL_ROM_READ_U8
 #define EL_ROM_READ_U8(p) (*(const uint8_t *)(p))
 #endif
+#ifndef EL_ROM_READ_PTR
+#define EL_ROM_READ_PTR(p) (*(const void *const *)(p))
+#endif
 
 /* Wrapping integer arithmetic of model expressions: computed in the
  * unsigned type of the same width, so overflow is defined and the result

@@ -2,10 +2,10 @@
  *
  * Every USART of the part is supported; the rings and interrupt handlers
  * of those the model uses are compiled in (el_avr_config.h:
- * EL_AVR_UARTn_RX / EL_AVR_UARTn_TX, 2 to 255 bytes). The
- * receive interrupt stores bytes (and the fine clock of the last one, for
- * Modbus' t3.5 silence); the data-register-empty interrupt sends from the
- * transmit ring and switches itself off when the ring is empty.
+ * EL_AVR_UARTn_RX / EL_AVR_UARTn_TX, 2 to 255 bytes). The receive
+ * interrupt stores bytes (and, on Modbus RTU's UART, the fine clock of the
+ * last one, for its t3.5 silence); the data-register-empty interrupt sends
+ * from the transmit ring and switches itself off when the ring is empty.
  *
  * Register layout: every USART of the ATmega328P and ATmega2560 has
  * UCSRnA, UCSRnB, UCSRnC, (reserved), UBRRnL, UBRRnH, UDRn at consecutive
@@ -47,12 +47,23 @@ typedef struct {
 /* The index after i in a ring of `size`. */
 #define NEXT(i, size) ((uint8_t)((uint8_t)((i) + 1u) == (size) ? 0u : (uint8_t)((i) + 1u)))
 
-__attribute__((always_inline)) static inline void rx_isr(uart_t *u)
+/* Only Modbus RTU needs the time of the last byte (its t3.5 silence):
+ * the other UARTs' interrupts do not read the clock, which makes them
+ * smaller and shorter. */
+#if defined(EL_AVR_MODBUS_UART)
+#define STAMPS(n) (EL_AVR_MODBUS_UART == (n))
+#else
+#define STAMPS(n) 0
+#endif
+
+__attribute__((always_inline)) static inline void rx_isr(uart_t *u, bool stamp)
 {
     uint8_t status = u->base[REG_A];
     uint8_t c = u->base[REG_DR];
     uint8_t next;
-    u->last_rx = el_avr_clock();
+    if (stamp) {
+        u->last_rx = el_avr_clock();
+    }
     next = NEXT(u->rx_head, u->rx_size);
     if ((status & RX_ERRORS) != 0u || next == u->rx_tail) {
         if (u->errors != 0xFFFFu) {
@@ -81,10 +92,10 @@ __attribute__((always_inline)) static inline void udre_isr(uart_t *u)
 UART_DEFINE(0, UCSR0A)
 #define UART0_PTR (&uart0)
 #if defined(USART0_RX_vect)
-ISR(USART0_RX_vect) { rx_isr(&uart0); }
+ISR(USART0_RX_vect) { rx_isr(&uart0, STAMPS(0)); }
 ISR(USART0_UDRE_vect) { udre_isr(&uart0); }
 #else
-ISR(USART_RX_vect) { rx_isr(&uart0); }
+ISR(USART_RX_vect) { rx_isr(&uart0, STAMPS(0)); }
 ISR(USART_UDRE_vect) { udre_isr(&uart0); }
 #endif
 #else
@@ -94,7 +105,7 @@ ISR(USART_UDRE_vect) { udre_isr(&uart0); }
 #if defined(EL_AVR_UART1_RX)
 UART_DEFINE(1, UCSR1A)
 #define UART1_PTR (&uart1)
-ISR(USART1_RX_vect) { rx_isr(&uart1); }
+ISR(USART1_RX_vect) { rx_isr(&uart1, STAMPS(1)); }
 ISR(USART1_UDRE_vect) { udre_isr(&uart1); }
 #else
 #define UART1_PTR ((uart_t *)0)
@@ -103,7 +114,7 @@ ISR(USART1_UDRE_vect) { udre_isr(&uart1); }
 #if defined(EL_AVR_UART2_RX)
 UART_DEFINE(2, UCSR2A)
 #define UART2_PTR (&uart2)
-ISR(USART2_RX_vect) { rx_isr(&uart2); }
+ISR(USART2_RX_vect) { rx_isr(&uart2, STAMPS(2)); }
 ISR(USART2_UDRE_vect) { udre_isr(&uart2); }
 #else
 #define UART2_PTR ((uart_t *)0)
@@ -112,7 +123,7 @@ ISR(USART2_UDRE_vect) { udre_isr(&uart2); }
 #if defined(EL_AVR_UART3_RX)
 UART_DEFINE(3, UCSR3A)
 #define UART3_PTR (&uart3)
-ISR(USART3_RX_vect) { rx_isr(&uart3); }
+ISR(USART3_RX_vect) { rx_isr(&uart3, STAMPS(3)); }
 ISR(USART3_UDRE_vect) { udre_isr(&uart3); }
 #else
 #define UART3_PTR ((uart_t *)0)

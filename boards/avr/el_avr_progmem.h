@@ -15,5 +15,6 @@
 #define EL_ROM_READ_U8(p) pgm_read_byte(p)
 #define EL_ROM_READ_U16(p) pgm_read_word(p)
 #define EL_ROM_READ_U32(p) pgm_read_dword(p)
+#define EL_ROM_READ_PTR(p) pgm_read_ptr(p)
 
 #endif /* EL_AVR_PROGMEM_H */

@@ -176,16 +176,20 @@ class Pic18Board(BoardBase):
             if measured.ram > mcu.ram:
                 over.append(f"{mcu.ram} bytes of RAM ({measured.ram - mcu.ram} bytes too many: static data plus "
                             f"the {mcu.stack}-byte stack)")
-            msg = f"error: the program does not fit the {mcu.name}'s " + ", nor its ".join(over)
+            if over:
+                msg = f"error: the program does not fit the {mcu.name}'s " + ", nor its ".join(over)
+            else:  # the totals fit, their parts do not
+                msg = (f"error: gplink could not place the program's sections in the {mcu.name}'s memory, though "
+                       f"in all they fit (each RAM section must fit within a 256-byte bank)")
         if not options.release and any(i.kind == "debug" for i in program.interfaces):
-            msg += "; the debug server takes about 20 KB of program memory: a --release build has none"
+            msg += "; the debug server takes about 17 KB of program memory: a --release build has none"
         if measured.ram > mcu.ram and options.schedule != "min-buffer" and any(df.buffers for df in program.dataflows):
             msg += "; dataflow buffers shrink with --schedule min-buffer"
         bigger = [m for m in self.all_mcus.values() if m.flash > mcu.flash]
         if bigger:
             msg += f"; or build for --mcu {bigger[0].name}"
         lines.append(msg)
-        if measured.ram > mcu.ram:
+        if measured.sections and (measured.ram > mcu.ram or not over):
             lines.append("largest in RAM: " + ", ".join(f"{name} {size} B ({src}.c)"
                                                         for size, name, src in measured.largest_ram()))
         return "\n".join(lines)

@@ -13,5 +13,6 @@
 #define EL_ROM_READ_U8(p) (*(p))
 #define EL_ROM_READ_U16(p) (*(p))
 #define EL_ROM_READ_U32(p) (*(p))
+#define EL_ROM_READ_PTR(p) (*(p))
 
 #endif /* EL_PIC18_ROM_H */

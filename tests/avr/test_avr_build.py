@@ -50,8 +50,9 @@ def test_every_example_builds_for_the_atmega2560(sim_builds, name):
 def test_release_builds_leave_out_the_debug_interface(tmp_path):
     debug = sizes(avr_build(ROOT / "examples/blink.elab", tmp_path / "d"))
     release = sizes(avr_build(ROOT / "examples/blink.elab", tmp_path / "r", "--release"))
-    # The 328P's debug server has buffers sized from the model: blink's take 374 bytes of RAM.
-    assert release["flash"] < debug["flash"] - 2000 and release["ram"] < debug["ram"] - 300
+    # The 328P's debug server has buffers sized from the model: with the debug UART's rings blink's
+    # debug build has 279 bytes of RAM more than its release build.
+    assert release["flash"] < debug["flash"] - 2000 and release["ram"] < debug["ram"] - 250
 
 
 def test_blink_builds_for_the_atmega328p_by_default(tmp_path):
