@@ -78,7 +78,7 @@ def build_nodes(program: Program, out_dir: Path, extra_cflags: list[str] | None 
     """Build each node of a distributed program on its own board into
     ``out_dir/<node>/`` (an MCU node with its board's simulator, for
     ``easylab launch``); the builds by node name (docs/distribution.md)."""
-    from .codegen.link import link_files
+    from .codegen.link import link_defines, link_files
     from .ir.split import split
 
     if program.deployment is None:
@@ -86,7 +86,8 @@ def build_nodes(program: Program, out_dir: Path, extra_cflags: list[str] | None 
     built = {}
     for name, node in split(program).items():
         board = load_board(node.node.board, board_path)
-        built[name] = build(node.program, node.node.board, out_dir / name, extra_cflags, None, release,
+        cflags = [*(extra_cflags or ()), *link_defines(node)]
+        built[name] = build(node.program, node.node.board, out_dir / name, cflags, None, release,
                             node.node.mcu, sim=board.has_simulator, schedule=schedule,
                             board_path=board_path, check=check, extra_files=link_files(node))
     return built

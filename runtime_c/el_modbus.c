@@ -450,12 +450,11 @@ static uint16_t device_id(const el_svc_map_t *m, const uint8_t *req, uint16_t le
 
 /* ---- the PDU dispatcher ---- */
 
-#if defined(__GNUC__)
+#if defined(EL_ROUND_SLAVE)
 /* A slave of a Modbus round (docs/distribution.md) answers the round's sync
- * and function-23 slot first (the node's generated el_link.c defines it;
- * 0xFFFF: not the round's). Other programs do not have it. */
-extern uint16_t el_mb_round_pdu(const uint8_t *req, uint16_t len, uint8_t *resp, bool broadcast)
-    __attribute__((weak));
+ * and function-23 slot first (the node's generated el_link.c defines it,
+ * and the build defines EL_ROUND_SLAVE; 0xFFFF: not the round's). */
+uint16_t el_mb_round_pdu(const uint8_t *req, uint16_t len, uint8_t *resp, bool broadcast);
 #endif
 
 uint16_t el_mb_pdu(const uint8_t *req, uint16_t len, uint8_t *resp, bool broadcast)
@@ -464,8 +463,8 @@ uint16_t el_mb_pdu(const uint8_t *req, uint16_t len, uint8_t *resp, bool broadca
     uint8_t fc;
     if (req == (const uint8_t *)0 || resp == (uint8_t *)0 || len == 0u || len > EL_MB_PDU_MAX)
         return 0u;
-#if defined(__GNUC__)
-    if (el_mb_round_pdu) {
+#if defined(EL_ROUND_SLAVE)
+    {
         uint16_t answered = el_mb_round_pdu(req, len, resp, broadcast);
         if (answered != 0xFFFFu)
             return answered;

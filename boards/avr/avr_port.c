@@ -183,14 +183,17 @@ bool el_port_init(int argc, char **argv)
     return true;
 }
 
+#if defined(EL_ROUND_SLAVE)
 /* A slave of a Modbus round (docs/distribution.md; the node's generated
- * el_link.c defines it): its ticks follow the master's sync, not the
- * timer. Other programs do not have it. */
-extern int8_t el_round_gate(uint32_t tick) __attribute__((weak));
+ * el_link.c defines it, and the build defines EL_ROUND_SLAVE): its ticks
+ * follow the master's sync, not the timer. */
+int8_t el_round_gate(uint32_t tick);
+#endif
 
 bool el_port_wait_tick(uint32_t tick)
 {
-    if (el_round_gate) {
+#if defined(EL_ROUND_SLAVE)
+    {
         for (;;) {
             wdt_reset();
             el_idle(); /* the bus: the sync that lets the tick run */
@@ -206,6 +209,7 @@ bool el_port_wait_tick(uint32_t tick)
             sleep_disable();
         }
     }
+#endif
     for (;;) {
         wdt_reset();
         if ((int32_t)(read_ticks() - tick) >= 0) {

@@ -235,10 +235,16 @@ static uint64_t mul_sat(uint64_t a, uint64_t b)
     return (b != 0u && a > UINT64_MAX / b) ? UINT64_MAX : a * b;
 }
 
+#if defined(EL_ROUND_MASTER)
 /* The master of a Modbus round (docs/distribution.md; the node's generated
- * el_link.c defines it) runs the round's events due by each instant, and
- * at the end of a run those before its end. */
-extern void el_round_master(uint64_t until_us, bool inclusive) __attribute__((weak));
+ * el_link.c defines it, and the build defines EL_ROUND_MASTER) runs the
+ * round's events due by each instant, and at the end of a run those before
+ * its end. */
+void el_round_master(uint64_t until_us, bool inclusive);
+#define ROUND_MASTER(until_us, inclusive) el_round_master((until_us), (inclusive))
+#else
+#define ROUND_MASTER(until_us, inclusive) ((void)0)
+#endif
 
 bool el_port_wait_tick(uint32_t tick)
 {
@@ -259,8 +265,7 @@ bool el_port_wait_tick(uint32_t tick)
     t_us = mul_sat(t64, el_tick_us);
 
     if (el_host_settings.has_duration && t_us >= el_host_settings.duration_us) {
-        if (el_round_master)
-            el_round_master(el_host_settings.duration_us, false);
+        ROUND_MASTER(el_host_settings.duration_us, false);
         if (!el_host_settings.fast) {
             uint64_t first_us = mul_sat(first_tick64, el_tick_us);
             if (el_host_settings.duration_us > first_us)
@@ -308,8 +313,7 @@ void el_port_irq_restore(el_irq_state_t state)
 
 void el_port_inputs(uint64_t tick)
 {
-    if (el_round_master)
-        el_round_master(mul_sat(tick, el_tick_us), true);
+    ROUND_MASTER(mul_sat(tick, el_tick_us), true);
     el_host_stimulus_inputs();
 }
 

@@ -98,4 +98,13 @@ def link_files(node: NodeProgram) -> dict[str, str]:
     return {"el_link.c": text}
 
 
-__all__ = ["link_files"]
+def link_defines(node: NodeProgram) -> list[str]:
+    """The C flags that turn on a node's side of its round in the port and
+    the Modbus slave (EL_ROUND_MASTER, EL_ROUND_SLAVE); none for a node on
+    no Modbus link, whose firmware has no trace of a round."""
+    if not node.rounds:
+        return []
+    return ["-DEL_ROUND_MASTER=1" if node.rounds[0].master == node.node.name else "-DEL_ROUND_SLAVE=1"]
+
+
+__all__ = ["link_defines", "link_files"]
