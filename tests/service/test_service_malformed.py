@@ -90,7 +90,11 @@ def test_garbage_between_frames(pty):
         pty.recv(timeout=0.02)  # random bytes may happen to be a request for us: whatever it answers
         time.sleep(GAP)
         pty.recv(timeout=0.01)
-        still_fine(pty)
+        # On a simulated board the garbage crosses the line at its baud rate,
+        # slower than the machine may write it: a request that follows it
+        # without a silence is one bad frame with it (the specification's
+        # framing), so a request without an answer is asked again, once.
+        assert pty.ask(UNIT, P_FAR) == P_FAR_REPLY or pty.ask(UNIT, P_FAR) == P_FAR_REPLY
 
 
 @host_only("frames back to back, without a t3.5 silence between them, are one (bad) frame on a timed RTU line, "
