@@ -243,7 +243,7 @@ static uint64_t mul_sat(uint64_t a, uint64_t b)
 void el_round_master(uint64_t until_us, bool inclusive);
 #define ROUND_MASTER(until_us, inclusive) el_round_master((until_us), (inclusive))
 #else
-#define ROUND_MASTER(until_us, inclusive) ((void)0)
+#define ROUND_MASTER(until_us, inclusive) ((void)(until_us), (void)(inclusive))
 #endif
 
 bool el_port_wait_tick(uint32_t tick)
