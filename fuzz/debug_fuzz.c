@@ -28,6 +28,7 @@
 #include "el_debug.h"
 #include "el_debug_cobs.h"
 #include "el_crc16.h"
+#include "fuzz_frames.h"
 
 #include <stdlib.h>
 #include <string.h>
@@ -93,21 +94,9 @@ uint16_t el_debug_port_read(uint8_t *buf, uint16_t max)
 
 bool el_debug_port_write(const uint8_t *frame, uint16_t len)
 {
-    el_cobs_decoder_t dec;
     uint8_t out[EL_DBG_MAX_FRAME];
-    uint16_t i;
-    uint8_t r = EL_COBS_MORE;
-    el_cobs_decoder_init(&dec, out, (uint16_t)sizeof out);
-    if (len < 2u || frame[len - 1u] != 0u) {
-        abort();
-    }
-    for (i = 0u; i < len; i++) {
-        r = el_cobs_decode_byte(&dec, frame[i]);
-        if (i + 1u < len && r != EL_COBS_MORE) {
-            abort(); /* a 0x00 inside the frame */
-        }
-    }
-    if (r != EL_COBS_FRAME || dec.len < 5u || el_crc16(out, dec.len) != 0u || (out[1] & EL_DBG_RESPONSE) == 0u) {
+    (void)fuzz_sent_frame(frame, len, out, (uint16_t)sizeof out, 5u);
+    if ((out[1] & EL_DBG_RESPONSE) == 0u) {
         abort();
     }
     return true;

@@ -30,6 +30,7 @@
 #include "el_debug_cobs.h"
 #include "el_dispatch.h"
 #include "el_port.h"
+#include "fuzz_frames.h"
 
 #include <stdlib.h>
 #include <string.h>
@@ -151,27 +152,12 @@ uint16_t el_remote_port_read(uint8_t *buf, uint16_t max)
 
 bool el_remote_port_write(const uint8_t *frame, uint16_t len)
 {
-    el_cobs_decoder_t dec;
     uint8_t out[EL_RMT_MAX_FRAME];
-    uint16_t i;
-    uint8_t r = EL_COBS_MORE;
-    el_cobs_decoder_init(&dec, out, (uint16_t)sizeof out);
-    if (len < 2u || frame[len - 1u] != 0u) {
-        abort();
-    }
-    for (i = 0u; i < len; i++) {
-        r = el_cobs_decode_byte(&dec, frame[i]);
-        if (i + 1u < len && r != EL_COBS_MORE) {
-            abort(); /* a 0x00 inside the frame */
-        }
-    }
-    if (r != EL_COBS_FRAME || dec.len < EL_RMT_HEADER + EL_RMT_TRAILER || el_crc16(out, dec.len) != 0u) {
-        abort();
-    }
+    uint16_t n = fuzz_sent_frame(frame, len, out, (uint16_t)sizeof out, EL_RMT_HEADER + EL_RMT_TRAILER);
     if (out[0] == EL_RMT_CMD_UP) {
         uint32_t instant = (uint32_t)out[1] | ((uint32_t)out[2] << 8) | ((uint32_t)out[3] << 16) |
                            ((uint32_t)out[4] << 24);
-        if (instant != (uint32_t)now || dec.len != EL_RMT_HEADER + UP_PAYLOAD + EL_RMT_TRAILER) {
+        if (instant != (uint32_t)now || n != EL_RMT_HEADER + UP_PAYLOAD + EL_RMT_TRAILER) {
             abort();
         }
     } else if ((out[0] & EL_RMT_RESPONSE) == 0u) {
