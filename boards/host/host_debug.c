@@ -126,15 +126,8 @@ static void on_listen(int fd, short revents, void *ctx)
 {
     int client;
     (void)ctx;
-    if ((revents & POLLIN) == 0)
+    if ((revents & POLLIN) == 0 || (client = el_host_accept_tcp(fd)) < 0)
         return;
-    client = accept(fd, NULL, NULL);
-    if (client < 0)
-        return;
-    if (!set_nonblocking(client)) {
-        (void)close(client);
-        return;
-    }
     if (conn_fd >= 0) { /* a new client replaces the old one */
         el_host_unwatch_fd(conn_fd);
         (void)close(conn_fd);

@@ -48,6 +48,9 @@ void el_host_drain_pty(int slave);
  * port, printed on stderr as "PROG: WHAT on 127.0.0.1:N"): a non-blocking
  * socket, closed on exec, or -1 after reporting the error. */
 int el_host_listen_tcp(const char *option, const char *port_text, const char *what);
+/* A client of a listener made by el_host_listen_tcp, non-blocking and without
+ * Nagle's delay; -1 when none could be taken. */
+int el_host_accept_tcp(int listen_fd);
 
 /* ---- messages (host_port.c) ---- */
 

@@ -25,9 +25,6 @@
 #include "el_remote.h"
 
 #include <errno.h>
-#include <fcntl.h>
-#include <netinet/in.h>
-#include <netinet/tcp.h>
 #include <poll.h>
 #include <signal.h>
 #include <string.h>
@@ -55,19 +52,10 @@ static void on_conn(int fd, short revents, void *ctx)
 
 static void on_listen(int fd, short revents, void *ctx)
 {
-    int client, one = 1, fl;
+    int client;
     (void)ctx;
-    if ((revents & POLLIN) == 0)
+    if ((revents & POLLIN) == 0 || (client = el_host_accept_tcp(fd)) < 0)
         return;
-    client = accept(fd, NULL, NULL);
-    if (client < 0)
-        return;
-    /* Frames are small and answer each other: no Nagle delay. */
-    if ((fl = fcntl(client, F_GETFL)) < 0 || fcntl(client, F_SETFL, fl | O_NONBLOCK) != 0 ||
-        setsockopt(client, IPPROTO_TCP, TCP_NODELAY, &one, sizeof one) != 0) {
-        (void)close(client);
-        return;
-    }
     if (conn_fd >= 0)
         drop_conn(); /* a new host replaces the old one */
     conn_fd = client;

@@ -17,6 +17,7 @@
 #include <errno.h>
 #include <fcntl.h>
 #include <netinet/in.h>
+#include <netinet/tcp.h>
 #include <poll.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -116,6 +117,20 @@ void el_host_drain_pty(int slave)
             break;
         idle = pending == 0 ? idle + 1 : 0;
     }
+}
+
+int el_host_accept_tcp(int listen_fd)
+{
+    int client = accept(listen_fd, NULL, NULL), one = 1, fl;
+    if (client < 0)
+        return -1;
+    /* Frames are small and answer each other: no Nagle delay. */
+    if ((fl = fcntl(client, F_GETFL)) < 0 || fcntl(client, F_SETFL, fl | O_NONBLOCK) != 0 ||
+        setsockopt(client, IPPROTO_TCP, TCP_NODELAY, &one, sizeof one) != 0) {
+        (void)close(client);
+        return -1;
+    }
+    return client;
 }
 
 int el_host_listen_tcp(const char *option, const char *port_text, const char *what)
