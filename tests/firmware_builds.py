@@ -127,6 +127,21 @@ def board_model(board: str, model: Path, interface: str, out: Path) -> Path:
     return path
 
 
+def end_process(proc: subprocess.Popen, timeout: float = 30.0) -> tuple[str, str]:
+    """End a firmware or simulator as a user would (SIGTERM: its files are
+    complete then), killed if it does not end within ``timeout``; its
+    (stdout, stderr), None for what was not captured."""
+    import signal
+
+    if proc.poll() is None:
+        proc.send_signal(signal.SIGTERM)
+    try:
+        return proc.communicate(timeout=timeout)
+    except subprocess.TimeoutExpired:
+        proc.kill()
+        return proc.communicate()
+
+
 def stimulus_of(name: str) -> Path | None:
     """An example's own stimulus (examples/NAME.stimulus.csv), if it has one."""
     path = ROOT / "examples" / f"{name}.stimulus.csv"

@@ -6,7 +6,6 @@ from __future__ import annotations
 import csv
 import json
 import os
-import signal
 import subprocess
 import time
 from pathlib import Path
@@ -25,6 +24,7 @@ except ImportError:  # a source tree where `easylab` is generator/ alone: add ho
 
 from easylab.host_tools.debug_map import DebugMap  # noqa: E402
 from easylab.host_tools.debug_protocol import DebugClient  # noqa: E402
+from firmware_builds import end_process  # noqa: E402
 
 
 def build(model: Path, out: Path, release: bool = False, cc: str | None = None) -> Path:
@@ -96,13 +96,7 @@ class Firmware:
     def stop(self) -> tuple[int, str, str]:
         for c in self.clients:
             c.close()
-        if self.proc.poll() is None:
-            self.proc.send_signal(signal.SIGTERM)
-        try:
-            out, err = self.proc.communicate(timeout=10)
-        except subprocess.TimeoutExpired:
-            self.proc.kill()
-            out, err = self.proc.communicate()
+        out, err = end_process(self.proc, timeout=10)
         return self.proc.returncode, out, err
 
     def rows(self) -> list[dict]:

@@ -8,7 +8,6 @@ flash and RAM on the ATmega328P."""
 from __future__ import annotations
 
 import re
-import signal
 import subprocess
 import time
 from pathlib import Path
@@ -20,6 +19,7 @@ from easylab.remote.device_model import device_model
 from easylab.remote.link import Link
 from easylab.remote.protocol import K
 from easylab.remote.proxy import build_proxy
+from firmware_builds import end_process
 from remote_testlib import EASYLAB, EXAMPLES, device_columns, native_of, remote, run_native, wait_for
 
 BLINK = EXAMPLES / "blink.elab"
@@ -54,14 +54,7 @@ class AvrProxy:
 
     def end(self) -> str:
         """End the simulation (its files are complete then); its stderr."""
-        if self.proc.poll() is None:
-            self.proc.send_signal(signal.SIGTERM)
-        try:
-            _, err = self.proc.communicate(timeout=30)
-        except subprocess.TimeoutExpired:
-            self.proc.kill()
-            _, err = self.proc.communicate()
-        return err
+        return end_process(self.proc)[1]
 
 
 def changes(trace: Path, column: str, until_us: int) -> list[tuple[int, str]]:

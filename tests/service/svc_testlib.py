@@ -374,3 +374,20 @@ on_boards = _boards_mark(None)
 
 def tool_available(name: str) -> bool:
     return shutil.which(name) is not None
+
+
+def run_runtime_harness(tmp_path: Path, name: str, harness: str, runtime_files: tuple[str, ...],
+                        sanitize: str) -> subprocess.CompletedProcess:
+    """Build a C test harness (text) with runtime_c/'s ``runtime_files``
+    under gcc -Werror and the sanitizers ``sanitize``, run it; its run
+    (the harness prints its failures)."""
+    runtime = ROOT / "runtime_c"
+    src, exe = tmp_path / f"{name}.c", tmp_path / name
+    src.write_text(harness)
+    cmd = ["gcc", "-std=c99", "-g", "-Wall", "-Wextra", "-Werror", f"-fsanitize={sanitize}",
+           "-fno-sanitize-recover=all", f"-I{runtime}", str(src), *[str(runtime / f) for f in runtime_files],
+           "-o", str(exe)]
+    built = subprocess.run(cmd, capture_output=True, text=True, timeout=120)
+    assert built.returncode == 0, built.stderr
+    return subprocess.run([str(exe)], capture_output=True, text=True, timeout=60)
+

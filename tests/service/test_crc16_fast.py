@@ -6,11 +6,7 @@ up to an RTU ADU. A C harness, built with UBSan."""
 
 from __future__ import annotations
 
-import subprocess
-
-from svc_testlib import ROOT
-
-RUNTIME = ROOT / "runtime_c"
+from svc_testlib import run_runtime_harness
 
 HARNESS = r"""
 #include "el_crc16.h"
@@ -51,12 +47,5 @@ int main(void)
 
 
 def test_the_table_driven_crc_is_the_bitwise_crc(tmp_path):
-    src = tmp_path / "crc16_fast.c"
-    src.write_text(HARNESS)
-    exe = tmp_path / "crc16_fast"
-    cmd = ["gcc", "-std=c99", "-Wall", "-Wextra", "-Werror", "-fsanitize=undefined", "-fno-sanitize-recover=all",
-           f"-I{RUNTIME}", str(src), str(RUNTIME / "el_crc16.c"), "-o", str(exe)]
-    proc = subprocess.run(cmd, capture_output=True, text=True, timeout=120)
-    assert proc.returncode == 0, proc.stderr
-    proc = subprocess.run([str(exe)], capture_output=True, text=True, timeout=60)
+    proc = run_runtime_harness(tmp_path, "crc16_fast", HARNESS, ("el_crc16.c",), "undefined")
     assert proc.returncode == 0 and proc.stdout == "failures: 0\n", proc.stdout + proc.stderr

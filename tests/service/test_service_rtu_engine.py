@@ -7,11 +7,7 @@ A C harness, built with ASan and UBSan."""
 
 from __future__ import annotations
 
-import subprocess
-
-from svc_testlib import ROOT
-
-RUNTIME = ROOT / "runtime_c"
+from svc_testlib import run_runtime_harness
 
 HARNESS = r"""
 #include "el_crc16.h"
@@ -115,14 +111,6 @@ int main(void)
 
 
 def test_rtu_receiver_with_a_simulated_clock(tmp_path):
-    src = tmp_path / "rtu_engine.c"
-    src.write_text(HARNESS)
-    exe = tmp_path / "rtu_engine"
-    cmd = ["gcc", "-std=c99", "-g", "-Wall", "-Wextra", "-Werror", "-fsanitize=address,undefined",
-           "-fno-sanitize-recover=all", f"-I{RUNTIME}", str(src),
-           *[str(RUNTIME / f) for f in ("el_modbus.c", "el_service.c", "el_persist.c", "el_crc16.c")],
-           "-o", str(exe)]
-    proc = subprocess.run(cmd, capture_output=True, text=True, timeout=120)
-    assert proc.returncode == 0, proc.stderr
-    proc = subprocess.run([str(exe)], capture_output=True, text=True, timeout=60)
+    proc = run_runtime_harness(tmp_path, "rtu_engine", HARNESS,
+                               ("el_modbus.c", "el_service.c", "el_persist.c", "el_crc16.c"), "address,undefined")
     assert proc.returncode == 0 and proc.stdout.endswith("failures: 0\n"), proc.stdout + proc.stderr
