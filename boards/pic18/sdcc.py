@@ -110,6 +110,11 @@ class Build:
     notes: list[str] = field(default_factory=list)
     in_ram: set[str] = field(default_factory=set)  # the program's RAM objects (sdcc_quirks.ram_pointer_tags)
 
+    def __post_init__(self) -> None:
+        # sdcc and gpasm run inside obj_dir: every path they see is absolute
+        self.obj_dir = self.obj_dir.resolve()
+        self.include_dirs = [d.resolve() for d in self.include_dirs]
+
     def flags(self) -> list[str]:
         return ["-mpic16", f"-p{self.part}", "--std-c99", "--no-warn-non-free", *WARNING_FLAGS, *OPT_FLAGS,
                 *self.defines, *(f"-I{d}" for d in self.include_dirs)]
@@ -136,7 +141,7 @@ class Build:
         objects begin (``ram_end`` + 1 when there are none)."""
         with ThreadPoolExecutor(max_workers=2) as pool:
             texts = list(pool.map(self.preprocess, sources))
-        units = {src.stem + ("_gen" if src.parent == self.obj_dir.parent else ""): lowered(src, text)
+        units = {src.stem + ("_gen" if src.resolve().parent == self.obj_dir.parent else ""): lowered(src, text)
                  for src, text in zip(sources, texts)}
         prune.prune(units, roots)
         for ast in units.values():
@@ -166,12 +171,12 @@ class Build:
         def one(src: Path) -> Path:
             stem = src.name.removesuffix(".sdcc.c").removesuffix(".c")
             obj, asm = self.obj_dir / f"{stem}.o", self.obj_dir / f"{stem}.asm"
-            text = src.read_bytes() if src.parent == self.obj_dir else \
+            text = src.read_bytes() if src.resolve().parent == self.obj_dir else \
                 _run([self.tc.sdcc, *self.flags(), "-E", src], f"preprocessing {src.name}").stdout.encode()
             digest = buildcache.key(str(self.tc.root), *self.flags(), text, ram)
             if buildcache.fetch_file("sdcc", digest, obj):
                 return obj
-            _run([self.tc.sdcc, *self.flags(), "-S", src, "-o", asm], f"compiling {src.name} with sdcc",
+            _run([self.tc.sdcc, *self.flags(), "-S", src.resolve(), "-o", asm], f"compiling {src.name} with sdcc",
                  cwd=self.obj_dir)
             asm.write_text(sdcc_quirks.ram_pointer_tags(asm.read_text(encoding="latin-1"), self.in_ram),
                            encoding="latin-1")

@@ -76,6 +76,42 @@ def test_each_nodes_trace_equals_the_single_node_run(tmp_path, pace):
     assert [r[2] for r in rows(tmp_path / "traces" / "planner.csv")[1:]] == ["0", "40", "150", "-220"]
 
 
+def pic18_elbow(text: str) -> str:
+    """The robot with its elbow joint on a PIC18F4620 (CCP1's PWM, the
+    encoder on INT0/INT1, the bus on its one EUSART)."""
+    for old, new in (('node joint2  board avr mcu atmega328p', 'node joint2  board pic18 mcu pic18f4620'),
+                     ('Motor(pwm = "PD6", dir = "PD7") on joint2', 'Motor(pwm = "RC2", dir = "RD6") on joint2'),
+                     ('Encoder(pin_a = "PD2", pin_b = "PD4") on joint2',
+                      'Encoder(pin_a = "RB0", pin_b = "RB1") on joint2')):
+        assert old in text, old
+        text = text.replace(old, new)
+    return text
+
+
+def test_slaves_on_different_boards_follow_one_round(tmp_path):
+    """An AVR joint and a PIC18 joint (in gpsim) on one bus, relative
+    build and trace folders: each node's trace still equals the
+    single-node reference."""
+    model = tmp_path / "robot.elab"
+    model.write_text(pic18_elbow(ROBOT.read_text()))
+    (tmp_path / "stimulus.csv").write_text(STIMULUS)
+    run = easylab("run", str(model), "--fast", "--duration", "600ms", "--stimulus", "stimulus.csv",
+                  "--trace", "reference.csv", cwd=tmp_path)
+    assert run.returncode == 0, run.stderr
+    expected = rows(tmp_path / "reference.csv")
+    run = easylab("launch", "robot.elab", "--fast", "--duration", "600ms", "--stimulus", "stimulus.csv",
+                  "--trace-dir", "traces", "--build-dir", "build", cwd=tmp_path)
+    assert run.returncode == 0, run.stdout + run.stderr
+    assert (tmp_path / "build" / "joint2" / "robot.joint2.hex").exists()
+    for node, columns in (("planner", ["time_us", "amplitude", "spread"]),
+                          ("joint1", ["time_us", "kp", "motor1.speed", "encoder1.count"]),
+                          ("joint2", ["time_us", "kp", "motor2.speed", "encoder2.count"])):
+        trace = rows(tmp_path / "traces" / f"{node}.csv")
+        assert trace[0] == columns
+        assert trace[1:] == projected(expected, columns), node
+    assert [r[2] for r in rows(tmp_path / "traces" / "planner.csv")[1:]] == ["0", "40", "150", "-220"]
+
+
 def test_a_killed_slave_is_reported_and_the_others_go_on(tmp_path):
     # the encoders move until the end, so that the planner misses joint2's last moves whenever it dies
     (tmp_path / "stimulus.csv").write_text(STIMULUS + "".join(f"{t * 1000000},{t * 10},{-t * 20}\n"
