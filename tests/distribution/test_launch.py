@@ -66,14 +66,20 @@ def test_each_nodes_trace_equals_the_single_node_run(tmp_path, pace):
     assert "silent" not in run.stderr
     assert run.stdout.splitlines()[-3:] == ["planner: traces/planner.csv", "joint1: traces/joint1.csv",
                                             "joint2: traces/joint2.csv"]
+    assert_each_node_follows(tmp_path / "traces", expected)
+
+
+def assert_each_node_follows(traces: Path, expected: list[list[str]]) -> None:
+    """Each node's trace is the reference's for its columns, and the values
+    crossed: the planner saw both joints move, each joint followed the
+    planner's ramp."""
     for node, columns in (("planner", ["time_us", "amplitude", "spread"]),
                           ("joint1", ["time_us", "kp", "motor1.speed", "encoder1.count"]),
                           ("joint2", ["time_us", "kp", "motor2.speed", "encoder2.count"])):
-        trace = rows(tmp_path / "traces" / f"{node}.csv")
+        trace = rows(traces / f"{node}.csv")
         assert trace[0] == columns
         assert trace[1:] == projected(expected, columns), node
-    # the values crossed: the planner saw both joints move, each joint followed the planner's ramp
-    assert [r[2] for r in rows(tmp_path / "traces" / "planner.csv")[1:]] == ["0", "40", "150", "-220"]
+    assert [r[2] for r in rows(traces / "planner.csv")[1:]] == ["0", "40", "150", "-220"]
 
 
 def pic18_elbow(text: str) -> str:
@@ -103,13 +109,7 @@ def test_slaves_on_different_boards_follow_one_round(tmp_path):
                   "--trace-dir", "traces", "--build-dir", "build", cwd=tmp_path)
     assert run.returncode == 0, run.stdout + run.stderr
     assert (tmp_path / "build" / "joint2" / "robot.joint2.hex").exists()
-    for node, columns in (("planner", ["time_us", "amplitude", "spread"]),
-                          ("joint1", ["time_us", "kp", "motor1.speed", "encoder1.count"]),
-                          ("joint2", ["time_us", "kp", "motor2.speed", "encoder2.count"])):
-        trace = rows(tmp_path / "traces" / f"{node}.csv")
-        assert trace[0] == columns
-        assert trace[1:] == projected(expected, columns), node
-    assert [r[2] for r in rows(tmp_path / "traces" / "planner.csv")[1:]] == ["0", "40", "150", "-220"]
+    assert_each_node_follows(tmp_path / "traces", expected)
 
 
 def test_a_killed_slave_is_reported_and_the_others_go_on(tmp_path):
