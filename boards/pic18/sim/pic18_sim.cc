@@ -16,7 +16,7 @@
  * (HookRegister), which passes every access on and tells the harness of
  * writes, in the middle of the instruction, the CPU stopped:
  * - el_pic18_sim_mark (RAM, found in the link map): the firmware's
- *   instants (pic18_port.c). At the inputs mark the stimulus due is applied
+ *   boot (after a RESET too) and instants (pic18_port.c). At the inputs mark the stimulus due is applied
  *   (params and vars into RAM, device data onto the pins and the ADC);
  *   while encoder edges are on their way el_pic18_sim_busy stays nonzero and
  *   the firmware waits. At the instant mark the items are read from RAM and
@@ -75,6 +75,7 @@ namespace {
 /* The firmware's marks (boards/pic18/pic18_hw.h). */
 const unsigned MARK_INPUTS = 1u;
 const unsigned MARK_INSTANT = 2u;
+const unsigned MARK_BOOT = 3u;
 const unsigned KEPT_SIM_HALT = 0xA5u;
 
 /* Special function registers (the same on both parts). */
@@ -327,6 +328,8 @@ void on_write(unsigned address, unsigned value)
                 get_bp().halt();
         } else if (value == MARK_INSTANT) {
             sim_instant_record(read_tick());
+        } else if (value == MARK_BOOT) {
+            stack_guarded = false; /* the start-up cleared RAM, the guard too: set it again */
         }
     } else if (address == TXREG) {
         sim_link_output(&sim_links[0], (uint8_t)value);
