@@ -163,11 +163,12 @@ def remote_config(model: DeviceModel) -> str:
 
 def build_proxy(program: Program, board_name: str, out_dir: Path, mcu: str | None = None, sim: bool = False,
                 board_path: list[str] | tuple[str, ...] = (), extra_cflags: tuple[str, ...] = (),
-                baud: int = DEFAULT_BAUD) -> BuildResult:
+                baud: int = DEFAULT_BAUD, check: bool = False) -> BuildResult:
     """Generate and compile the proxy of ``program`` for a board (as
     build.build does for firmware), its link at ``baud`` where the board's
-    link is a serial port. BuildError when a frame of its device model
-    would not fit the protocol's largest frame."""
+    link is a serial port; ``check``: the board's further checks of the C
+    (``easylab build --check``). BuildError when a frame of its device
+    model would not fit the protocol's largest frame."""
     model = device_model(program)
     check_frames(program, model)
     check_watchdog(program, model)
@@ -178,7 +179,7 @@ def build_proxy(program: Program, board_name: str, out_dir: Path, mcu: str | Non
     files.update(board.produce(proxy, checked, False))
     generated = write_files(out_dir, files)
     compiled = board.compile(proxy, checked, out_dir, generated,
-                             CompileOptions(False, proxy_cflags(baud) + tuple(extra_cflags)))
+                             CompileOptions(False, proxy_cflags(baud) + tuple(extra_cflags), check=check))
     result = BuildResult(out_dir, board, compiled, generated, list(compiled.size.lines if compiled.size else []))
     result.notes += compiled.notes + [f"device model 0x{model.id:08x}"]
     if sim:
