@@ -1,6 +1,7 @@
 """The PIC18 proxy (boards/pic18/pic18_remote.c) in the gpsim harness, its
 link (the EUSART) on a pty, against `easylab remote`: the host-native
-trace in lock-step for the models that fit the part, in real time for
+trace in lock-step for the models that fit the part (blink at 1 Mbaud),
+in real time for
 pt100_sensor at 115200 baud, a proxy of another device model refused with
 the devices that differ, a model whose devices claim the EUSART refused,
 and the proxy's program memory and RAM on the PIC18F4520."""
@@ -48,22 +49,23 @@ def stimulus_of(model: Path) -> Path | None:
 
 # The models whose devices fit the part: the examples, and the board's
 # variant of pneumatic_cylinder (the example's pins are the AVR's); one on
-# the PIC18F4620.
-LOCK_STEP = [(BLINK, "pic18f4520"), (EXAMPLES / "cd_to_dat.elab", "pic18f4520"),
-             (EXAMPLES / "pt100_sensor.elab", "pic18f4520"), (VARIANTS / "pneumatic_cylinder.elab", "pic18f4620")]
+# the PIC18F4620; blink at 1 Mbaud (100 instruction cycles a byte).
+LOCK_STEP = [(BLINK, "pic18f4520", 1_000_000), (EXAMPLES / "cd_to_dat.elab", "pic18f4520", 115200),
+             (EXAMPLES / "pt100_sensor.elab", "pic18f4520", 115200),
+             (VARIANTS / "pneumatic_cylinder.elab", "pic18f4620", 115200)]
 
 
-@pytest.mark.parametrize("model,mcu", LOCK_STEP, ids=[f"{m.stem}-{mcu}" for m, mcu in LOCK_STEP])
-def test_the_pic18_proxy_in_lock_step_gives_the_native_trace(model, mcu, build_cache, tmp_path):
+@pytest.mark.parametrize("model,mcu,baud", LOCK_STEP, ids=[f"{m.stem}-{mcu}-{b}" for m, mcu, b in LOCK_STEP])
+def test_the_pic18_proxy_in_lock_step_gives_the_native_trace(model, mcu, baud, build_cache, tmp_path):
     stimulus = stimulus_of(model)
     native = tmp_path / "native.csv"
     run_native(native_of(build_cache, model), native, "1s", stimulus)
-    built = pic18_proxy(build_cache, model, mcu)
+    built = pic18_proxy(build_cache, model, mcu, baud)
     devices = device_columns(stimulus, model, tmp_path / "devices.csv") if stimulus else None
     proxy = pic18_proxy_process(built, tmp_path / "link", "--fast", *(["--stimulus", str(devices)] if devices else []))
     try:
         traced = tmp_path / "remote.csv"
-        proc = remote(model, proxy.link, "--fast", "--duration", "1s", "--trace", str(traced),
+        proc = remote(model, proxy.link, "--fast", "--baud", str(baud), "--duration", "1s", "--trace", str(traced),
                       *(["--stimulus", str(stimulus)] if stimulus else []))
         assert proc.returncode == 0, proc.stderr
     finally:

@@ -30,7 +30,10 @@
  *   traced pins' levels and PWM duties (--pins), stamped with the cycle
  *   (a duty PWM_SETTLE_CYCLES after a CCP write: it spans two registers).
  * Bytes from the link enter the EUSART's receive FIFO one frame time apart
- * (the baud rate the firmware set), when reception is on.
+ * (the baud rate the firmware set), when reception is on, and only into an
+ * empty FIFO: with two bytes queued gpsim 0.31 hands the firmware a wrong
+ * one (seen at 1 Mbaud, 100 cycles a byte); a byte the firmware has not
+ * taken yet waits (no overrun is modelled).
  *
  * Time: gpsim counts instruction cycles exactly (10 MHz at 40 MHz).
  * --fast runs flat out; otherwise the harness keeps the simulated time in
@@ -256,7 +259,7 @@ public:
         if (scheduled || u->in_len == 0u || rc == nullptr || (rcsta & 0x90u) != 0x90u) /* SPEN, CREN */
             return;
         guint64 frame = bit_cycles() * ((rcsta & 0x40u) ? 11u : 10u);
-        if (rc->fifo_sp < 2u) {
+        if (rc->fifo_sp == 0u) { /* not the FIFO's second place: see the top of the file */
             unsigned byte = u->in[0];
             if (rcsta & 0x40u) /* RX9: the 9th bit carries the parity the model's interface uses */
                 byte |= (unsigned)ninth_bit(u->in[0]) << 8;
