@@ -114,6 +114,12 @@ class F16Board(BoardBase):
         if options.cc is not None:
             raise BuildError(f"--cc: the {self.name} board's compiler is Softune's fcc907s; the proxies are fixed")
         if self.sim:
+            from easylab.remote.proxy import PROXY_CFLAGS
+
+            if set(PROXY_CFLAGS) <= set(options.extra_cflags):
+                raise BuildError(f"the {self.name} board's simulation (the model on an 8051 in s51) has no UART for "
+                                 f"a remote-execution proxy's link: build the proxy without --sim, a Softune project "
+                                 f"(docs/remote.md, \"The F16 proxy\")")
             return self._compile_proxy(program, out_dir, generated, options)
         return self._compile_project(program, out_dir, generated, options)
 

@@ -62,3 +62,11 @@ def test_a_baud_rate_uart1_does_not_make_is_refused(tmp_path):
     assert proc.returncode == 1
     assert ("the proxy's link: UART1 of the mb90f543 makes these rates within 2 %: 1200, 2400, 4800, 9600, "
             "19200, 38400, 76800 (easylab proxy --baud)") in proc.stderr
+
+
+def test_a_simulation_build_of_the_proxy_is_refused(tmp_path):
+    """The board's s51 simulation has no UART to carry the link."""
+    proc = proxy(tmp_path / "p", "--sim", "--baud", "76800")
+    assert proc.returncode == 1
+    assert ("the f16 board's simulation (the model on an 8051 in s51) has no UART for a remote-execution proxy's "
+            "link: build the proxy without --sim") in proc.stderr
