@@ -229,13 +229,11 @@ def remote_link(board, res: Resolved) -> list[str]:
                      f"is claimed ({users}); build for another --mcu\"")
     else:
         n = free[0]
-        # Rings of the device model's frames (el_remote_config.h; a ring of n bytes holds n - 1): the
-        # largest frame the proxy sends whole, two of the largest it receives (a DOWN may arrive while
-        # an instant runs).
+        # Rings of the device model's frames (el_remote_config.h), at most 255 bytes.
         lines += [f"#define EL_AVR_REMOTE_UART {n}u /* the proxy's link: uart{n} (pins {', '.join(mcu.uart[n])}) */",
                   '#include "el_remote_config.h"',
-                  f"#define EL_AVR_UART{n}_RX (EL_RMT_RX_WIRE < 127u ? 2u * EL_RMT_RX_WIRE + 1u : 255u)",
-                  f"#define EL_AVR_UART{n}_TX (EL_RMT_TX_WIRE + 1u)",
+                  f"#define EL_AVR_UART{n}_RX (EL_RMT_RX_RING < 255u ? EL_RMT_RX_RING : 255u)",
+                  f"#define EL_AVR_UART{n}_TX EL_RMT_TX_RING",
                   f"#define EL_AVR_REMOTE_TX EL_AVR_UART{n}_TX"]
     return lines + ["#endif"]
 

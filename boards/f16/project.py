@@ -106,8 +106,7 @@ def _link_uart(mcu: Mcu, res: Resolved) -> int | None:
 
 def remote_link(mcu: Mcu, res: Resolved) -> list[str]:
     """A remote-execution proxy's link (f16_uart.c) on UART1, its rings
-    sized from the device model's frames (el_remote_config.h: the largest
-    frame the proxy sends whole, two of the largest it receives), its
+    sized from the device model's frames (el_remote_config.h), its
     divisors those of EL_REMOTE_BAUD (easylab proxy --baud) among the
     standard rates UART1 makes; only a proxy build (-DEL_REMOTE_PROXY=1)
     sees it."""
@@ -120,7 +119,7 @@ def remote_link(mcu: Mcu, res: Resolved) -> list[str]:
     rates = usable_rates(mcu)
     lines += [f"#define EL_F16_REMOTE_UART {n}u /* the proxy's link: uart{n} (pins {', '.join(mcu.uart[n])}) */",
               '#include "el_remote_config.h"',
-              f"#define EL_F16_UART{n}_RX (2u * EL_RMT_RX_WIRE + 1u)", f"#define EL_F16_UART{n}_TX (EL_RMT_TX_WIRE + 1u)"]
+              f"#define EL_F16_UART{n}_RX EL_RMT_RX_RING", f"#define EL_F16_UART{n}_TX EL_RMT_TX_RING"]
     for k, (baud, rate) in enumerate(rates):
         lines += [f"#{'if' if k == 0 else 'elif'} EL_REMOTE_BAUD == {baud}UL /* {rate.baud:.0f} baud "
                   f"({rate.error * 100:+.2f} %) */",

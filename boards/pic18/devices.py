@@ -158,9 +158,8 @@ def _ring_sizes(mcu: Mcu, use: str) -> tuple[int, int]:
 
 def remote_link(mcu: Mcu, res: Resolved) -> list[str]:
     """A remote-execution proxy's link (pic18_remote.c) on the EUSART, its
-    rings sized from the device model's frames (el_remote_config.h: the
-    largest frame the proxy sends whole, two of the largest it receives);
-    only a proxy build (-DEL_REMOTE_PROXY=1, easylab proxy) sees it. A
+    rings sized from the device model's frames (el_remote_config.h, at most
+    255 bytes); only a proxy build (-DEL_REMOTE_PROXY=1, easylab proxy) sees it. A
     model whose devices claim the EUSART has no link."""
     lines = ["", "#if defined(EL_REMOTE_PROXY) && EL_REMOTE_PROXY"]
     free = [n for n in sorted(mcu.uart) if n not in res.uarts]
@@ -172,8 +171,8 @@ def remote_link(mcu: Mcu, res: Resolved) -> list[str]:
         lines += [f"#define EL_PIC18_REMOTE_UART {free[0]}u /* the proxy's link: uart{free[0]} "
                   f"(pins {', '.join(mcu.uart[free[0]])}) */",
                   '#include "el_remote_config.h"',
-                  "#define EL_PIC18_UART_RX (EL_RMT_RX_WIRE < 127u ? 2u * EL_RMT_RX_WIRE + 1u : 255u)",
-                  "#define EL_PIC18_UART_TX (EL_RMT_TX_WIRE + 1u)"]
+                  "#define EL_PIC18_UART_RX (EL_RMT_RX_RING < 255u ? EL_RMT_RX_RING : 255u)",
+                  "#define EL_PIC18_UART_TX EL_RMT_TX_RING"]
     return lines + ["#endif"]
 
 

@@ -157,6 +157,10 @@ def remote_config(model: DeviceModel) -> str:
         f"#define EL_RMT_TX_FRAME {sizes.tx}u /* the largest decoded frame the proxy sends */",
         f"#define EL_RMT_RX_WIRE {sizes.rx_wire}u /* the same on the wire (COBS, delimiter) */",
         f"#define EL_RMT_TX_WIRE {sizes.tx_wire}u",
+        "/* A board's UART rings for the link (a ring of n bytes holds n - 1): the largest frame the proxy sends",
+        " * whole, two of the largest it receives (a DOWN may arrive while an instant runs). */",
+        "#define EL_RMT_TX_RING (EL_RMT_TX_WIRE + 1u)",
+        "#define EL_RMT_RX_RING (2u * EL_RMT_RX_WIRE + 1u)",
         f"#define EL_RMT_TASKS {max(1, len(model.tasks))}u /* proxy tasks: the runtime's per-task tables */",
         "#endif", ""])
 
