@@ -2,7 +2,8 @@
  * handling (runtime_c/el_remote.c, el_debug_cobs.c) under ASan and UBSan.
  *
  *   clang -g -O1 -fsanitize=fuzzer,address,undefined -DEL_REMOTE_PROXY=1 \
- *       -Iruntime_c fuzz/remote_fuzz.c fuzz/remote_fuzz_model.c runtime_c/el_remote.c \
+ *       [-DEL_FUZZ_LARGEST_FRAMES=1] -Ifuzz/remote_include -Iruntime_c \
+ *       fuzz/remote_fuzz.c fuzz/remote_fuzz_model.c runtime_c/el_remote.c \
  *       runtime_c/el_debug_cobs.c runtime_c/el_crc16.c -o remote_fuzz
  *   ./remote_fuzz fuzz/remote_corpus -runs=150000
  *
@@ -21,11 +22,13 @@
  * proxy still waits for it, then STOP, as `easylab remote` ends a run.
  *
  * Invariants checked (abort on violation): every frame the proxy sends is
- * one COBS frame with a valid CRC, at most EL_RMT_MAX_FRAME bytes, an
+ * one COBS frame with a valid CRC, at most EL_RMT_TX_FRAME bytes (the
+ * size el_remote_config.h gives the model, fuzz/remote_include/), an
  * answer (response bit) or an UP for the current tick with the model's
  * payload size; after STOP the device `in` data hold their safe values.
  */
 #include "el_remote.h"
+#include "el_remote_config.h"
 #include "el_crc16.h"
 #include "el_debug_cobs.h"
 #include "el_dispatch.h"
@@ -152,7 +155,7 @@ uint16_t el_remote_port_read(uint8_t *buf, uint16_t max)
 
 bool el_remote_port_write(const uint8_t *frame, uint16_t len)
 {
-    uint8_t out[EL_RMT_MAX_FRAME];
+    uint8_t out[EL_RMT_TX_FRAME];
     uint16_t n = fuzz_sent_frame(frame, len, out, (uint16_t)sizeof out, EL_RMT_HEADER + EL_RMT_TRAILER);
     if (out[0] == EL_RMT_CMD_UP) {
         uint32_t instant = (uint32_t)out[1] | ((uint32_t)out[2] << 8) | ((uint32_t)out[3] << 16) |

@@ -8,9 +8,19 @@
 #include "el_dispatch.h"
 #include "el_model.h"
 #include "el_port.h"
+#include "el_remote_config.h" /* generated: the frame sizes of this device model */
 
-#define MAX_TASKS 32u
-#define TX_CAP (EL_COBS_MAX_ENCODED(EL_RMT_MAX_FRAME) + 1u)
+#if !defined(EL_RMT_RX_FRAME) || !defined(EL_RMT_TX_FRAME) || !defined(EL_RMT_TASKS) || \
+    EL_RMT_TASKS < 1u || EL_RMT_TASKS > 32u || EL_RMT_RX_FRAME > EL_RMT_MAX_FRAME || \
+    EL_RMT_TX_FRAME > EL_RMT_MAX_FRAME || EL_RMT_RX_FRAME < EL_RMT_HEADER + EL_RMT_TRAILER + 1u || \
+    EL_RMT_TX_FRAME < EL_RMT_HEADER + EL_RMT_TRAILER + 1u + 2u * EL_RMT_COUNTER_COUNT
+#error "el_remote_config.h (easylab proxy) sizes the frames and tables: EL_RMT_RX_FRAME, EL_RMT_TX_FRAME, EL_RMT_TASKS"
+#endif
+
+#define MASK_BITS 32u /* the proxy tasks a DOWN's mask can name */
+#define TX_CAP (EL_COBS_MAX_ENCODED(EL_RMT_TX_FRAME) + 1u)
+/* The largest payload the proxy sends. */
+#define TX_PAYLOAD (EL_RMT_TX_FRAME - EL_RMT_HEADER - EL_RMT_TRAILER)
 
 static uint8_t state = EL_RMT_STATE_SAFE;
 static bool started; /* START came: UP frames flow (in the safe state too, telling the host) */
@@ -20,9 +30,9 @@ static uint32_t last_frame_tick; /* the instant of the last valid frame (real ti
 static uint8_t overruns_in_a_row;
 
 /* The current activation of each proxy task. */
-static uint32_t release_tick[MAX_TASKS];
-static bool pending[MAX_TASKS];  /* released, deadline not reached */
-static bool arrived[MAX_TASKS];  /* its values came (staged) */
+static uint32_t release_tick[EL_RMT_TASKS];
+static bool pending[EL_RMT_TASKS];  /* released, deadline not reached */
+static bool arrived[EL_RMT_TASKS];  /* its values came (staged) */
 
 /* The tasks released at the instant being processed. */
 static uint32_t released_now;
@@ -30,9 +40,11 @@ static uint32_t released_tick;
 static bool up_sent;
 static bool down_done; /* lock-step: the DOWN of the instant being processed came */
 
-static uint8_t rx_buf[EL_RMT_MAX_FRAME];
+/* A longer received frame is one the device model cannot produce: the
+ * decoder drops it as oversize (counted malformed). */
+static uint8_t rx_buf[EL_RMT_RX_FRAME];
 static el_cobs_decoder_t rx;
-static uint8_t frame[EL_RMT_MAX_FRAME];
+static uint8_t frame[EL_RMT_TX_FRAME];
 static uint8_t tx[TX_CAP];
 
 static void put_u32(uint8_t *p, uint32_t v)
@@ -93,7 +105,7 @@ static void enter_safe_state(void)
     uint8_t t;
     apply_safe_values();
     state = EL_RMT_STATE_SAFE;
-    for (t = 0u; t < MAX_TASKS; t++) {
+    for (t = 0u; t < EL_RMT_TASKS; t++) {
         arrived[t] = false;
     }
 }
@@ -102,8 +114,8 @@ static void enter_safe_state(void)
 static void on_down(uint32_t instant, const uint8_t *p, uint16_t n)
 {
     uint32_t mask;
-    uint16_t i, at = 0u, need = 4u, staged_at = 0u;
-    if (n < 4u) {
+    uint16_t i, at = 0u, need = EL_RMT_DOWN_MASK, staged_at = 0u;
+    if (n < EL_RMT_DOWN_MASK) {
         count(EL_RMT_COUNTER_MALFORMED);
         return;
     }
@@ -117,7 +129,7 @@ static void on_down(uint32_t instant, const uint8_t *p, uint16_t n)
         count(EL_RMT_COUNTER_MALFORMED);
         return;
     }
-    at = 4u;
+    at = EL_RMT_DOWN_MASK;
     for (i = 0u; i < el_rmt_in_count; i++) {
         uint8_t task = el_rmt_in_fields[i].owner;
         uint16_t size = el_rmt_in_fields[i].size;
@@ -130,8 +142,9 @@ static void on_down(uint32_t instant, const uint8_t *p, uint16_t n)
         }
         staged_at = (uint16_t)(staged_at + size);
     }
-    for (i = 0u; i < MAX_TASKS; i++) { /* tasks whose activation is over: too late */
-        if ((mask & ((uint32_t)1u << i)) != 0u && !(pending[i] && release_tick[i] == instant)) {
+    for (i = 0u; i < MASK_BITS; i++) { /* tasks whose activation is over (or none): too late */
+        if ((mask & ((uint32_t)1u << i)) != 0u &&
+            (i >= EL_RMT_TASKS || !(pending[i] && release_tick[i] == instant))) {
             count(EL_RMT_COUNTER_STALE);
         }
     }
@@ -165,7 +178,7 @@ static void on_frame(uint16_t n)
         put_u32(&frame[EL_RMT_HEADER + 1u], el_rmt_device_model_id);
         frame[EL_RMT_HEADER + 5u] = el_rmt_device_count_;
         frame[EL_RMT_HEADER + 6u] = state;
-        send((uint8_t)(cmd | EL_RMT_RESPONSE), instant, 7u);
+        send((uint8_t)(cmd | EL_RMT_RESPONSE), instant, EL_RMT_HELLO_ANSWER);
         break;
     case EL_RMT_CMD_DEVICE: {
         const char *path;
@@ -177,11 +190,11 @@ static void on_frame(uint16_t n)
         path = el_rmt_device_paths[p[0]];
         frame[EL_RMT_HEADER] = p[0];
         put_u32(&frame[EL_RMT_HEADER + 1u], el_rmt_device_ids[p[0]]);
-        while (path[len] != '\0' && len < EL_RMT_MAX_PAYLOAD - 5u) {
-            frame[EL_RMT_HEADER + 5u + len] = (uint8_t)path[len];
+        while (path[len] != '\0' && len < TX_PAYLOAD - EL_RMT_DEVICE_ANSWER) {
+            frame[EL_RMT_HEADER + EL_RMT_DEVICE_ANSWER + len] = (uint8_t)path[len];
             len++;
         }
-        send((uint8_t)(cmd | EL_RMT_RESPONSE), instant, (uint16_t)(5u + len));
+        send((uint8_t)(cmd | EL_RMT_RESPONSE), instant, (uint16_t)(EL_RMT_DEVICE_ANSWER + len));
         break;
     }
     case EL_RMT_CMD_START:
@@ -246,7 +259,7 @@ void el_remote_boot(void)
     for (t = 0u; t < EL_RMT_COUNTER_COUNT; t++) {
         counters[t] = 0u;
     }
-    for (t = 0u; t < MAX_TASKS; t++) {
+    for (t = 0u; t < EL_RMT_TASKS; t++) {
         pending[t] = false;
         arrived[t] = false;
     }
@@ -278,6 +291,9 @@ static void watchdog(void)
 void el_remote_release(uint8_t task)
 {
     uint32_t now = (uint32_t)el_now_tick();
+    if (task >= EL_RMT_TASKS) { /* not a proxy task of this device model */
+        return;
+    }
     watchdog();
     if (released_now == 0u || released_tick != now) {
         released_now = 0u;
@@ -300,11 +316,11 @@ void el_remote_body(uint8_t task)
     }
     up_sent = true;
     frame[EL_RMT_HEADER] = state; /* the host learns at once that the safe values hold */
-    at = 1u;
+    at = EL_RMT_UP_STATE;
     for (i = 0u; i < el_rmt_out_count; i++) {
         const el_rmt_field_t *f = &el_rmt_out_fields[i];
         if ((el_rmt_device_readers[f->owner] & released_now) != 0u &&
-            (uint16_t)(at + f->size) <= EL_RMT_MAX_PAYLOAD) { /* easylab proxy checked that it fits */
+            (uint16_t)(at + f->size) <= TX_PAYLOAD) { /* easylab proxy sized the frame to fit */
             copy_bytes(&frame[EL_RMT_HEADER + at], (const uint8_t *)f->addr, f->size);
             at = (uint16_t)(at + f->size);
         }
@@ -318,7 +334,11 @@ void el_remote_body(uint8_t task)
 void el_remote_publish(uint8_t task)
 {
     uint16_t i, at = 0u;
-    bool got = arrived[task];
+    bool got;
+    if (task >= EL_RMT_TASKS) { /* not a proxy task of this device model */
+        return;
+    }
+    got = arrived[task];
     watchdog();
     pending[task] = false;
     arrived[task] = false;

@@ -18,6 +18,15 @@
 /* Largest decoded frame either side accepts. */
 #define EL_RMT_MAX_FRAME 250u
 #define EL_RMT_MAX_PAYLOAD 243u
+/* A proxy's own buffers hold the largest frames of its device model only
+ * (generated el_remote_config.h: EL_RMT_RX_FRAME, EL_RMT_TX_FRAME, computed
+ * by generator/remote/device_model.py from these payloads). */
+
+/* Fixed parts of payloads (bytes). */
+#define EL_RMT_HELLO_ANSWER 7u  /* version u8, device-model id u32, device count u8, state u8 */
+#define EL_RMT_DEVICE_ANSWER 5u /* index u8, device id u32; the path follows */
+#define EL_RMT_UP_STATE 1u      /* UP: the state byte before the device data */
+#define EL_RMT_DOWN_MASK 4u     /* DOWN: the task mask u32 before the device data */
 
 /* ---- host -> proxy ------------------------------------------------------ */
 #define EL_RMT_CMD_HELLO 0x01u

@@ -213,8 +213,6 @@ def _ring_sizes(mcu: Mcu, use: str) -> tuple[int, int]:
         return (64, 168) if mcu.small else (192, 255)
     if use == "modbus-rtu":  # a whole ADU (256 bytes) arrives while a task may run
         return (128, 64) if mcu.small else (255, 128)
-    if use == "remote":  # a whole encoded frame (253 bytes) must fit in TX; DOWN frames arrive while an instant runs
-        return (128, 255) if mcu.small else (255, 255)
     return (32, 4)  # line camera: frames of 4 bytes, listen only
 
 
@@ -231,10 +229,12 @@ def remote_link(board, res: Resolved) -> list[str]:
                      f"is claimed ({users}); build for another --mcu\"")
     else:
         n = free[0]
-        rx, tx = _ring_sizes(mcu, "remote")
+        # Rings of the device model's frames (el_remote_config.h), at most 255 bytes.
         lines += [f"#define EL_AVR_REMOTE_UART {n}u /* the proxy's link: uart{n} (pins {', '.join(mcu.uart[n])}) */",
-                  f"#define EL_AVR_UART{n}_RX {rx}u", f"#define EL_AVR_UART{n}_TX {tx}u",
-                  f"#define EL_AVR_REMOTE_TX {tx}u"]
+                  '#include "el_remote_config.h"',
+                  f"#define EL_AVR_UART{n}_RX (EL_RMT_RX_RING < 255u ? EL_RMT_RX_RING : 255u)",
+                  f"#define EL_AVR_UART{n}_TX EL_RMT_TX_RING",
+                  f"#define EL_AVR_REMOTE_TX EL_AVR_UART{n}_TX"]
     return lines + ["#endif"]
 
 

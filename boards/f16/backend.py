@@ -114,6 +114,12 @@ class F16Board(BoardBase):
         if options.cc is not None:
             raise BuildError(f"--cc: the {self.name} board's compiler is Softune's fcc907s; the proxies are fixed")
         if self.sim:
+            from easylab.remote.proxy import PROXY_CFLAGS
+
+            if set(PROXY_CFLAGS) <= set(options.extra_cflags):
+                raise BuildError(f"the {self.name} board's simulation (the model on an 8051 in s51) has no UART for "
+                                 f"a remote-execution proxy's link: build the proxy without --sim, a Softune project "
+                                 f"(docs/remote.md, \"The F16 proxy\")")
             return self._compile_proxy(program, out_dir, generated, options)
         return self._compile_project(program, out_dir, generated, options)
 
@@ -128,7 +134,7 @@ class F16Board(BoardBase):
         sources = [out_dir / rel for rel in project.copy_sources(out_dir, originals, headers, out_dir)]
         (out_dir / "Makefile").write_text(project.makefile(program, self.part, self.description.raw,
                                                            [str(s.relative_to(out_dir)) for s in sources],
-                                                           options.release), encoding="utf-8")
+                                                           options.release, options.extra_cflags), encoding="utf-8")
         flags = [*_FRONT_END_DEFINES, *mode_flags(options.release), *options.extra_cflags, f"-I{out_dir}",
                  f"-I{out_dir / 'runtime'}", f"-I{out_dir / 'board'}"]
         objects = proxy.clang_objects(self, sources, flags, out_dir / "obj430", out_dir)
@@ -148,10 +154,11 @@ class F16Board(BoardBase):
         if data > mcu.ram:
             raise BuildError(f"{line}\nerror: the program's static data does not fit the {mcu.name}'s {mcu.ram} bytes "
                              f"of RAM: {data - mcu.ram} bytes too many")
+        defines = project.fcc_defines(options.release, options.extra_cflags).split()
         cc_line = " ".join(shlex.quote(a) for a in [self.description.toolchain.cc,
                                                       *(f.format(cpu=mcu.cpu) for f in self.description.toolchain.cflags),
-                                                      *project.mode_define(options.release).split(), "-I", ".", "-I",
-                                                      "runtime", "-I", "board", "-o", "obj/model.obj", "model.c"])
+                                                      *defines, "-I", ".", "-I", "runtime", "-I", "board", "-o",
+                                                      "obj/model.obj", "model.c"])
         notes += [f"compiling for the {mcu.name} needs Softune (fcc907s, flnk907s), which does not run here: "
                   f"copy Softune's startup for the MB90540 series into the folder as start.asm, then "
                   f"`make -C {out_dir} SOFTUNE=C:/Softune`, which runs for each file, e.g. `{cc_line}`"]

@@ -37,6 +37,18 @@ void el_f16_hw_init(void)
 #if defined(EL_F16_DEBUG_UART) && defined(EL_DEBUG_SERVER) && EL_DEBUG_SERVER
     el_f16_debug_open();
 #endif
+#if defined(EL_F16_REMOTE_UART) && defined(EL_REMOTE_PROXY) && EL_REMOTE_PROXY
+    el_f16_remote_open(); /* the proxy's link */
+#endif
+}
+
+void el_f16_hw_reset(void)
+{
+    /* RST = 0 starts an internal reset; TMD stays 1 (0 would enter the
+     * watch mode) and the CPU runs without intermittent cycles (CG = 00). */
+    EL_F16_LPMCR = EL_F16_LPMCR_TMD;
+    for (;;) {
+    }
 }
 
 void el_f16_tick_timer_start(void)

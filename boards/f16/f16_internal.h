@@ -48,8 +48,12 @@ bool el_f16_hw_nv_write(uint16_t offset, const void *data, uint16_t size);
 /* The run is over (the proxy stops the simulator; a part stays stopped). */
 void el_f16_hw_shutdown(void);
 
-/* UART1 for the debug interface (f16_uart.c; el_f16_hw_init opens it). */
+/* UART1 for the debug interface or a proxy's link (f16_uart.c;
+ * el_f16_hw_init opens it). */
 void el_f16_debug_open(void);
+void el_f16_remote_open(void);
+/* A software reset (LPMCR's RST): the part starts again from its reset vector. */
+void el_f16_hw_reset(void);
 /* The devices' interrupt levels (generated el_f16_devices.c). */
 void el_f16_devices_boot(void);
 

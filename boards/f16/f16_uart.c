@@ -11,6 +11,11 @@
  * for room in the transmit ring, else it is dropped (the server counts it).
  * RESET is refused: nothing here restarts the part.
  *
+ * A remote-execution proxy's link (runtime_c/el_remote.h, a proxy build
+ * only): 8N1 at EL_REMOTE_BAUD; a frame waits for room in the transmit
+ * ring as long as a full ring takes to send, else it is dropped; STOP
+ * restarts the part once its answer has left (el_f16_hw_reset).
+ *
  * Modbus RTU (runtime_c/el_modbus_port.h): the end of a request is a
  * silence of 3.5 characters (1750 us above 19200 baud) after the last byte,
  * measured on the port's fine clock from the receive interrupt's time stamp.
@@ -142,6 +147,48 @@ bool el_debug_port_reset(uint8_t flags)
 {
     (void)flags;
     return false;
+}
+
+#endif
+
+#if defined(EL_F16_REMOTE_UART) && defined(EL_REMOTE_PROXY) && EL_REMOTE_PROXY
+#include "el_remote.h"
+
+/* Milliseconds to send a full transmit ring (10 bits a byte), rounded up. */
+#define REMOTE_TX_WAIT_MS ((uint16_t)((uint32_t)EL_F16_UART1_TX * 10000UL / (uint32_t)EL_REMOTE_BAUD + 2UL))
+
+void el_f16_remote_open(void)
+{
+    uart1_open(0u); /* 8N1 */
+}
+
+uint16_t el_remote_port_read(uint8_t *buf, uint16_t max)
+{
+    uint16_t n = 0u;
+    while (n < max) {
+        int16_t c = uart1_getc();
+        if (c < 0) {
+            break;
+        }
+        buf[n++] = (uint8_t)c;
+    }
+    return n;
+}
+
+bool el_remote_port_write(const uint8_t *frame, uint16_t len)
+{
+    return uart1_write(frame, len, REMOTE_TX_WAIT_MS);
+}
+
+void el_remote_port_end(void)
+{
+    /* STOP's answer drains from the ring (interrupts stay on), then a
+     * software reset restarts the part: its boot drives the actuators to
+     * their safe values and waits for the next host's START, at tick 0. */
+    uint32_t start = el_f16_clock();
+    while (el_f16_clock() - start < el_f16_clock_from_us((uint32_t)REMOTE_TX_WAIT_MS * 1000u)) {
+    }
+    el_f16_hw_reset();
 }
 
 #endif

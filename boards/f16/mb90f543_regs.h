@@ -92,6 +92,11 @@
 #define EL_F16_TMCSR_RELD 0x0010u
 #define EL_F16_TMCSR_CSL_SHIFT 10u /* CSL1..0: machine clock / 2, / 8, / 32 */
 
+/* ---- Chapter "Low-Power Consumption Mode": LPMCR (writing RST = 0 resets
+ * the part: a proxy's STOP) */
+#define EL_F16_LPMCR EL_F16_REG8(0x00A0u)
+#define EL_F16_LPMCR_TMD 0x08u  /* 0 would enter the watch mode: keep it 1 */
+
 /* ---- Chapter "Clocks": CKSCR selects the PLL multiplier */
 #define EL_F16_CKSCR EL_F16_REG8(0x00A1u)
 #define EL_F16_CKSCR_MCM 0x40u  /* 1: the main clock runs (PLL not yet locked) */

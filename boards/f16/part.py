@@ -126,6 +126,22 @@ def uart1_rates(clock_hz: int) -> list[UartRate]:
                   key=lambda r: -r.baud)
 
 
+# The standard rates a serial link is asked for.
+STANDARD_BAUDS = (300, 600, 1200, 2400, 4800, 9600, 14400, 19200, 38400, 57600, 76800, 115200, 230400, 250000,
+                  500000, 1000000)
+
+
+def usable_rates(mcu: Mcu) -> list[tuple[int, UartRate]]:
+    """(baud, divisors) of every standard rate UART1 makes within 2 %."""
+    rates = uart1_rates(mcu.clock_hz)
+    out = []
+    for baud in STANDARD_BAUDS:
+        best = min(rates, key=lambda r: (abs(r.baud - baud), r.div))
+        if abs(best.baud / baud - 1.0) <= BAUD_TOLERANCE:
+            out.append((baud, UartRate(best.div, best.cs, best.baud, best.baud / baud - 1.0)))
+    return out
+
+
 def uart1_rate(mcu: Mcu, baud: int, what: str) -> UartRate:
     """The divisors nearest to ``baud``; BuildError when more than 2 % off,
     listing the standard rates that work."""
@@ -133,8 +149,7 @@ def uart1_rate(mcu: Mcu, baud: int, what: str) -> UartRate:
     best = min(rates, key=lambda r: (abs(r.baud - baud), r.div))
     error = best.baud / baud - 1.0
     if abs(error) > BAUD_TOLERANCE:
-        usable = [b for b in (300, 600, 1200, 2400, 4800, 9600, 14400, 19200, 38400, 57600, 76800, 115200)
-                  if min(abs(r.baud / b - 1.0) for r in rates) <= BAUD_TOLERANCE]
+        usable = [b for b, _ in usable_rates(mcu)]
         raise BuildError(f"{what}: {baud} baud is {error * 100:+.1f} % off on UART1 of the {mcu.name} (its nearest "
                          f"rate from the {mcu.clock_hz // 1_000_000} MHz machine clock is {best.baud:.0f}); rates "
                          f"within 2 %: {', '.join(map(str, usable))}")

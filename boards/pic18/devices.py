@@ -156,6 +156,26 @@ def _ring_sizes(mcu: Mcu, use: str) -> tuple[int, int]:
     return (128, 64) if small else (255, 128)  # Modbus: a whole ADU arrives while a task may run
 
 
+def remote_link(mcu: Mcu, res: Resolved) -> list[str]:
+    """A remote-execution proxy's link (pic18_remote.c) on the EUSART, its
+    rings sized from the device model's frames (el_remote_config.h, at most
+    255 bytes); only a proxy build (-DEL_REMOTE_PROXY=1, easylab proxy) sees it. A
+    model whose devices claim the EUSART has no link."""
+    lines = ["", "#if defined(EL_REMOTE_PROXY) && EL_REMOTE_PROXY"]
+    free = [n for n in sorted(mcu.uart) if n not in res.uarts]
+    if not free:
+        users = ", ".join(f"uart{n} by {res.uarts[n].get('device', 'a device')}" for n in sorted(res.uarts))
+        lines.append(f"#error \"a remote-execution proxy needs a UART for its link: the {mcu.name}'s only UART is "
+                     f"claimed ({users}); free it for the link\"")
+    else:
+        lines += [f"#define EL_PIC18_REMOTE_UART {free[0]}u /* the proxy's link: uart{free[0]} "
+                  f"(pins {', '.join(mcu.uart[free[0]])}) */",
+                  '#include "el_remote_config.h"',
+                  "#define EL_PIC18_UART_RX (EL_RMT_RX_RING < 255u ? EL_RMT_RX_RING : 255u)",
+                  "#define EL_PIC18_UART_TX EL_RMT_TX_RING"]
+    return lines + ["#endif"]
+
+
 def config_header(program: Program, board, res: Resolved, release: bool) -> str:
     mcu: Mcu = board.part
     if program.tick_us < MIN_TICK_US:
@@ -191,6 +211,7 @@ def config_header(program: Program, board, res: Resolved, release: bool) -> str:
             lines.append(f"#define EL_PIC18_DEBUG_BAUD {int(u.get('baud', 115200))}UL")
         elif u["use"] == "modbus-rtu":
             lines.append("#define EL_PIC18_MODBUS 1")
+    lines += remote_link(mcu, res)
     if board.sim:
         lines += ["", "#define EL_PIC18_SIM 1 /* simulation build: instants reported to the gpsim harness */"]
     lines += ["", "#endif /* EL_PIC18_CONFIG_H */", ""]

@@ -17,7 +17,8 @@
  * writes the harness watches: el_port_inputs stores the instant's tick in
  * el_pic18_sim_tick, writes EL_PIC18_SIM_INPUTS and waits while the
  * harness keeps el_pic18_sim_busy nonzero (it is delivering input: UART
- * bytes, encoder edges); el_port_instant writes EL_PIC18_SIM_INSTANT. The
+ * bytes, encoder edges); el_port_instant writes EL_PIC18_SIM_INSTANT;
+ * el_port_init writes EL_PIC18_SIM_BOOT (a RESET cleared the RAM). The
  * harness reads the items from RAM at that moment. Other builds do nothing
  * there.
  */
@@ -29,6 +30,15 @@
 #include "el_debug.h" /* EL_DEBUG_SERVER: whether to open the debug UART */
 #endif
 
+#if defined(EL_PIC18_SIM) && EL_PIC18_SIM
+/* The instant being processed (32 bits, EL_TICK_32: the harness extends
+ * it), its marks and the harness's busy flag: read and written by the
+ * harness, at the addresses the linker gives them. */
+volatile uint32_t el_pic18_sim_tick;
+volatile uint8_t el_pic18_sim_mark;
+volatile uint8_t el_pic18_sim_busy;
+#endif
+
 /* el_pic18_kept after a debugger's RESET with RESET_HALT (pic18_interfaces.c). */
 #define KEPT_RESET_HALT 0x5Au
 
@@ -38,6 +48,9 @@ bool el_port_init(int argc, char **argv)
     (void)argc;
     (void)argv;
     cause = el_pic18_start();
+#if defined(EL_PIC18_SIM) && EL_PIC18_SIM
+    el_pic18_sim_mark = EL_PIC18_SIM_BOOT; /* after a RESET too (a proxy's STOP): the stack's guard is gone */
+#endif
 #if defined(EL_PIC18_DEBUG_BAUD) && defined(EL_DEBUG_SERVER) && EL_DEBUG_SERVER
     el_pic18_uart_open(EL_PIC18_DEBUG_BAUD, EL_PIC18_PARITY_NONE);
     /* Halt at the first instant after a RESET with RESET_HALT only (after a
@@ -52,6 +65,9 @@ bool el_port_init(int argc, char **argv)
 #endif
 #else
     (void)cause;
+#endif
+#if defined(EL_REMOTE_PROXY) && EL_REMOTE_PROXY && defined(EL_PIC18_REMOTE_UART)
+    el_pic18_uart_open(EL_REMOTE_BAUD, EL_PIC18_PARITY_NONE); /* the proxy's link (pic18_remote.c) */
 #endif
     el_pic18_kept = 0u;
     return true;
@@ -118,12 +134,6 @@ void el_port_irq_restore(el_irq_state_t state)
 /* ---- instants ---- */
 
 #if defined(EL_PIC18_SIM) && EL_PIC18_SIM
-/* The instant being processed (32 bits, EL_TICK_32: the harness extends
- * it), its marks and the harness's busy flag: read and written by the
- * harness, at the addresses the linker gives them. */
-volatile uint32_t el_pic18_sim_tick;
-volatile uint8_t el_pic18_sim_mark;
-volatile uint8_t el_pic18_sim_busy;
 
 /* The tick first, in a function of its own: the mark is written after the
  * call returns (sdcc 4.2 moved a mark passed as a parameter in front of

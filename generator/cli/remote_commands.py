@@ -31,6 +31,8 @@ def add_parsers(sub) -> None:
     add_board_options(p)
     p.add_argument("-o", "--output", metavar="DIR", help="output folder (default: build/<model>/<board>-proxy/)")
     p.add_argument("--sim", action="store_true", help="a simulation build and the board's simulator")
+    p.add_argument("--check", action="store_true", help="the board's further checks of the C, if it has any "
+                                                        "(docs/boards.md)")
     p.add_argument("--baud", type=int, default=DEFAULT_BAUD,
                    help=f"the link's baud rate where it is a serial port (default {DEFAULT_BAUD}; "
                         "`easylab remote --baud` says the same)")
@@ -80,7 +82,7 @@ def cmd_proxy(args) -> int:
     out = Path(args.output) if args.output else default_out_dir(program, f"{args.board}-proxy")
     try:
         built = build_proxy(program, args.board, out, mcu=args.mcu, sim=args.sim, board_path=args.board_path,
-                            baud=args.baud)
+                            baud=args.baud, check=args.check)
     except BuildError as err:
         raise CliError(str(err)) from None
     return report_built(built)

@@ -43,8 +43,8 @@ def link_budget(program: Program, model: DeviceModel, baud: int) -> list[Instant
     for instant in model.instants:
         if not instant.release:
             continue
-        up = wire_bytes(1 + model.frame_bytes(model.up_items(instant.release)))
-        down = wire_bytes(4 + sum(model.frame_bytes(items) for _, items in model.down_items(instant.release)))
+        up = wire_bytes(model.up_payload(instant.release))
+        down = wire_bytes(model.down_payload(instant.release))
         deadline = min(model.tasks[k].deadline for k in instant.release) * model.tick_us
         budgets.append(InstantBudget(instant.tick, [program.tasks[model.tasks[k].task].name for k in instant.release],
                                      up, down, (up + down) * BITS_PER_BYTE * 1e6 / baud, deadline))

@@ -17,7 +17,7 @@ from dataclasses import dataclass, field
 
 from ..core import types as T
 from ..ir.program import Device, Instant, Item, Program, Task, to_json
-from .protocol import K
+from .protocol import K, wire_bytes
 
 
 # The proxy applies the safe values after this many consecutive overruns, and
@@ -52,6 +52,25 @@ def value_size(t: T.ValueType) -> int:
 
 def item_bytes(item: Item) -> int:
     return value_size(item.type) * item.count
+
+
+@dataclass(frozen=True)
+class FrameSizes:
+    """The largest decoded frame (header, payload, CRC) a proxy receives
+    (``rx``) and sends (``tx``): its buffers' sizes, at most MAX_FRAME."""
+
+    rx: int
+    tx: int
+
+    @property
+    def rx_wire(self) -> int:
+        """Bytes of the largest received frame on the wire (COBS, delimiter)."""
+        return wire_bytes(self.rx - K.HEADER - K.TRAILER)
+
+    @property
+    def tx_wire(self) -> int:
+        """Bytes of the largest sent frame on the wire (COBS, delimiter)."""
+        return wire_bytes(self.tx - K.HEADER - K.TRAILER)
 
 
 @dataclass
@@ -99,6 +118,29 @@ class DeviceModel:
         """(proxy task, item ids) of a DOWN frame's payload for the proxy
         tasks ``released``: each one's written device data, task order."""
         return [(k, self.tasks[k].writes) for k in sorted(released) if self.tasks[k].writes]
+
+    def up_payload(self, released: list[int]) -> int:
+        """Bytes of the UP payload when the proxy tasks ``released`` are
+        released: the state byte and the device data read."""
+        return K.UP_STATE + self.frame_bytes(self.up_items(released))
+
+    def down_payload(self, released: list[int]) -> int:
+        """Bytes of the DOWN payload for the proxy tasks ``released``: the
+        task mask and the device data they publish."""
+        return K.DOWN_MASK + sum(self.frame_bytes(items) for _, items in self.down_items(released))
+
+    def frame_sizes(self) -> FrameSizes:
+        """The proxy's buffer sizes: the largest decoded frame each way
+        (docs/remote.md, "Frames"), from the fixed frames of the protocol
+        and the largest UP and DOWN of this device model. A DEVICE answer's
+        path is cut at MAX_PAYLOAD, as the proxy cuts it."""
+        released = [i.release for i in self.instants if i.release]
+        path = max((len(d.path.encode()) for d in self.devices), default=0)
+        down = max((self.down_payload(r) for r in released), default=K.DOWN_MASK)
+        up = max((self.up_payload(r) for r in released), default=K.UP_STATE)
+        received = max(1, down)  # DEVICE and START carry one byte, HELLO, STOP and COUNTERS none
+        sent = max(K.HELLO_ANSWER, min(K.MAX_PAYLOAD, K.DEVICE_ANSWER + path), 1 + 2 * K.COUNTER_COUNT, up)
+        return FrameSizes(K.HEADER + received + K.TRAILER, K.HEADER + sent + K.TRAILER)
 
     def release_ticks(self) -> list[int]:
         """The ticks of the instants at which a proxy task is released (an

@@ -12,6 +12,7 @@ from pathlib import Path
 from easylab.pipeline import lower_file
 from easylab.remote.proxy import build_proxy
 from easylab.remote.stimulus import device_columns as split_devices
+from firmware_builds import end_process
 
 ROOT = Path(__file__).resolve().parents[2]
 EXAMPLES = ROOT / "examples"
@@ -92,6 +93,23 @@ class Proxy:
         if self.proc.poll() is None:
             self.proc.kill()
             self.proc.communicate()
+
+
+class SimulatedProxy:
+    """A proxy in its board's simulation harness (real time unless
+    ``--fast`` is given), its link UART (``--uartN``) on a pty (symlink
+    ``link``)."""
+
+    def __init__(self, simulator: Path, uart: int, link: Path, *args: str):
+        self.link = link
+        self.proc = subprocess.Popen([str(simulator), f"--uart{uart}", f"pty:{link}", *args],
+                                     stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True,
+                                     stdin=subprocess.DEVNULL)
+        wait_for(link)
+
+    def end(self) -> str:
+        """End the simulation (its files are complete then); its stderr."""
+        return end_process(self.proc)[1]
 
 
 def remote(model: Path, target: Path | str, *args: str, timeout: float = 300) -> subprocess.CompletedProcess:

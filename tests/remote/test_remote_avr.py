@@ -17,11 +17,10 @@ import pytest
 from easylab.pipeline import lower_file
 from easylab.remote.device_model import device_model
 from easylab.remote.link import Link
-from easylab.remote.protocol import K
 from easylab.remote.budget import refusal
+from easylab.remote.protocol import K
 from easylab.remote.proxy import build_proxy
-from firmware_builds import end_process
-from remote_testlib import EASYLAB, EXAMPLES, device_columns, native_of, remote, run_native, wait_for
+from remote_testlib import EASYLAB, EXAMPLES, SimulatedProxy, device_columns, native_of, remote, run_native
 
 BLINK = EXAMPLES / "blink.elab"
 PT100 = EXAMPLES / "pt100_sensor.elab"
@@ -42,20 +41,10 @@ def link_uart(built) -> int:
     return int(re.search(r"#define EL_AVR_REMOTE_UART (\d+)u", config).group(1))
 
 
-class AvrProxy:
+def avr_proxy_process(built, link: Path, *args: str) -> SimulatedProxy:
     """The proxy in the simavr harness (real time unless ``--fast`` is
     given), its link UART on a pty (symlink ``link``)."""
-
-    def __init__(self, built, link: Path, *args: str):
-        self.link = link
-        self.proc = subprocess.Popen([str(built.simulator), f"--uart{link_uart(built)}", f"pty:{link}", *args],
-                                     stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True,
-                                     stdin=subprocess.DEVNULL)
-        wait_for(link)
-
-    def end(self) -> str:
-        """End the simulation (its files are complete then); its stderr."""
-        return end_process(self.proc)[1]
+    return SimulatedProxy(built.simulator, link_uart(built), link, *args)
 
 
 def changes(trace: Path, column: str, until_us: int) -> list[tuple[int, str]]:
@@ -110,7 +99,7 @@ def test_the_avr_proxy_in_real_time_gives_the_native_trace(name, mcu, baud, buil
         run_dir = tmp_path / f"run{attempt}"
         run_dir.mkdir()
         inputs = ["--stimulus", str(devices)] if devices is not None else []
-        proxy = AvrProxy(built, run_dir / "link", *inputs, "--trace", str(run_dir / "proxy.csv"))
+        proxy = avr_proxy_process(built, run_dir / "link", *inputs, "--trace", str(run_dir / "proxy.csv"))
         try:
             traced = run_dir / "remote.csv"
             started = time.monotonic()
@@ -148,7 +137,7 @@ def test_lock_step_and_the_budget_at_each_baud_rate(build_cache, tmp_path):
     stimulus = EXAMPLES / "blink.stimulus.csv"
     native = tmp_path / "native.csv"
     run_native(native_of(build_cache, BLINK), native, "1s", stimulus)
-    proxy = AvrProxy(avr_proxy(build_cache, BLINK, "atmega328p", 1_000_000), tmp_path / "link", "--fast")
+    proxy = avr_proxy_process(avr_proxy(build_cache, BLINK, "atmega328p", 1_000_000), tmp_path / "link", "--fast")
     try:
         traced = tmp_path / "remote.csv"
         proc = remote(BLINK, proxy.link, "--baud", "1000000", "--fast", "--duration", "1s", "--trace", str(traced),
@@ -195,7 +184,7 @@ def test_the_actuators_reach_their_safe_values_when_the_host_dies(case, build_ca
         run_dir = tmp_path / f"run{attempt}"
         run_dir.mkdir()
         pins, trace = run_dir / "pins.csv", run_dir / "proxy.csv"
-        proxy = AvrProxy(built, run_dir / "link", "--pins", str(pins), "--trace", str(trace),
+        proxy = avr_proxy_process(built, run_dir / "link", "--pins", str(pins), "--trace", str(trace),
                          *(["--stimulus", str(devices)] if devices else []))
         try:
             link = Link(str(proxy.link), dm)
@@ -250,7 +239,7 @@ def test_easylab_proxy_builds_the_avr_proxy_for_the_atmega328p(tmp_path):
     assert proc.returncode == 0, proc.stderr
     size = re.search(r"atmega328p: flash (\d+) of \d+ bytes .*RAM (\d+) of 2048 bytes", proc.stdout)
     flash, ram = int(size.group(1)), int(size.group(2))
-    assert flash <= 6656 and ram <= 1536, proc.stdout
+    assert flash <= 5632 and ram <= 288, proc.stdout
     assert proc.stdout.splitlines()[-1] == str(tmp_path / "p" / "blink_proxy.elf")
     assert "#define EL_AVR_REMOTE_UART 0u" in (tmp_path / "p" / "el_avr_config.h").read_text()
 

@@ -397,3 +397,26 @@ def test_the_tcp_link_takes_one_host_at_a_time(build_cache, tmp_path):
         for link in links:
             link.close()
         proxy.kill()
+
+
+# The proxy's frame sizes (header 5 and CRC 2 around each payload): the
+# largest DOWN it receives; the largest of UP, the HELLO answer (7),
+# COUNTERS (13) and the DEVICE answer (5 and the longest device path).
+FRAME_SIZES = {
+    "blink": (5 + 4 + 1 + 2, 5 + 13 + 2),  # DOWN: mask, led.level; COUNTERS
+    "pt100_sensor": (5 + 4 + 1 + 2, 5 + 5 + len("sensor.adc") + 2),  # DOWN: mask, alarm_led.level; DEVICE sensor.adc
+    "line_follower": (5 + 4 + 3 * 2 + 2, 5 + 5 + len("robot.drive.m1") + 2),  # three motor speeds; DEVICE
+}
+
+
+@pytest.mark.parametrize("name", FRAME_SIZES)
+def test_the_proxy_buffers_hold_the_device_models_largest_frames(name):
+    from easylab.board.registry import load_board
+    from easylab.remote.proxy import render_proxy
+
+    program, _ = lower_file(EXAMPLES / f"{name}.elab")
+    sizes = device_model(program).frame_sizes()
+    assert (sizes.rx, sizes.tx) == FRAME_SIZES[name]
+    assert (sizes.rx_wire, sizes.tx_wire) == (sizes.rx + 2, sizes.tx + 2)  # COBS' first code byte, the delimiter
+    config = render_proxy(program, load_board("host").configure(None))["el_remote_config.h"]
+    assert f"#define EL_RMT_RX_FRAME {sizes.rx}u" in config and f"#define EL_RMT_TX_FRAME {sizes.tx}u" in config

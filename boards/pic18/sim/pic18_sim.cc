@@ -16,7 +16,7 @@
  * (HookRegister), which passes every access on and tells the harness of
  * writes, in the middle of the instruction, the CPU stopped:
  * - el_pic18_sim_mark (RAM, found in the link map): the firmware's
- *   instants (pic18_port.c). At the inputs mark the stimulus due is applied
+ *   boot (after a RESET too) and instants (pic18_port.c). At the inputs mark the stimulus due is applied
  *   (params and vars into RAM, device data onto the pins and the ADC);
  *   while encoder edges are on their way el_pic18_sim_busy stays nonzero and
  *   the firmware waits. At the instant mark the items are read from RAM and
@@ -30,7 +30,10 @@
  *   traced pins' levels and PWM duties (--pins), stamped with the cycle
  *   (a duty PWM_SETTLE_CYCLES after a CCP write: it spans two registers).
  * Bytes from the link enter the EUSART's receive FIFO one frame time apart
- * (the baud rate the firmware set), when reception is on.
+ * (the baud rate the firmware set), when reception is on, and only into an
+ * empty FIFO: with two bytes queued gpsim 0.31 hands the firmware a wrong
+ * one (seen at 1 Mbaud, 100 cycles a byte); a byte the firmware has not
+ * taken yet waits (no overrun is modelled).
  *
  * Time: gpsim counts instruction cycles exactly (10 MHz at 40 MHz).
  * --fast runs flat out; otherwise the harness keeps the simulated time in
@@ -75,6 +78,7 @@ namespace {
 /* The firmware's marks (boards/pic18/pic18_hw.h). */
 const unsigned MARK_INPUTS = 1u;
 const unsigned MARK_INSTANT = 2u;
+const unsigned MARK_BOOT = 3u;
 const unsigned KEPT_SIM_HALT = 0xA5u;
 
 /* Special function registers (the same on both parts). */
@@ -255,7 +259,7 @@ public:
         if (scheduled || u->in_len == 0u || rc == nullptr || (rcsta & 0x90u) != 0x90u) /* SPEN, CREN */
             return;
         guint64 frame = bit_cycles() * ((rcsta & 0x40u) ? 11u : 10u);
-        if (rc->fifo_sp < 2u) {
+        if (rc->fifo_sp == 0u) { /* not the FIFO's second place: see the top of the file */
             unsigned byte = u->in[0];
             if (rcsta & 0x40u) /* RX9: the 9th bit carries the parity the model's interface uses */
                 byte |= (unsigned)ninth_bit(u->in[0]) << 8;
@@ -327,6 +331,8 @@ void on_write(unsigned address, unsigned value)
                 get_bp().halt();
         } else if (value == MARK_INSTANT) {
             sim_instant_record(read_tick());
+        } else if (value == MARK_BOOT) {
+            stack_guarded = false; /* the start-up cleared RAM, the guard too: set it again */
         }
     } else if (address == TXREG) {
         sim_link_output(&sim_links[0], (uint8_t)value);
