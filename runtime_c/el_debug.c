@@ -17,11 +17,13 @@
  * it ends, so real time resumes without catching up.
  *
  * Small on 8-bit parts (docs/benchmarks.md, "Footprint goals"): values move
- * as bytes (one path for reads, writes and transactions), range checks
- * compare order-preserving 32-bit keys (no float arithmetic), every
- * response is built by one bounded `put8` and checked for size once, and
- * the response is COBS-encoded in place in the buffer that keeps it for a
- * repeated request.
+ * as bytes (one path for reads, writes and transactions; a queued entry
+ * holds its element's address and size, not its ids), range checks compare
+ * order-preserving 32-bit keys (no float arithmetic), every response is
+ * built by one bounded `put8` and checked for size once, a request is
+ * COBS-decoded in place in the buffer that received it and the response
+ * encoded in place in the buffer that keeps it for a repeated request,
+ * and payload lengths and indexes are 8-bit (frames are under 254 bytes).
  */
 #include "el_debug.h"
 
@@ -29,13 +31,14 @@
 
 /* GCC's loop-invariant motion keeps table addresses and sizes in registers
  * that 8-bit parts then save and restore around every call: smaller
- * without it (about 75 bytes on the ATmega328P); the server's loops are
- * short. */
+ * without it (about 90 bytes on the ATmega328P); the server's loops are
+ * short. Value-range propagation and the loops' induction-variable
+ * canonicalisation duplicate paths of the request handlers: 44 bytes more
+ * off without them. */
 #if defined(__GNUC__) && !defined(__clang__)
-#pragma GCC optimize("no-move-loop-invariants")
+#pragma GCC optimize("no-move-loop-invariants", "no-tree-vrp", "no-tree-loop-ivcanon")
 #endif
 
-#include "el_debug_cobs.h"
 #include "el_crc16.h"
 #include "el_dispatch.h"
 #include "el_model.h"
@@ -74,13 +77,16 @@
 
 /* ---- state ----------------------------------------------------------------- */
 
-/* A queued read or write of one element. */
+/* A queued read or write of one element: where it is in memory, its size
+ * (ENTRY_WRITE set for a write; the item was checked when queued) and its
+ * value in the wire's order (to write, or read when applied). */
 typedef struct {
-    uint16_t item;                     /* id, EL_DBG_OP_WRITE in bit 15 for a write */
-    uint16_t elem;
-    uint8_t value[EL_DBG_VALUE_BYTES]; /* to write, or read when applied */
+    uint8_t *addr;
+    uint8_t size;
+    uint8_t value[EL_DBG_VALUE_BYTES];
 } entry_t;
-#define ENTRY_WRITE 0x8000u
+#define ENTRY_WRITE 0x80u
+#define ENTRY_SIZE 0x7Fu
 
 typedef struct {
     uint8_t kind; /* EL_DBG_P_...; EL_DBG_P_NONE: a free slot */
@@ -94,17 +100,21 @@ typedef struct {
 #define TX_COMMITTED 2u
 #define TX_APPLIED 3u
 
-static uint8_t rx_buf[EL_DBG_FRAME];
-static el_cobs_decoder_t rx;
-static bool rx_ready;
+/* The frame being received, as it comes (COBS): decoded in place at its
+ * delimiter. A COBS frame of n < 254 bytes is n + 1 bytes; rx_len counts
+ * one byte beyond rx_buf for a frame that outgrew it. Every variable of
+ * the server starts at zero or its initialiser: the server needs no
+ * start (el_debug_boot only forgets a client). */
+static uint8_t rx_buf[EL_DBG_FRAME + 1u];
+#define rx_frame (rx_buf + 1) /* the decoded frame (cobs_decode) */
+static uint8_t rx_len;
 /* The response: [0] COBS code, then seq, cmd, status, payload, CRC, then
  * the delimiter; encoded in place, kept for a repeated request. */
 static uint8_t out[EL_DBG_FRAME + 2u];
 #define resp (out + 1)
 static uint8_t resp_len;  /* bytes of resp in use (seq, cmd, status, payload) */
 static bool resp_full;    /* a put8 did not fit: the response is EL_DBG_E_TOO_BIG */
-static uint8_t wire_len;  /* the last response as sent (0: none) */
-static bool have_last;
+static uint8_t wire_len;  /* the last response as sent (0: none since the client came) */
 static uint8_t last_seq;
 static uint16_t last_crc;
 static uint16_t counters[EL_DBG_C_COUNT];
@@ -120,11 +130,10 @@ static uint8_t bp_count;
 
 uint8_t el_dbg_armed;
 volatile uint8_t el_debug_abort_halt;
-static bool halted;
 static bool halt_request;
 static uint8_t halt_why; /* EL_DBG_WHY_... of the current or next halt */
 static uint8_t step_unit;
-static uint8_t loc_kind;
+static uint8_t loc_kind; /* EL_DBG_P_NONE: not halted */
 static uint16_t loc_a = EL_DBG_NONE16;
 static uint16_t loc_b = EL_DBG_NONE16;
 static uint8_t loc_bp = EL_DBG_NONE8;
@@ -231,32 +240,23 @@ static bool load_item(uint16_t id, el_dbg_item_t *it)
 
 /* A 32-bit key of a value of `type` (its bits in u, a range bound's or a
  * written value's) that orders as the values do: signed integers
- * sign-extended with the sign bit flipped, floats by their IEEE bits (-0
- * as +0; a NaN orders beyond the infinities, so it is out of any finite
- * range as a float comparison has it). */
+ * sign-extended with the sign bit flipped, floats by their IEEE bits with
+ * the sign bit set, a negative one negated (-0 keys as +0; a NaN orders
+ * beyond the infinities, so it is out of any finite range as a float
+ * comparison has it). */
 static uint32_t order_key(uint8_t type, uint32_t u)
 {
-    switch (type) {
-    case EL_DBG_T_I8:
-        if ((u & 0x80u) != 0u) {
-            u |= 0xFFFFFF00uL;
-        }
-        return u ^ 0x80000000uL;
-    case EL_DBG_T_I16:
-        if ((u & 0x8000u) != 0u) {
-            u |= 0xFFFF0000uL;
-        }
-        return u ^ 0x80000000uL;
-    case EL_DBG_T_I32:
-        return u ^ 0x80000000uL;
-    case EL_DBG_T_F32:
-        if (u == 0x80000000uL) {
-            u = 0u;
-        }
-        return (u & 0x80000000uL) != 0u ? ~u : (u | 0x80000000uL);
-    default: /* unsigned, time, bool */
-        return u;
+    if (type == EL_DBG_T_F32) {
+        return (u & 0x80000000uL) != 0u ? (uint32_t)0u - u : (u | 0x80000000uL); /* -0: 0 - 0x80000000, +0's key */
     }
+    if (type == EL_DBG_T_I8) {
+        u = (uint32_t)(int32_t)(int8_t)(uint8_t)u; /* sign-extended */
+    } else if (type == EL_DBG_T_I16) {
+        u = (uint32_t)(int32_t)(int16_t)(uint16_t)u;
+    } else if (type != EL_DBG_T_I32) {
+        return u; /* unsigned, time, bool */
+    }
+    return u ^ 0x80000000uL;
 }
 
 /* The item's range into *r; false when writes are not checked. */
@@ -284,49 +284,36 @@ static uint8_t check_value(const el_dbg_item_t *it, const uint8_t *in)
     return (key >= order_key(it->type, r.lo.u) && key <= order_key(it->type, r.hi.u)) ? EL_DBG_OK : EL_DBG_E_RANGE;
 }
 
-/* The element's bytes in memory. */
-static uint8_t *elem_addr(const el_dbg_item_t *it, uint16_t elem)
-{
-    return (uint8_t *)it->addr + elem * type_size(it->type);
-}
-
-/* Move one element of item `it` between memory and its entry. */
-static void apply_item(const el_dbg_item_t *it, entry_t *e)
-{
-    uint8_t *mem = elem_addr(it, e->elem);
-    uint8_t size = type_size(it->type);
-    if ((e->item & ENTRY_WRITE) != 0u) {
-        move_value(mem, e->value, size);
-    } else {
-        move_value(e->value, mem, size);
-    }
-}
-
-/* The same for a queued entry. */
+/* Move an entry's element between memory and the entry. */
 static void apply(entry_t *e)
 {
-    el_dbg_item_t it;
-    (void)load_item(e->item & (uint16_t)~ENTRY_WRITE, &it); /* checked when queued */
-    apply_item(&it, e);
+    uint8_t size = e->size & ENTRY_SIZE;
+    if ((e->size & ENTRY_WRITE) != 0u) {
+        move_value(e->addr, e->value, size);
+    } else {
+        move_value(e->value, e->addr, size);
+    }
 }
 
 static bool at_instant(void)
 {
-    return halted && loc_kind == EL_DBG_P_INSTANT;
+    return loc_kind == EL_DBG_P_INSTANT;
 }
 
 /* The queued writes, then a committed transaction: at an instant's inputs. */
+static void apply_all(entry_t *q, uint8_t n)
+{
+    while (n-- != 0u) {
+        apply(q++);
+    }
+}
+
 static void apply_queues(void)
 {
-    uint8_t i;
-    for (i = 0u; i < wq_len; i++) {
-        apply(&wq[i]);
-    }
+    apply_all(wq, wq_len);
     wq_len = 0u;
     if (tx_state == TX_COMMITTED) {
-        for (i = 0u; i < tx_len; i++) {
-            apply(&txq[i]);
-        }
+        apply_all(txq, tx_len);
         tx_state = TX_APPLIED;
     }
 }
@@ -342,31 +329,40 @@ static void clear_bps(void)
     bp_count = 0u;
 }
 
-static void halt_here(uint8_t why, uint8_t kind, uint16_t a, uint16_t b, uint8_t bp)
+/* Cancel a pending break or step, then step to the next probe of `unit`
+ * (0: none). */
+static void set_step(uint8_t unit)
 {
-    halted = true;
-    halt_why = why;
     halt_request = false;
-    step_unit = 0u;
-    loc_kind = kind;
-    loc_a = a;
-    loc_b = b;
-    loc_bp = bp;
+    step_unit = unit;
     update_armed();
-    while (halted && el_debug_abort_halt == 0u) {
-        el_port_idle(EL_DBG_IDLE_MS);
-    }
-    halted = false;
+}
+
+/* The program goes on: no halt location (halt_here returns). */
+static void resume(void)
+{
     halt_why = EL_DBG_WHY_NONE;
     loc_kind = EL_DBG_P_NONE;
     loc_a = loc_b = EL_DBG_NONE16;
     loc_bp = EL_DBG_NONE8;
-    if (el_debug_abort_halt != 0u) {
-        halt_request = false;
-        step_unit = 0u;
-        clear_bps();
+}
+
+static void halt_here(uint8_t why, uint8_t kind, uint16_t a, uint16_t b, uint8_t bp)
+{
+    halt_why = why;
+    loc_kind = kind;
+    loc_a = a;
+    loc_b = b;
+    loc_bp = bp;
+    set_step(0u);
+    while (loc_kind != EL_DBG_P_NONE && el_debug_abort_halt == 0u) {
+        el_port_idle(EL_DBG_IDLE_MS);
     }
-    update_armed();
+    resume();
+    if (el_debug_abort_halt != 0u) {
+        clear_bps();
+        set_step(0u);
+    }
     el_port_resync();
 }
 
@@ -384,8 +380,8 @@ static uint8_t find_bp(uint8_t kind, uint16_t a, uint16_t b)
 
 void el_debug_probe(uint8_t kind, uint16_t a, uint16_t b)
 {
-    uint8_t i;
-    if (el_debug_abort_halt != 0u || halted) {
+    uint8_t i, why = EL_DBG_WHY_NONE;
+    if (el_debug_abort_halt != 0u || loc_kind != EL_DBG_P_NONE) {
         return;
     }
     i = find_bp(kind, a, b);
@@ -393,11 +389,14 @@ void el_debug_probe(uint8_t kind, uint16_t a, uint16_t b)
         if (bps[i].hits != UINT16_MAX) {
             bps[i].hits++;
         }
-        halt_here(EL_DBG_WHY_BREAKPOINT, kind, a, b, i);
+        why = EL_DBG_WHY_BREAKPOINT;
     } else if (step_unit == kind) {
-        halt_here(EL_DBG_WHY_STEP, kind, a, b, EL_DBG_NONE8);
+        why = EL_DBG_WHY_STEP;
     } else if (halt_request && kind == EL_DBG_P_INSTANT) {
-        halt_here(halt_why == EL_DBG_WHY_START ? EL_DBG_WHY_START : EL_DBG_WHY_BREAK, kind, a, b, EL_DBG_NONE8);
+        why = halt_why == EL_DBG_WHY_START ? EL_DBG_WHY_START : EL_DBG_WHY_BREAK;
+    }
+    if (why != EL_DBG_WHY_NONE) {
+        halt_here(why, kind, a, b, i);
     }
 }
 
@@ -477,7 +476,7 @@ static bool valid_point(uint8_t kind, uint16_t a, uint16_t b)
 
 static void put_location(void)
 {
-    put8(halted ? 1u : 0u);
+    put8(loc_kind != EL_DBG_P_NONE ? 1u : 0u);
     put8(halt_why);
     put8(loc_kind);
     put16(loc_a);
@@ -490,10 +489,8 @@ static void put_tx_reads(void)
 {
     uint8_t i;
     for (i = 0u; i < tx_len; i++) {
-        if ((txq[i].item & ENTRY_WRITE) == 0u) {
-            el_dbg_item_t it;
-            (void)load_item(txq[i].item, &it); /* a queued id: checked */
-            put_bytes(txq[i].value, type_size(it.type));
+        if ((txq[i].size & ENTRY_WRITE) == 0u) {
+            put_bytes(txq[i].value, txq[i].size);
         }
     }
 }
@@ -502,29 +499,35 @@ static void put_tx_reads(void)
  * transactions: queued in the open transaction; a write queued for the
  * next instant, or applied at once at a halted instant; a read into the
  * response. */
-static uint8_t submit(const el_dbg_item_t *it, entry_t *e)
+/* Append *e to the queue q of *len entries (max at most): false when it
+ * is full. */
+static bool enqueue(entry_t *q, uint8_t *len, uint8_t max, const entry_t *e)
 {
-    bool write = (e->item & ENTRY_WRITE) != 0u;
-    entry_t *q;
+    if (*len >= max) {
+        return false;
+    }
+    q += (*len)++;
+    *q = *e;
+    return true;
+}
+
+static uint8_t submit(entry_t *e)
+{
+    bool write = (e->size & ENTRY_WRITE) != 0u;
     if (tx_state == TX_OPEN) {
-        if (tx_len >= EL_DBG_TX_ENTRIES) {
+        return enqueue(txq, &tx_len, EL_DBG_TX_ENTRIES, e) ? EL_DBG_OK : EL_DBG_E_QUEUE_FULL;
+    }
+    if (write && !at_instant()) {
+        if (!enqueue(wq, &wq_len, EL_DBG_WRITE_ENTRIES, e)) {
             return EL_DBG_E_QUEUE_FULL;
         }
-        q = &txq[tx_len++];
-        *q = *e;
-    } else if (write && !at_instant()) {
-        if (wq_len >= EL_DBG_WRITE_ENTRIES) {
-            return EL_DBG_E_QUEUE_FULL;
-        }
-        q = &wq[wq_len++];
-        *q = *e;
         put8(EL_DBG_QUEUED);
     } else {
-        apply_item(it, e);
+        apply(e);
         if (write) {
             put8(EL_DBG_APPLIED);
         } else {
-            put_bytes(e->value, type_size(it->type));
+            put_bytes(e->value, e->size);
         }
     }
     return EL_DBG_OK;
@@ -532,59 +535,52 @@ static uint8_t submit(const el_dbg_item_t *it, entry_t *e)
 
 /* READ (p[n]: item ids, every element of each) and WRITE (p[n]: id, element,
  * value). In an open transaction the response is QUEUED and the index of
- * the first entry; a READ queues all of its elements or none. */
-static uint8_t do_access(bool write, const uint8_t *p, uint16_t n)
+ * the first entry; a request queues all of its elements or none (an error
+ * takes back what it queued; a response with an error carries nothing). */
+static uint8_t do_access(bool write, const uint8_t *p, uint8_t n)
 {
-    uint16_t k;
-    uint8_t first = tx_len, size, st = EL_DBG_OK;
+    uint8_t k, first = tx_len, st = EL_DBG_OK;
+    uint16_t elem;
     el_dbg_item_t it;
     entry_t e;
-    if (n < (write ? 5u : 2u) || (!write && (n & 1u) != 0u)) {
+    if (write ? n < 5u : (n == 0u || (n & 1u) != 0u)) {
         return EL_DBG_E_LENGTH;
-    }
-    for (k = 0u; k < n; k += 2u) {
-        if (!load_item(get_u16(p + k), &it)) {
-            return EL_DBG_E_ID;
-        }
-        if (write) {
-            break;
-        }
-    }
-    if (write) {
-        e.elem = get_u16(p + 2);
-        size = type_size(it.type);
-        if (n != 4u + size) {
-            return EL_DBG_E_LENGTH;
-        }
-        if ((it.flags & EL_DBG_F_WRITE) == 0u) {
-            return EL_DBG_E_READ_ONLY;
-        }
-        if (e.elem >= it.count) {
-            return EL_DBG_E_VALUE;
-        }
-        st = check_value(&it, p + 4);
-        if (st != EL_DBG_OK) {
-            return st;
-        }
-        for (k = 0u; k < size; k++) {
-            e.value[k] = p[4u + k]; /* the wire's order: apply moves it to memory */
-        }
-        n = 2u; /* one element of one item */
     }
     if (tx_state == TX_OPEN) {
         put8(EL_DBG_QUEUED);
         put8(first);
     }
     for (k = 0u; k < n && st == EL_DBG_OK; k += 2u) {
-        e.item = get_u16(p + k);
-        (void)load_item(e.item, &it); /* checked above */
+        if (!load_item(get_u16(p + k), &it)) {
+            st = EL_DBG_E_ID;
+            break;
+        }
+        e.size = type_size(it.type);
+        e.addr = (uint8_t *)it.addr;
         if (write) {
-            e.item |= ENTRY_WRITE;
-            st = submit(&it, &e);
-        } else {
-            for (e.elem = 0u; e.elem < it.count && st == EL_DBG_OK && !resp_full; e.elem++) {
-                st = submit(&it, &e);
+            elem = get_u16(p + 2);
+            if (n != 4u + e.size) {
+                st = EL_DBG_E_LENGTH;
+            } else if ((it.flags & EL_DBG_F_WRITE) == 0u) {
+                st = EL_DBG_E_READ_ONLY;
+            } else if (elem >= it.count) {
+                st = EL_DBG_E_VALUE;
+            } else {
+                st = check_value(&it, p + 4);
             }
+            if (st == EL_DBG_OK) {
+                e.addr += elem * e.size;
+                for (k = 0u; k < e.size; k++) {
+                    e.value[k] = p[4u + k]; /* the wire's order: apply moves it to memory */
+                }
+                e.size |= ENTRY_WRITE;
+                st = submit(&e);
+            }
+            break; /* one element of one item */
+        }
+        for (elem = 0u; elem < it.count && st == EL_DBG_OK && !resp_full; elem++) {
+            st = submit(&e);
+            e.addr += e.size;
         }
     }
     if (st != EL_DBG_OK) {
@@ -634,19 +630,17 @@ static uint8_t do_bp_clear(uint8_t slot)
 
 static void put_stack(void)
 {
-    uint8_t c, s;
+    uint8_t c;
     put32((uint32_t)el_now_tick());
     put_location();
     put8(running_task);
-    put16(halted && loc_kind == EL_DBG_P_ACTOR ? loc_a : EL_DBG_NONE16);
+    put16(loc_kind == EL_DBG_P_ACTOR ? loc_a : EL_DBG_NONE16);
     put8(el_dbg_chart_count);
     for (c = 0u; c < el_dbg_chart_count; c++) {
         el_dbg_chart_t chart;
         rom_copy(&chart, &el_dbg_charts[c], (uint8_t)sizeof chart);
         put8(chart.slot_count);
-        for (s = 0u; s < chart.slot_count; s++) {
-            put8(chart.slots[s]);
-        }
+        put_bytes(chart.slots, chart.slot_count);
     }
 }
 
@@ -668,7 +662,7 @@ static void put_hello(void)
 
 static void put_flags(void)
 {
-    uint8_t f = halted ? EL_DBG_S_HALTED : 0u;
+    uint8_t f = loc_kind != EL_DBG_P_NONE ? EL_DBG_S_HALTED : 0u;
     if (tx_state != TX_NONE) {
         f |= (uint8_t)(EL_DBG_S_TX_OPEN << (tx_state - TX_OPEN)); /* OPEN, COMMITTED, APPLIED in a row */
     }
@@ -757,7 +751,7 @@ typedef char requests_match_their_enum[sizeof requests / sizeof requests[0] == R
 
 /* Run one request (cmd, payload p[n]); the response's status byte is at
  * resp[2], its payload follows. Returns the status. */
-static uint8_t dispatch(uint8_t cmd, const uint8_t *p, uint16_t n)
+static uint8_t dispatch(uint8_t cmd, const uint8_t *p, uint8_t n)
 {
     uint8_t i, req, want;
     for (req = 0u; req < REQ_COUNT && EL_ROM_READ_U8(&requests[req][0]) != cmd; req++) {
@@ -826,13 +820,11 @@ static uint8_t dispatch(uint8_t cmd, const uint8_t *p, uint16_t n)
         put_stack();
         break;
     case REQ_RUN:
-        halt_request = false;
-        step_unit = 0u;
-        halted = false;
-        update_armed();
+        set_step(0u);
+        resume();
         break;
     case REQ_BREAK:
-        if (!halted) {
+        if (loc_kind == EL_DBG_P_NONE) {
             halt_request = true;
             halt_why = EL_DBG_WHY_BREAK;
             update_armed();
@@ -843,12 +835,11 @@ static uint8_t dispatch(uint8_t cmd, const uint8_t *p, uint16_t n)
             && p[0] != EL_DBG_STEP_INSTANT) {
             return EL_DBG_E_VALUE;
         }
-        if (!halted) {
+        if (loc_kind == EL_DBG_P_NONE) {
             return EL_DBG_E_NOT_HALTED;
         }
-        step_unit = p[0];
-        halted = false;
-        update_armed();
+        set_step(p[0]);
+        resume();
         break;
     case REQ_RESET:
         if (n > 1u) {
@@ -899,6 +890,14 @@ bool el_debug_put(const uint8_t *data, uint16_t n)
  * fewer than 254 bytes every block is short: each zero byte (and the code
  * byte before the frame) becomes the distance to the next zero or the
  * delimiter. */
+/* Send the last response (out[0 .. wire_len)). */
+static void transmit(void)
+{
+    if (!el_debug_port_write(out, wire_len)) {
+        count(EL_DBG_C_TX_DROPPED);
+    }
+}
+
 static void send_response(void)
 {
     uint16_t crc = el_crc16(resp, resp_len);
@@ -915,13 +914,11 @@ static void send_response(void)
     }
     out[0] = next;
     wire_len = (uint8_t)(resp_len + 2u);
-    if (!el_debug_port_write(out, wire_len)) {
-        count(EL_DBG_C_TX_DROPPED);
-    }
+    transmit();
 }
 
-/* A complete decoded frame is in rx_buf[0 .. len). */
-static void handle_frame(uint16_t len)
+/* A complete decoded frame is in rx_frame[0 .. len). */
+static void handle_frame(uint8_t len)
 {
     uint16_t crc;
     uint8_t seq, cmd, status;
@@ -929,40 +926,38 @@ static void handle_frame(uint16_t len)
         count(EL_DBG_C_TRUNCATED);
         return;
     }
-    crc = get_u16(rx_buf + len - 2u);
-    if (el_crc16(rx_buf, (uint16_t)(len - 2u)) != crc) {
+    len = (uint8_t)(len - EL_DBG_TRAILER);
+    crc = get_u16(rx_frame + len);
+    if (el_crc16(rx_frame, len) != crc) {
         count(EL_DBG_C_BAD_CRC);
         return;
     }
-    seq = rx_buf[0];
-    cmd = rx_buf[1];
+    seq = rx_frame[0];
+    cmd = rx_frame[1];
     if ((cmd & EL_DBG_RESPONSE) != 0u) {
         count(EL_DBG_C_UNKNOWN); /* a response (an echo?) is no request: drop it */
         return;
     }
     count(EL_DBG_C_FRAMES);
-    if (cmd != EL_DBG_CMD_HELLO && have_last) {
-        if (seq == last_seq && crc == last_crc && wire_len != 0u) {
+    if (cmd != EL_DBG_CMD_HELLO && wire_len != 0u) {
+        if (seq == last_seq && crc == last_crc) {
             /* The host repeats a request whose response it lost: resend,
              * do not run it twice. */
             count(EL_DBG_C_DUPLICATES);
-            if (!el_debug_port_write(out, wire_len)) {
-                count(EL_DBG_C_TX_DROPPED);
-            }
+            transmit();
             return;
         }
         if (seq != (uint8_t)(last_seq + 1u)) {
             count(EL_DBG_C_SEQ_GAPS);
         }
     }
-    have_last = true;
     last_seq = seq;
     last_crc = crc;
     resp[0] = seq;
     resp[1] = (uint8_t)(cmd | EL_DBG_RESPONSE);
     resp_len = 3u;
     resp_full = false;
-    status = dispatch(cmd, rx_buf + EL_DBG_HEADER, (uint16_t)(len - EL_DBG_HEADER - EL_DBG_TRAILER));
+    status = dispatch(cmd, rx_frame + EL_DBG_HEADER, (uint8_t)(len - EL_DBG_HEADER));
     if (status == EL_DBG_OK && resp_full) {
         status = EL_DBG_E_TOO_BIG;
     }
@@ -974,48 +969,70 @@ static void handle_frame(uint16_t len)
     send_response();
 }
 
+/* Decode the COBS frame in rx_buf[0 .. rx_len) in place: false when a
+ * block is cut. Each code byte gives the distance to the next one, and
+ * each one after the first stands for a zero: the decoded frame is
+ * rx_buf[1 .. rx_len) (rx_frame) once they are zeroed. A frame that fits
+ * rx_buf has no full 254-byte block (code 0xFF): such a block is cut. */
+static bool cobs_decode(void)
+{
+    uint8_t at = 0u, code;
+    while (at < rx_len) {
+        code = rx_buf[at];
+        if (code > (uint8_t)(rx_len - at)) {
+            return false;
+        }
+        rx_buf[at] = 0u;
+        at = (uint8_t)(at + code);
+    }
+    return true;
+}
+
 void el_debug_rx(const uint8_t *data, uint16_t len)
 {
     uint16_t i;
-    uint8_t r;
-    if (!rx_ready) {
-        el_debug_boot();
-    }
+    uint8_t b;
     for (i = 0u; i < len; i++) {
-        r = el_cobs_decode_byte(&rx, data[i]);
-        if (r == EL_COBS_FRAME) {
-            handle_frame(rx.len);
-        } else if (r == EL_COBS_OVERSIZE) {
-            count(EL_DBG_C_OVERSIZE);
-        } else if (r == EL_COBS_BAD) {
-            count(EL_DBG_C_TRUNCATED);
+        b = data[i];
+        if (b != EL_DBG_DELIMITER) {
+            if (rx_len < sizeof rx_buf) {
+                rx_buf[rx_len] = b;
+            }
+            if (rx_len <= sizeof rx_buf) {
+                rx_len++;
+            }
+        } else {
+            if (rx_len > sizeof rx_buf) {
+                count(EL_DBG_C_OVERSIZE);
+            } else if (rx_len != 0u) { /* a delimiter alone ends no frame */
+                if (cobs_decode()) {
+                    handle_frame((uint8_t)(rx_len - 1u));
+                } else {
+                    count(EL_DBG_C_TRUNCATED);
+                }
+            }
+            rx_len = 0u;
         }
     }
 }
 
 void el_debug_boot(void)
 {
-    el_cobs_decoder_init(&rx, rx_buf, (uint16_t)sizeof rx_buf);
-    rx_ready = true;
-    have_last = false; /* a new client: no repeated request to recognise */
-    wire_len = 0u;
+    rx_len = 0u;
+    wire_len = 0u; /* a new client: no repeated request to recognise */
     update_armed();
 }
 
 void el_debug_poll(void)
 {
-    uint8_t chunk[16];
-    uint16_t total = 0u, n;
-    if (!rx_ready) {
-        el_debug_boot();
-    }
-    while (total < EL_DBG_POLL_BYTES) {
+    uint8_t chunk[16], k;
+    uint16_t n;
+    for (k = 0u; k < (EL_DBG_POLL_BYTES + sizeof chunk - 1u) / sizeof chunk; k++) {
         n = el_debug_port_read(chunk, (uint16_t)sizeof chunk);
         if (n == 0u) {
             break;
         }
         el_debug_rx(chunk, n > sizeof chunk ? (uint16_t)sizeof chunk : n);
-        total = (uint16_t)(total + n);
     }
     if (reset_pending) {
         reset_pending = false;

@@ -1,5 +1,7 @@
-/* EasyLab runtime: COBS framing (see el_debug_cobs.h). Only the debug server
- * uses it, so a release build leaves it out with the rest of el_debug*.c. */
+/* EasyLab runtime: COBS framing (see el_debug_cobs.h) of the remote link
+ * (el_remote.c) and the fuzz harnesses. The debug server codes its frames
+ * in place instead (el_debug.c: frames under 254 bytes). A release build
+ * leaves it out with the rest of el_debug*.c. */
 #include "el_debug_cobs.h"
 
 void el_cobs_decoder_init(el_cobs_decoder_t *dec, uint8_t *buf, uint16_t cap)
