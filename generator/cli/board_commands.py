@@ -61,13 +61,18 @@ def _run(command: list[str], dry: bool) -> int:
 
 def cmd_flash(args) -> int:
     board, program, out = _board_and_program(args)
+    if args.proxy:  # the remote-execution proxy `easylab proxy` built (docs/remote.md)
+        from ..remote.device_model import proxy_program
+        out = Path(args.output) if args.output else default_out_dir(program, f"{args.board}-proxy")
+        program = proxy_program(program)
     try:
         command = board.flash_command(out, program, args.port, args.programmer, args.baud)
     except BuildError as err:
         raise CliError(str(err)) from None
     if not args.print and not any(Path(a).is_file() for a in command if str(out) in a):
+        build = "proxy" if args.proxy else "build"
         raise CliError(f"nothing built in {out} to flash: build it first "
-                       f"(easylab build {args.file} --board {args.board} -o {out})")
+                       f"(easylab {build} {args.file} --board {args.board} -o {out})")
     return _run(command, args.print)
 
 
@@ -104,6 +109,8 @@ def add_parsers(sub) -> None:
     p.add_argument("--baud", type=int, metavar="N", help="the upload baud rate (default: the board's)")
     p.add_argument("-o", "--output", metavar="DIR", help="the build's folder")
     p.add_argument("--print", action="store_true", help="print the command, do not run it")
+    p.add_argument("--proxy", action="store_true", help="flash the model's remote-execution proxy (easylab proxy; "
+                                                       "default folder build/<model>/<board>-proxy/)")
     p.set_defaults(func=cmd_flash)
 
     p = sub.add_parser("sim", help="run a simulation build",

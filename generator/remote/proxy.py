@@ -192,4 +192,9 @@ def build_proxy(program: Program, board_name: str, out_dir: Path, mcu: str | Non
         # Its serial links on ptys in out_dir: `easylab remote --target` opens the link's.
         run_it = shlex.join(board.simulator_command(out_dir, proxy))
         result.notes += simulator.notes + [f"simulator: {simulator.program}", f"run: {run_it}"]
+    else:
+        try:  # what `easylab flash --proxy` runs
+            result.notes.append("flash: " + shlex.join(board.flash_command(out_dir, proxy, "PORT")))
+        except BuildError:
+            pass  # a process (the host board's proxy) runs where it is built
     return result

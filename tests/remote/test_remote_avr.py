@@ -242,6 +242,19 @@ def test_easylab_proxy_builds_the_avr_proxy_for_the_atmega328p(tmp_path):
     assert flash <= 5632 and ram <= 288, proc.stdout
     assert proc.stdout.splitlines()[-1] == str(tmp_path / "p" / "blink_proxy.elf")
     assert "#define EL_AVR_REMOTE_UART 0u" in (tmp_path / "p" / "el_avr_config.h").read_text()
+    # flashed as firmware is: through the bootloader, the proxy's image
+    hex_file = tmp_path / "p" / "blink_proxy.hex"
+    assert f"flash: avrdude -p m328p -c arduino -P PORT -b 115200 -D -U flash:w:{hex_file}:i" in proc.stdout
+    flash = subprocess.run([*EASYLAB, "flash", str(BLINK), "--board", "avr", "--mcu", "atmega328p", "--proxy", "-o",
+                            str(tmp_path / "p"), "--port", "/dev/ttyACM0", "--print"], capture_output=True, text=True,
+                           timeout=300, stdin=subprocess.DEVNULL)
+    assert flash.returncode == 0, flash.stderr
+    assert flash.stdout.strip() == f"avrdude -p m328p -c arduino -P /dev/ttyACM0 -b 115200 -D -U flash:w:{hex_file}:i"
+    missing = subprocess.run([*EASYLAB, "flash", str(BLINK), "--board", "avr", "--proxy", "-o", str(tmp_path / "q"),
+                              "--port", "/dev/ttyACM0"], capture_output=True, text=True, timeout=300,
+                             stdin=subprocess.DEVNULL)
+    assert missing.returncode != 0 and f"nothing built in {tmp_path / 'q'} to flash: build it first (easylab proxy" \
+        in missing.stderr
 
 
 def test_a_part_whose_every_uart_a_device_claims_has_no_link(tmp_path):
