@@ -200,14 +200,18 @@ static void on_frame(uint16_t n)
         send((uint8_t)(cmd | EL_RMT_RESPONSE), instant, 0u);
         el_remote_port_end();
         break;
-    case EL_RMT_CMD_COUNTERS:
+    case EL_RMT_CMD_COUNTERS: {
+        /* the link's counters, then each proxy task's overruns (at most MAX_TASKS: 77 bytes) */
+        uint8_t tasks = el_task_count < MAX_TASKS ? el_task_count : (uint8_t)MAX_TASKS;
         frame[EL_RMT_HEADER] = state;
-        for (i = 0u; i < EL_RMT_COUNTER_COUNT; i++) {
-            frame[EL_RMT_HEADER + 1u + 2u * i] = (uint8_t)counters[i];
-            frame[EL_RMT_HEADER + 2u + 2u * i] = (uint8_t)(counters[i] >> 8);
+        for (i = 0u; i < EL_RMT_COUNTER_COUNT + tasks; i++) {
+            uint16_t v = i < EL_RMT_COUNTER_COUNT ? counters[i] : el_overruns[i - EL_RMT_COUNTER_COUNT];
+            frame[EL_RMT_HEADER + 1u + 2u * i] = (uint8_t)v;
+            frame[EL_RMT_HEADER + 2u + 2u * i] = (uint8_t)(v >> 8);
         }
-        send((uint8_t)(cmd | EL_RMT_RESPONSE), instant, (uint16_t)(1u + 2u * EL_RMT_COUNTER_COUNT));
+        send((uint8_t)(cmd | EL_RMT_RESPONSE), instant, (uint16_t)(1u + 2u * (EL_RMT_COUNTER_COUNT + tasks)));
         break;
+    }
     case EL_RMT_CMD_DOWN:
         if (state == EL_RMT_STATE_RUNNING) {
             on_down(instant, p, payload);

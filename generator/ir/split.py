@@ -20,6 +20,7 @@ from math import gcd
 from ..core import expr as I
 from .deployment import Crossing, NodeSpec
 from .program import Chart, Dataflow, Instant, Interface, Program, Task, program_id
+from .status import node_status
 
 
 @dataclass
@@ -114,7 +115,6 @@ def _node_program(program: Program, node: NodeSpec) -> NodeProgram:
     node_program = Program(f"{program.name}.{node.name}", program.title, program.source, 0, tick, hyper, new_items,
                            new_devices, new_specs, new_instances, new_dataflows, new_charts, new_channels,
                            new_tasks, instants, _link_interfaces(program, node.name))
-    node_program.program_id = program_id(node_program)
     inputs, outputs = [], []
     for crossing in dep.crossings:
         end = _end(crossing, node.name, channels, program)
@@ -122,6 +122,10 @@ def _node_program(program: Program, node: NodeSpec) -> NodeProgram:
             (outputs if crossing.producer_node == node.name else inputs).append(end)
     rounds = [table for name, table in dep.rounds.items()
               if any(m.node == node.name for lk in dep.links if lk.name == name for m in lk.members)]
+    mastered = [table for table in rounds if table.master == node.name]
+    node_program.status = node_status(node_program, [(end.channel, end.name) for end in inputs],
+                                      [slot.node for table in mastered for slot in table.slots], program.source)
+    node_program.program_id = program_id(node_program)
     return NodeProgram(node, node_program, inputs, outputs, rounds)
 
 
