@@ -135,9 +135,12 @@ def debug_items(program: Program, view) -> list[DebugItem]:
             items.append(DebugItem(next_id, f"{df.name}.{inst.name}.{name}", "state", t, size or 1, addr, None,
                                    None, None, inst.location, actor=inst.id))
             next_id += 1
+    declared = set()
     for sv in view.status:  # the links' fault counters (docs/ir.md, "Status items")
         st = sv.item
-        items.append(DebugItem(next_id, st.name, "status", st.type, 1, f"(void *){sv.addr}", sv.c_extern,
+        decl = None if sv.c_extern in declared else sv.c_extern  # one declaration of an array of counters
+        declared.add(sv.c_extern)
+        items.append(DebugItem(next_id, st.name, "status", st.type, 1, f"(void *){sv.addr}", decl,
                                None, None, st.location))
         next_id += 1
     ranged = 0

@@ -89,3 +89,27 @@ def test_the_sync_the_slot_a_wrong_slot_and_the_service_map(joint):
     sim.wait(timeout=30)
     assert (out / "joint1.csv").read_text().splitlines() == [
         "time_us,kp,motor1.speed,encoder1.count", "0,2000,0,0", "60000,2000,14,0"]
+
+
+def test_a_slave_serves_its_tardy_count_on_its_service_map(joint):
+    """Rounds whose slot never comes (the master's frames lost on the bus):
+    the joint's releases find no new target1 beyond its two initial tokens,
+    keep the last ones and count them; the count is the input register of
+    `link.target1.tardy` in the joint's service map, read with function 4
+    at its unit id on the link, and the joint keeps answering."""
+    import json
+
+    fd, out, sim = joint
+    entry = next(i for i in json.loads((out / "joint1" / "service_map.json").read_text())["items"]
+                 if i["name"] == "link.target1.tardy")
+    assert (entry["table"], entry["access"], entry["type"], entry["kind"]) == ("input", "ro", "uint16", "status")
+    read = frame(2, 0x04, entry["address"] >> 8, entry["address"] & 0xFF, 0x00, 0x01)
+    assert ask(fd, read, 7) == frame(2, 0x04, 0x02, 0x00, 0x00)  # nothing late before the rounds
+    for number in range(6):  # syncs of rounds 0..5, no slot: releases at 0 .. 100 ms
+        sync = frame(2, 0x06, 0xE0, 0x00, 0x00, number)
+        assert ask(fd, sync, 8) == sync
+    # releases at 0 and 20 ms take the initial tokens; those at 40, 60, 80 and 100 ms find none
+    assert ask(fd, read, 7) == frame(2, 0x04, 0x02, 0x00, 0x04)
+    # the counter is read-only: a write to the input table is no function of Modbus (06 writes holding registers)
+    assert ask(fd, frame(2, 0x06, entry["address"] >> 8, entry["address"] & 0xFF, 0x00, 0x00), 5) == \
+        frame(2, 0x86, 0x02)
