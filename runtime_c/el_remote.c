@@ -205,7 +205,7 @@ static void on_frame(uint16_t n)
         uint8_t tasks = el_task_count < MAX_TASKS ? el_task_count : (uint8_t)MAX_TASKS;
         frame[EL_RMT_HEADER] = state;
         for (i = 0u; i < EL_RMT_COUNTER_COUNT + tasks; i++) {
-            uint16_t v = i < EL_RMT_COUNTER_COUNT ? counters[i] : el_overruns[i - EL_RMT_COUNTER_COUNT];
+            uint16_t v = i < EL_RMT_COUNTER_COUNT ? counters[i] : el_rmt_task_overruns[i - EL_RMT_COUNTER_COUNT];
             frame[EL_RMT_HEADER + 1u + 2u * i] = (uint8_t)v;
             frame[EL_RMT_HEADER + 2u + 2u * i] = (uint8_t)(v >> 8);
         }
@@ -249,6 +249,9 @@ void el_remote_boot(void)
     mode = EL_RMT_MODE_REAL_TIME;
     for (t = 0u; t < EL_RMT_COUNTER_COUNT; t++) {
         counters[t] = 0u;
+    }
+    for (t = 0u; t < el_task_count && t < MAX_TASKS; t++) {
+        el_rmt_task_overruns[t] = 0u;
     }
     for (t = 0u; t < MAX_TASKS; t++) {
         pending[t] = false;
@@ -319,6 +322,19 @@ void el_remote_body(uint8_t task)
     }
 }
 
+/* Whether a proxy task drives device `in` data: a task that only reads
+ * devices has no values coming, so it is never late. */
+static bool drives_devices(uint8_t task)
+{
+    uint16_t i;
+    for (i = 0u; i < el_rmt_in_count; i++) {
+        if (el_rmt_in_fields[i].owner == task) {
+            return true;
+        }
+    }
+    return false;
+}
+
 void el_remote_publish(uint8_t task)
 {
     uint16_t i, at = 0u;
@@ -329,10 +345,16 @@ void el_remote_publish(uint8_t task)
     if (state != EL_RMT_STATE_RUNNING) {
         return; /* the safe values stay */
     }
+    if (!drives_devices(task)) {
+        return; /* no values come for it: never late, and no break in a row of overruns */
+    }
     if (!got) { /* an overrun: the previous values stay */
         count(EL_RMT_COUNTER_OVERRUNS);
         if (el_overruns[task] < UINT16_MAX) {
             el_overruns[task]++;
+        }
+        if (el_rmt_task_overruns[task] < UINT16_MAX) { /* late values only, not the dispatcher's lateness */
+            el_rmt_task_overruns[task]++;
         }
         if (++overruns_in_a_row >= el_rmt_overrun_limit) {
             enter_safe_state();

@@ -99,3 +99,33 @@ def test_injected_latency_gives_overruns_on_the_debug_and_modbus_interfaces(tmp_
     assert [int(e[1]) for e in events] == sorted(int(e[1]) for e in events)
     rows = [line.split(",") for line in lines[1:] if not line.startswith("#")]
     assert all(len(r) == len(lines[0].split(",")) for r in rows)  # events are lines of their own, never columns
+
+
+def test_status_events_are_lines_of_their_own_in_both_trace_formats(tmp_path):
+    """A status event never adds a column: in CSV a `#status` line after the
+    instant's row, in VCD a `$comment` under its time (one `#time` line
+    per time, whether values changed then or not)."""
+    from easylab.interp.trace import TraceWriter, columns_of
+
+    program, _ = lower_file(EXAMPLES / "blink.elab")
+    columns = columns_of(program)
+    base = tuple(0 for _ in columns)
+    changed = (1,) + base[1:]
+    for name in ("t.csv", "t.vcd"):
+        writer = TraceWriter(str(tmp_path / name), program, columns)
+        writer.record(0, base)
+        writer.event(0, "remote.blink.overruns", 1)
+        writer.record(1000, changed)
+        writer.record(2000, changed)
+        writer.event(2000, "remote.blink.overruns", 2)
+        writer.close(3000)
+    csv_lines = (tmp_path / "t.csv").read_text().splitlines()
+    assert [line for line in csv_lines if line.startswith("#")] == [
+        "#status,0,remote.blink.overruns,1", "#status,2000,remote.blink.overruns,2"]
+    assert csv_lines.index("#status,0,remote.blink.overruns,1") == 2  # after the header and instant 0's row
+    assert all(len(line.split(",")) == len(columns) + 1 for line in csv_lines if not line.startswith("#"))
+    vcd = (tmp_path / "t.vcd").read_text().split("$enddefinitions $end\n")[1].splitlines()
+    times = [line for line in vcd if line.startswith("#")]
+    assert times == ["#0", "#1000", "#2000", "#3000"]
+    assert vcd[vcd.index("#2000") + 1] == "$comment status remote.blink.overruns 2 $end"
+    assert "$comment status remote.blink.overruns 1 $end" in vcd[:vcd.index("#1000")]
