@@ -10,6 +10,7 @@ from __future__ import annotations
 import signal
 import socket
 import subprocess
+import sys
 import time
 
 from easylab.host_tools.debug_map import DebugMap
@@ -80,6 +81,13 @@ def test_injected_latency_gives_overruns_on_the_debug_and_modbus_interfaces(tmp_
             assert refused.isError()
         finally:
             modbus.close()
+        # easylab-service reads it by name, as any item of the map
+        tool = subprocess.run([sys.executable, "-m", "easylab.host_tools.service_cli", "--map",
+                               str(maps / "service_map.json"), "--tcp", f"127.0.0.1:{mb}", "read",
+                               "remote.acquire.overruns"], capture_output=True, text=True, timeout=60)
+        assert tool.returncode == 0, tool.stderr
+        name, value = tool.stdout.split(" = ")
+        assert name == "remote.acquire.overruns" and int(value.split()[0]) >= debug_count
         client.close()
         host.send_signal(signal.SIGTERM)
         _, err = host.communicate(timeout=120)
