@@ -114,6 +114,7 @@ class RemoteEngine(Engine):
         self.frames = 0
         self.proxy_overruns = [0] * len(self.program.status)  # per proxy task, as the proxy last counted them
         self._asked_us: int | None = None  # logical time of the last COUNTERS request
+        self._status_io = None  # the interfaces library that holds the counts
 
     def _prepare(self, program: Program):
         return super()._prepare(remote_program(program))
@@ -155,6 +156,10 @@ class RemoteEngine(Engine):
             if not self.link.lock_step and (self._asked_us is None or t - self._asked_us >= COUNTERS_EVERY_US):
                 self.link.ask_counters()  # in real time: the overrun counts (lock-step has none)
                 self._asked_us = t
+        if self.io is not None and self.io is not self._status_io:  # a program swapped in: its library starts at 0
+            self._status_io = self.io
+            for status, count in zip(self.program.status, self.proxy_overruns):
+                self.io.set_status(status.id, count)
         if self.link.latest_counters is not None:
             self.take_counters(self.link.latest_counters, t)
             self.link.latest_counters = None
