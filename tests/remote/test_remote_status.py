@@ -30,13 +30,16 @@ def free_port() -> int:
 
 
 def until(condition, what: str, proc: subprocess.Popen, timeout: float = 120.0):
+    """The first true value of ``condition()`` (which may fail while the
+    host starts: its first run compiles the interfaces library), while
+    ``proc`` runs."""
     deadline = time.monotonic() + timeout
     while True:
         try:
             value = condition()
             if value:
                 return value
-        except (OSError, ConnectionError, Exception) as err:  # not listening yet
+        except Exception as err:  # not listening yet
             value = err
         assert proc.poll() is None, proc.communicate()
         assert time.monotonic() < deadline, f"{what}: {value!r}"
