@@ -200,6 +200,7 @@ def test_overruns_in_a_row_apply_the_safe_values(declared, build_cache, tmp_path
         until(lambda: link._request(K.CMD_COUNTERS)[0] == K.STATE_SAFE)
         counters = link.counters()
         assert counters["overruns"] >= model.overrun_limit
+        assert counters["tasks"] == [counters["overruns"]]  # per proxy task: acquire, the one driving a device
         assert counters["watchdog"] == 0  # K overruns come first (10 ms deadlines, watchdog 100 ms)
         link.stop()
         status, err = proxy.finish()
