@@ -213,14 +213,18 @@ static void on_frame(uint16_t n)
         send((uint8_t)(cmd | EL_RMT_RESPONSE), instant, 0u);
         el_remote_port_end();
         break;
-    case EL_RMT_CMD_COUNTERS:
+    case EL_RMT_CMD_COUNTERS: {
+        /* the link's counters, then each proxy task's overruns (EL_RMT_TX_FRAME holds them) */
+        uint8_t tasks = el_task_count < EL_RMT_TASKS ? el_task_count : (uint8_t)EL_RMT_TASKS;
         frame[EL_RMT_HEADER] = state;
-        for (i = 0u; i < EL_RMT_COUNTER_COUNT; i++) {
-            frame[EL_RMT_HEADER + 1u + 2u * i] = (uint8_t)counters[i];
-            frame[EL_RMT_HEADER + 2u + 2u * i] = (uint8_t)(counters[i] >> 8);
+        for (i = 0u; i < EL_RMT_COUNTER_COUNT + tasks; i++) {
+            uint16_t v = i < EL_RMT_COUNTER_COUNT ? counters[i] : el_rmt_task_overruns[i - EL_RMT_COUNTER_COUNT];
+            frame[EL_RMT_HEADER + 1u + 2u * i] = (uint8_t)v;
+            frame[EL_RMT_HEADER + 2u + 2u * i] = (uint8_t)(v >> 8);
         }
-        send((uint8_t)(cmd | EL_RMT_RESPONSE), instant, (uint16_t)(1u + 2u * EL_RMT_COUNTER_COUNT));
+        send((uint8_t)(cmd | EL_RMT_RESPONSE), instant, (uint16_t)(1u + 2u * (EL_RMT_COUNTER_COUNT + tasks)));
         break;
+    }
     case EL_RMT_CMD_DOWN:
         if (state == EL_RMT_STATE_RUNNING) {
             on_down(instant, p, payload);
@@ -260,6 +264,7 @@ void el_remote_boot(void)
         counters[t] = 0u;
     }
     for (t = 0u; t < EL_RMT_TASKS; t++) {
+        el_rmt_task_overruns[t] = 0u;
         pending[t] = false;
         arrived[t] = false;
     }
@@ -331,6 +336,19 @@ void el_remote_body(uint8_t task)
     }
 }
 
+/* Whether a proxy task drives device `in` data: a task that only reads
+ * devices has no values coming, so it is never late. */
+static bool drives_devices(uint8_t task)
+{
+    uint16_t i;
+    for (i = 0u; i < el_rmt_in_count; i++) {
+        if (el_rmt_in_fields[i].owner == task) {
+            return true;
+        }
+    }
+    return false;
+}
+
 void el_remote_publish(uint8_t task)
 {
     uint16_t i, at = 0u;
@@ -345,10 +363,16 @@ void el_remote_publish(uint8_t task)
     if (state != EL_RMT_STATE_RUNNING) {
         return; /* the safe values stay */
     }
+    if (!drives_devices(task)) {
+        return; /* no values come for it: never late, and no break in a row of overruns */
+    }
     if (!got) { /* an overrun: the previous values stay */
         count(EL_RMT_COUNTER_OVERRUNS);
         if (el_overruns[task] < UINT16_MAX) {
             el_overruns[task]++;
+        }
+        if (el_rmt_task_overruns[task] < UINT16_MAX) { /* late values only, not the dispatcher's lateness */
+            el_rmt_task_overruns[task]++;
         }
         if (++overruns_in_a_row >= el_rmt_overrun_limit) {
             enter_safe_state();

@@ -45,6 +45,9 @@ def add_parser(sub) -> None:
                                                           "own columns")
     p.add_argument("--trace-dir", metavar="DIR", help="the nodes' traces (default: launch/<model>/)")
     p.add_argument("--build-dir", metavar="DIR", help="the nodes' builds (default: build/<model>/)")
+    p.add_argument("--debug", metavar="pty:LINK|tcp:PORT[,halt]",
+                   help="serve the Modbus master's debug interface (its status items: the channels' tardy "
+                        "counts, each slave's unanswered frames), as its host program does")
     p.set_defaults(func=cmd_launch)
 
 
@@ -88,6 +91,9 @@ def cmd_launch(args) -> int:
         raise CliError(str(err)) from None
     nodes = split(program)
     slaves = {s.node: s.uart for table in program.deployment.rounds.values() for s in table.slots}
+    masters = {table.master for table in program.deployment.rounds.values()}
+    if args.debug and len(masters) != 1:
+        raise CliError(f"model '{program.name}' has {len(masters)} Modbus masters: --debug serves one")
     common = (["--fast"] if args.fast else []) + (["--duration", args.duration] if args.duration else [])
     procs: dict[str, subprocess.Popen] = {}
     env = dict(os.environ)
@@ -113,6 +119,7 @@ def cmd_launch(args) -> int:
             if name in slaves:
                 continue
             cmd = [str(built[name].executable), *common, "--trace", str(trace_dir / f"{name}.csv")]
+            cmd += ["--debug", args.debug] if args.debug and name in masters else []
             cmd += _stimulus_args(args, node, trace_dir, name)
             procs[name] = subprocess.Popen(cmd, stdin=subprocess.DEVNULL, env=env)
         for name, proc in procs.items():

@@ -150,6 +150,7 @@ def cmd_remote(args) -> int:
         link.start(lock_step=args.fast)
         engine.run(duration, clock)
         counters = link.counters()
+        engine.take_counters(counters, engine.last_time_us or 0)  # the last counts: status items and trace
         if counters["overruns"] or counters["watchdog"]:
             _say(f"easylab remote: the proxy counted {counters['overruns']} overruns (values held) and "
                  f"{counters['watchdog']} watchdog expiries")

@@ -52,6 +52,41 @@ class ItemView:
 
 
 @dataclass
+class StatusView:
+    """A status item (docs/ir.md, "Status items") as C: the uint16 counter
+    that holds it and its declaration."""
+
+    item: Item
+    c_name: str  # an lvalue of type uint16_t
+    c_extern: str
+
+    @property
+    def addr(self) -> str:
+        return f"&{self.c_name}"
+
+
+# The counter a firmware keeps for each fault (model.c.j2, link.c.j2).
+_FIRMWARE_COUNTERS = {"tardy": ("el_ch{subject}_tardy", "extern uint16_t el_ch{subject}_tardy;"),
+                      "unanswered": ("el_round_silent[{subject}]", "extern uint16_t el_round_silent[];")}
+
+
+def status_views(program: Program, library: bool) -> list[StatusView]:
+    """The status items' counters: in local execution's interfaces library
+    ``el_interp_status[id]`` (the interpreter keeps them), in a firmware
+    the counter its link code keeps."""
+    views = []
+    for st in program.status:
+        if library:
+            views.append(StatusView(st, f"el_interp_status[{st.id}]", "extern uint16_t el_interp_status[];"))
+        elif st.fault in _FIRMWARE_COUNTERS:
+            name, decl = _FIRMWARE_COUNTERS[st.fault]
+            views.append(StatusView(st, name.format(subject=st.subject), decl.format(subject=st.subject)))
+        else:
+            raise ValueError(f"status item {st.name}: counted by the host of remote execution, not by a firmware")
+    return views
+
+
+@dataclass
 class SpecView:
     spec: ActorSpec
     state_type: str
@@ -97,6 +132,7 @@ class CModel:
     deadlines: list[int]
     interface_boot: list[str] = field(default_factory=list)  # C statements: start the interfaces
     interface_poll: list[str] = field(default_factory=list)  # C statements: serve them when idle
+    status: list[StatusView] = field(default_factory=list)  # the links' fault counters
 
 
 class _Builder:
@@ -515,8 +551,9 @@ class _Builder:
         return TaskView(task, fields, release, body, publish)
 
 
-def build_view(program: Program, board) -> CModel:
-    """The view of a program that the C templates print."""
+def build_view(program: Program, board, library: bool = False) -> CModel:
+    """The view of a program that the C templates print (``library``: for
+    local execution's interfaces library rather than a firmware)."""
     b = _Builder(program, board)
     specs = [b.spec_view(s) for s in program.specs]
     states = [(specs[i.spec].state_type, f"el_a{i.id}_{ident(i.name)}",
@@ -549,7 +586,7 @@ def build_view(program: Program, board) -> CModel:
     instants = [(i.tick, sum(1 << t for t in i.publish), sum(1 << t for t in i.release)) for i in program.instants]
     deadlines = [t.deadline for t in program.tasks]
     return CModel(program, __version__, board.name, b.items, specs, states, b.buffers, dataflows, charts, tasks,
-                  channels, boot, shutdown, reads, instants, deadlines)
+                  channels, boot, shutdown, reads, instants, deadlines, status=status_views(program, library))
 
 
 def spec_view(spec: ActorSpec) -> SpecView:

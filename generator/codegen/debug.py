@@ -16,7 +16,8 @@ never has one. For a debug build this writes:
   charts, steps, transitions, actors and tasks with their ids).
 
 Debug item ids: the IR's items keep their ids (params, vars, device data);
-the state variables of actor instances follow, instance by instance.
+the state variables of actor instances follow, instance by instance, then
+the program's status items (the links' fault counters, read-only).
 """
 
 from __future__ import annotations
@@ -41,10 +42,11 @@ _TYPE_ENUM = {"bool": "EL_DBG_T_BOOL", "int8": "EL_DBG_T_I8", "uint8": "EL_DBG_T
               "uint16": "EL_DBG_T_U16", "int32": "EL_DBG_T_I32", "uint32": "EL_DBG_T_U32",
               "float32": "EL_DBG_T_F32", "time": "EL_DBG_T_TIME"}
 _KIND_ENUM = {"param": "EL_DBG_K_PARAM", "var": "EL_DBG_K_VAR", "dev_out": "EL_DBG_K_DEV_OUT",
-              "dev_in": "EL_DBG_K_DEV_IN", "state": "EL_DBG_K_STATE"}
+              "dev_in": "EL_DBG_K_DEV_IN", "state": "EL_DBG_K_STATE", "status": "EL_DBG_K_STATUS"}
 # What the debugger may write (docs/protocol.md "What is writable"): the
 # application's inputs and state. A device `in` datum is the application's
-# output to an actuator, rewritten at every publication: read-only.
+# output to an actuator, rewritten at every publication: read-only; so is
+# a status item, a fault counter of the links.
 WRITABLE_KINDS = ("param", "var", "dev_out", "state")
 
 
@@ -110,7 +112,8 @@ def _int32(v: int) -> str:
 
 
 def debug_items(program: Program, view) -> list[DebugItem]:
-    """Every debug item with its debug id (model items, then actor states)."""
+    """Every debug item with its debug id (model items, actor states, then
+    status items)."""
 
     items: list[DebugItem] = []
     for iv in view.items:
@@ -132,6 +135,14 @@ def debug_items(program: Program, view) -> list[DebugItem]:
             items.append(DebugItem(next_id, f"{df.name}.{inst.name}.{name}", "state", t, size or 1, addr, None,
                                    None, None, inst.location, actor=inst.id))
             next_id += 1
+    declared = set()
+    for sv in view.status:  # the links' fault counters (docs/ir.md, "Status items")
+        st = sv.item
+        decl = None if sv.c_extern in declared else sv.c_extern  # one declaration of an array of counters
+        declared.add(sv.c_extern)
+        items.append(DebugItem(next_id, st.name, "status", st.type, 1, f"(void *){sv.addr}", decl,
+                               None, None, st.location))
+        next_id += 1
     ranged = 0
     for d in items:
         if d.range is not None:

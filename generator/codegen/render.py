@@ -70,7 +70,7 @@ def render_interfaces(program: Program, board: Target, template_dir: Path | None
     build): interp_interfaces.c, the model's storage and interface glue,
     in place of model.c, and what the producers write beside it (debug and
     service tables and maps)."""
-    view = _view_with_interfaces(program, board, False)
+    view = _view_with_interfaces(program, board, False, library=True)
     env = environment(template_dir)
     files = {"interp_interfaces.c": env.get_template("interp_interfaces.c.j2").render(m=view)}
     for produce in PRODUCERS:
@@ -78,8 +78,8 @@ def render_interfaces(program: Program, board: Target, template_dir: Path | None
     return files
 
 
-def _view_with_interfaces(program: Program, board: Target, release: bool) -> CModel:
-    view = build_view(program, board)
+def _view_with_interfaces(program: Program, board: Target, release: bool, library: bool = False) -> CModel:
+    view = build_view(program, board, library)
     for hook in INTERFACE_HOOKS:
         boot, poll = hook(program, release)
         view.interface_boot.extend(boot)

@@ -121,7 +121,8 @@ def _describe(e: Entry, located: bool = True) -> str:
 
 def build_map(program: Program, nv_size: int | None = None) -> ServiceMap:
     """The register map of a program; ServiceMapError on a clash."""
-    items = [i for i in program.items if i.service is not None]
+    # The model's service items, then its status items (input registers; docs/ir.md, "Status items").
+    items = [i for i in program.items if i.service is not None] + list(program.status)
     entries: list[Entry] = []
     slot = 0
     for index, item in enumerate(items):
@@ -281,16 +282,22 @@ def c_view(smap: ServiceMap, view, service_api: bool = False) -> dict:
     the service layer."""
     p = smap.program
     items_by_id = {iv.item.id: iv for iv in view.items}
+    status_by_id = {sv.item.id: sv for sv in view.status}
     entries = []
     for e in smap.entries:
-        iv = items_by_id[e.item.id]
+        if e.item.kind == "status":
+            iv = status_by_id[e.item.id]
+            c_extern = iv.c_extern
+        else:
+            iv = items_by_id[e.item.id]
+            c_extern = f"extern {iv.c_type} {iv.c_name};"
         flags = ["EL_SVC_F_RW" if e.access == "rw" else None, "EL_SVC_F_PERSIST" if e.item.persist else None,
                  "EL_SVC_F_RANGE" if e.item.range is not None else None]
         flags = " | ".join(f for f in flags if f) or "0u"
         lo, hi = (_bits(e.item.type, e.item.range[0]), _bits(e.item.type, e.item.range[1])) \
             if e.item.range is not None else ("0UL", "0UL")
         entries.append({
-            "e": e, "c_name": iv.c_name, "c_type": iv.c_type, "name": _c_string(e.name), "lo": lo, "hi": hi,
+            "e": e, "c_name": iv.c_name, "c_extern": c_extern, "name": _c_string(e.name), "lo": lo, "hi": hi,
             "type": C_TYPES[e.item.type.name], "table": C_TABLES[e.table], "flags": flags,
             "nv_key": f"0x{e.nv_key:04x}u" if e.nv_key is not None else "0u",
             "nv_slot": f"{e.nv_slot}u" if e.nv_slot is not None else "0u",

@@ -167,6 +167,7 @@ class Interfaces:
         slots = (ctypes.c_void_p * max(1, len(self.program.charts))).in_dll(lib, "el_interp_chart_slots")
         self.chart_slots = [(ctypes.c_uint8 * c.slots).from_address(slots[c.id]) for c in self.program.charts]
         self._armed = lib.el_interp_armed
+        self.status = (ctypes.c_uint16 * max(1, len(self.program.status))).in_dll(lib, "el_interp_status")
 
     @staticmethod
     def _fn(fn, restype, argtypes) -> None:
@@ -214,6 +215,11 @@ class Interfaces:
             values = array[:]
             if values != published[k]:
                 published[k] = values
+
+    def set_status(self, status_id: int, value: int) -> None:
+        """A status item's count (docs/ir.md, "Status items"), as its
+        uint16 saturates."""
+        self.status[status_id] = min(max(value, 0), 0xFFFF)
 
     # ------------------------------------------------------------ hooks
 

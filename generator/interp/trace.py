@@ -176,6 +176,7 @@ class TraceWriter:
             raise TraceError(f"cannot write trace {path}: {err.strerror or err}") from None
         self.previous: tuple | None = None
         self.last_time_us = 0
+        self._vcd_at: int | None = None  # the time of the last `#time` line of a VCD
         if self.format == "csv":
             self.file.write(",".join(["time_us"] + [c.csv_name for c in columns]) + "\n")
         else:
@@ -188,6 +189,7 @@ class TraceWriter:
                 self.file.write(f"{time_us}," + ",".join(self._csv_cell(c, v)
                                                            for c, v in zip(self.columns, snapshot)) + "\n")
         elif self.previous is None:
+            self._vcd_at = time_us
             self.file.write(f"#{time_us}\n$dumpvars\n")
             self.file.write("".join(self._vcd_value(k, v) for k, v in enumerate(snapshot)))
             self.file.write("$end\n")
@@ -195,9 +197,24 @@ class TraceWriter:
             changes = "".join(self._vcd_value(k, v) for k, (v, old) in enumerate(zip(snapshot, self.previous))
                               if v != old)
             if changes:
+                self._vcd_at = time_us
                 self.file.write(f"#{time_us}\n{changes}")
         self.previous = snapshot
         self.last_time_us = time_us
+
+    def event(self, time_us: int, name: str, value: int) -> None:
+        """A status event (boards/host/README.md, "Traces"): the status item
+        ``name`` (a link's fault counter) reads ``value`` from ``time_us``
+        on. A line of its own, never a column, so that a run without faults
+        has the trace of every other board and mode: in CSV
+        ``#status,TIME,NAME,VALUE``, in VCD a ``$comment`` at that time."""
+        if self.format == "csv":
+            self.file.write(f"#status,{time_us},{name},{value}\n")
+            return
+        if self._vcd_at != time_us:
+            self.file.write(f"#{time_us}\n")
+            self._vcd_at = time_us
+        self.file.write(f"$comment status {_vcd_name(name)} {value} $end\n")
 
     def close(self, end_time_us: int | None = None) -> None:
         """Flush and close; a VCD ends with ``#end_time_us`` (the end of the

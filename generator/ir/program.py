@@ -56,6 +56,19 @@ class Item:
 
 
 @dataclass
+class Status(Item):
+    """A read-only fault counter of a link (docs/ir.md, "Status items"):
+    made by the IR from the model's structure (``ir/status.py``), never by
+    a backend. ``kind`` is ``status``; ``fault`` says what it counts
+    (``overruns``, ``tardy``, ``unanswered``) and ``subject`` of what (a
+    task id, a channel id, a slave's slot in its link's round). A uint16
+    that saturates at 65535; ``id`` is its index in ``Program.status``."""
+
+    fault: str = ""
+    subject: int = 0
+
+
+@dataclass
 class Device:
     """A primitive device. ``claims`` are written as in the model
     (``pin["PB5"]``, ``i2c[0] addr 0x48``). ``handlers`` name, per board,
@@ -297,6 +310,8 @@ class Program:
     # Where it runs, for a model of several nodes (ir/deployment.py); None for one board.
     deployment: object = None
     remote: RemoteSettings | None = None  # None: the defaults
+    # Fault counters of the links the program runs over (ir/status.py); empty for one board.
+    status: list[Status] = field(default_factory=list)
 
     def item(self, name: str) -> Item:
         return next(i for i in self.items if i.name == name)
@@ -308,8 +323,9 @@ class Program:
 def to_json(program: Program) -> dict:
     """A canonical, JSON-serialisable dump of the IR (also hashed for the id)."""
     def conv(value):
-        if isinstance(value, Program) and value.deployment is None:  # a one-board program, as before nodes
-            return {k: conv(getattr(value, k)) for k in value.__dataclass_fields__ if k != "deployment"}
+        if isinstance(value, Program):  # no nodes, no status items: the dump (and id) of a program before them
+            return {k: conv(getattr(value, k)) for k in value.__dataclass_fields__
+                    if not (k in ("deployment", "status") and not getattr(value, k))}
         if isinstance(value, T.ValueType):
             return value.name
         if isinstance(value, (Schedule,)):

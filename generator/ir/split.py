@@ -6,7 +6,9 @@ from 0 like any program: the node's tasks (in the whole model's dispatch
 order), the actors, dataflows and charts they run, its devices, the items
 its tasks read or write, its channels, and a dispatch table recomputed for
 its tasks alone (their tick and hyperperiod), and, on a slave of a Modbus
-link, the link's Modbus RTU slave interface on its UART. A channel that crosses to
+link, the link's Modbus RTU slave interface on its UART; its status items
+(``ir/status.py``: the links' fault counters), with a debug interface of its
+own on a node that is no slave. A channel that crosses to
 another node keeps one end here: an **output** (its consumer task is on
 another node, ``consumer_task`` is None) or an **input** (``producer_task``
 is None); the link moves its tokens between the two ends.
@@ -20,6 +22,7 @@ from math import gcd
 from ..core import expr as I
 from .deployment import Crossing, NodeSpec
 from .program import Chart, Dataflow, Instant, Interface, Program, Task, program_id
+from .status import node_status
 
 
 @dataclass
@@ -114,7 +117,6 @@ def _node_program(program: Program, node: NodeSpec) -> NodeProgram:
     node_program = Program(f"{program.name}.{node.name}", program.title, program.source, 0, tick, hyper, new_items,
                            new_devices, new_specs, new_instances, new_dataflows, new_charts, new_channels,
                            new_tasks, instants, _link_interfaces(program, node.name))
-    node_program.program_id = program_id(node_program)
     inputs, outputs = [], []
     for crossing in dep.crossings:
         end = _end(crossing, node.name, channels, program)
@@ -122,6 +124,15 @@ def _node_program(program: Program, node: NodeSpec) -> NodeProgram:
             (outputs if crossing.producer_node == node.name else inputs).append(end)
     rounds = [table for name, table in dep.rounds.items()
               if any(m.node == node.name for lk in dep.links if lk.name == name for m in lk.members)]
+    mastered = [table for table in rounds if table.master == node.name]
+    node_program.status = node_status(node_program, [(end.channel, end.name) for end in inputs],
+                                      [slot.node for table in mastered for slot in table.slots], program.source)
+    if node_program.status and not node_program.interfaces:
+        # A node that is no Modbus slave (a PC: the master, a DDS peer) serves its status items on a
+        # debug interface of its own, where its process is told (`easylab launch --debug`); a slave
+        # serves them as input registers of its Modbus RTU slave on the link.
+        node_program.interfaces = [Interface("debug", None, {})]
+    node_program.program_id = program_id(node_program)
     return NodeProgram(node, node_program, inputs, outputs, rounds)
 
 

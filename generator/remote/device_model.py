@@ -17,6 +17,7 @@ from dataclasses import dataclass, field
 
 from ..core import types as T
 from ..ir.program import Device, Instant, Item, Program, Task, to_json
+from ..ir.status import device_tasks
 from .protocol import K, wire_bytes
 
 
@@ -139,7 +140,8 @@ class DeviceModel:
         down = max((self.down_payload(r) for r in released), default=K.DOWN_MASK)
         up = max((self.up_payload(r) for r in released), default=K.UP_STATE)
         received = max(1, down)  # DEVICE and START carry one byte, HELLO, STOP and COUNTERS none
-        sent = max(K.HELLO_ANSWER, min(K.MAX_PAYLOAD, K.DEVICE_ANSWER + path), 1 + 2 * K.COUNTER_COUNT, up)
+        counters = 1 + 2 * (K.COUNTER_COUNT + max(1, len(self.tasks)))  # the link's, then each task's overruns
+        sent = max(K.HELLO_ANSWER, min(K.MAX_PAYLOAD, K.DEVICE_ANSWER + path), counters, up)
         return FrameSizes(K.HEADER + received + K.TRAILER, K.HEADER + sent + K.TRAILER)
 
     def release_ticks(self) -> list[int]:
@@ -186,16 +188,8 @@ def _hash32(dump) -> int:
 def device_model(program: Program) -> DeviceModel:
     """The device model of ``program``: the one place it is decided."""
     device_items = [i for i in program.items if i.kind in ("dev_out", "dev_in")]
-    reads_of: dict[int, list[int]] = {}
-    for device in program.devices:
-        for task in device.read_by:
-            reads_of.setdefault(task, []).append(device.id)
-    tasks: list[ProxyTask] = []
-    for task in program.tasks:
-        writes = sorted(i for i in task.writes if program.items[i].kind == "dev_in")
-        reads = sorted(reads_of.get(task.id, []))
-        if reads or writes:
-            tasks.append(ProxyTask(task.id, task.period, task.offset, task.deadline, reads, writes))
+    tasks = [ProxyTask(task.id, task.period, task.offset, task.deadline, reads, writes)
+             for task, reads, writes in device_tasks(program)]
     proxy_of = {t.task: k for k, t in enumerate(tasks)}
     instants = []
     for instant in program.instants:

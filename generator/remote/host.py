@@ -12,10 +12,15 @@ import sys
 from ..interp.engine import Engine
 from ..interp.stimulus import Stimulus
 from ..ir.program import Program
+from ..ir.status import remote_program
 from ..interp.plugins import PluginError
 from .device_model import DeviceModel, device_model, item_bytes
 from .link import Link, RemoteError
 from .protocol import K
+
+# In real time the host asks the proxy for its counters at most this often
+# (logical time): a COUNTERS answer is 7 + 2 bytes per proxy task more on the link.
+COUNTERS_EVERY_US = 100_000
 
 if sys.byteorder != "little":  # device data travel in the C layout of every board, little-endian
     raise ImportError("remote execution needs a little-endian host")
@@ -107,6 +112,12 @@ class RemoteEngine(Engine):
         # In real time UP frames come at the proxy's pace: wait for the longest gap, and more.
         self.up_timeout = up_timeout or max(5.0, 2 * model.hyperperiod * model.tick_us / 1e6)
         self.frames = 0
+        self.proxy_overruns = [0] * len(self.program.status)  # per proxy task, as the proxy last counted them
+        self._asked_us: int | None = None  # logical time of the last COUNTERS request
+        self._status_io = None  # the interfaces library that holds the counts
+
+    def _prepare(self, program: Program):
+        return super()._prepare(remote_program(program))
 
     def replace_model(self, new_program: Program) -> None:
         """Swap in an edited application; an edit of the device model is
@@ -142,3 +153,27 @@ class RemoteEngine(Engine):
                 mask |= 1 << k
             self.link.down(tick, mask, b"".join(parts))
             self.frames += 1
+            if not self.link.lock_step and (self._asked_us is None or t - self._asked_us >= COUNTERS_EVERY_US):
+                self.link.ask_counters()  # in real time: the overrun counts (lock-step has none)
+                self._asked_us = t
+        if self.io is not None and self.io is not self._status_io:  # a program swapped in: its library starts at 0
+            self._status_io = self.io
+            for status, count in zip(self.program.status, self.proxy_overruns):
+                self.io.set_status(status.id, count)
+        if self.link.latest_counters is not None:
+            self.take_counters(self.link.latest_counters, t)
+            self.link.latest_counters = None
+
+    def take_counters(self, counters: dict, time_us: int) -> None:
+        """The proxy's overrun counts into the status items
+        ``remote.<task>.overruns`` (debug and service interfaces) and, when
+        one grew, into the trace as a status event at ``time_us``."""
+        for k, count in enumerate(counters["tasks"][:len(self.proxy_overruns)]):
+            if count == self.proxy_overruns[k]:
+                continue
+            self.proxy_overruns[k] = count
+            status = self.program.status[k]
+            if self.io is not None:
+                self.io.set_status(status.id, count)
+            if self.trace is not None:
+                self.trace.event(time_us, status.name, count)

@@ -42,6 +42,9 @@ class Link:
             raise RemoteError(str(err)) from None
         self.frames_in = 0
         self.dropped = 0  # frames with a bad CRC, COBS or length
+        self.lock_step = False
+        # The latest COUNTERS answer that came while waiting for another frame (ask_counters).
+        self.latest_counters: dict | None = None
 
     def close(self) -> None:
         self.transport.close()
@@ -77,6 +80,8 @@ class Link:
             self.frames_in += 1
             if frame[0] == cmd:
                 return frame[1], frame[2]
+            if frame[0] == K.CMD_COUNTERS | K.RESPONSE:
+                self.latest_counters = _counters(frame[2])
 
     def _request(self, cmd: int, payload: bytes = b"", timeout: float = ANSWER_S) -> bytes:
         self._send(cmd, 0, payload)
@@ -124,16 +129,21 @@ class Link:
         return "; ".join(parts) or "the devices are the same, the instants at which tasks read or write them differ"
 
     def start(self, lock_step: bool) -> None:
+        self.lock_step = lock_step
         self._request(K.CMD_START, bytes([K.MODE_LOCK_STEP if lock_step else K.MODE_REAL_TIME]))
 
     def stop(self) -> None:
         """The proxy applies its safe values (and a host-board proxy ends)."""
         self._request(K.CMD_STOP)
 
-    def counters(self) -> dict[str, int]:
-        body = self._request(K.CMD_COUNTERS)
-        names = ["frames", "bad_crc", "malformed", "stale", "overruns", "watchdog"]
-        return dict(zip(names, struct.unpack_from(f"<{K.COUNTER_COUNT}H", body, 1)))
+    def counters(self) -> dict:
+        """The proxy's counters (waits for the answer; other frames meanwhile are dropped)."""
+        return _counters(self._request(K.CMD_COUNTERS))
+
+    def ask_counters(self) -> None:
+        """Ask for the counters without waiting: the answer lands in
+        ``latest_counters`` while the host waits for its next UP frame."""
+        self._send(K.CMD_COUNTERS, 0)
 
     def up(self, tick: int, timeout: float) -> bytes:
         """The device data the proxy read at ``tick`` (lock-step: waits)."""
@@ -149,3 +159,17 @@ class Link:
 
     def down(self, tick: int, mask: int, payload: bytes) -> None:
         self._send(K.CMD_DOWN, tick, struct.pack("<I", mask) + payload)
+
+
+COUNTER_NAMES = ("frames", "bad_crc", "malformed", "stale", "overruns", "watchdog")
+
+
+def _counters(body: bytes) -> dict:
+    """A COUNTERS answer: the link's counters by name, and ``tasks``, the
+    overruns of each proxy task (task order)."""
+    if len(body) < 1 + 2 * K.COUNTER_COUNT:
+        raise RemoteError(f"a COUNTERS answer of {len(body)} bytes")
+    link = struct.unpack_from(f"<{K.COUNTER_COUNT}H", body, 1)
+    tasks = (len(body) - 1 - 2 * K.COUNTER_COUNT) // 2
+    per_task = list(struct.unpack_from(f"<{tasks}H", body, 1 + 2 * K.COUNTER_COUNT)) if tasks > 0 else []
+    return {**dict(zip(COUNTER_NAMES, link)), "tasks": per_task}

@@ -140,6 +140,81 @@ def test_a_killed_slave_is_reported_and_the_others_go_on(tmp_path):
     assert planner[1:] != projected(expected, planner[0])  # the planner kept joint2's last position
 
 
+def test_a_killed_slaves_faults_are_on_the_masters_debug_interface(tmp_path):
+    """`easylab launch --debug tcp:PORT` serves the planner's debug
+    interface: its status items, read by id as any item, count the frames
+    joint2 left unanswered once it is killed and the releases of `plan`
+    that found no new position2 (tardy, the last value held), and none for
+    joint1; the run goes on until the planner is stopped, and joint1's
+    trace stays the single-node run's."""
+    import socket
+
+    from easylab.host_tools.debug_map import DebugMap
+    from easylab.host_tools.debug_protocol import DebugClient
+
+    (tmp_path / "stimulus.csv").write_text(STIMULUS + "".join(f"{t * 1000000},{t * 10},{-t * 20}\n"
+                                                              for t in range(1, 20)))
+    expected = reference(tmp_path, "20s")
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        port = s.getsockname()[1]
+    launch = subprocess.Popen([sys.executable, "-m", "easylab", "launch", str(ROBOT), "--fast", "--duration", "600s",
+                               "--stimulus", "stimulus.csv", "--trace-dir", "traces", "--debug", f"tcp:{port}"],
+                              cwd=tmp_path, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    client = None
+    try:
+        deadline = time.monotonic() + 300
+        while client is None:
+            assert launch.poll() is None and time.monotonic() < deadline, launch.communicate()
+            try:
+                client = DebugClient.open(f"socket://127.0.0.1:{port}", 2.0)
+            except Exception:
+                time.sleep(0.05)
+        names = ("link.joint1.unanswered", "link.joint2.unanswered", "link.position1.tardy", "link.position2.tardy")
+        dmap = DebugMap.load(tmp_path / "build" / "robot" / "planner" / "debug_map.json")
+        items = [dmap.item(n) for n in names]
+        assert all(i.kind == "status" and not i.writable for i in items)
+
+        def counts() -> dict[str, int]:
+            return dict(zip(names, client.read([(i.id, i.type, 1) for i in items])))
+
+        assert counts()["link.joint2.unanswered"] == 0
+        os.kill(int((tmp_path / "traces" / "joint2.pid").read_text()), signal.SIGKILL)
+        while counts()["link.joint2.unanswered"] == 0 or counts()["link.position2.tardy"] == 0:
+            assert launch.poll() is None and time.monotonic() < deadline, "no fault counted"
+            time.sleep(0.02)
+        seen = counts()
+        assert seen["link.joint1.unanswered"] == 0 and seen["link.position1.tardy"] == 0
+        client.close()
+        client = None
+        # easylab-debug lists them with the other items (read-only, kind status) and reads them by name
+        console = subprocess.run([sys.executable, "-m", "easylab.host_tools.debug_console", f"socket://127.0.0.1:{port}",
+                                  "--map", str(tmp_path / "build" / "robot" / "planner" / "debug_map.json"),
+                                  "--timeout", "5", "-c", "vars link.*; read link.joint2.unanswered"],
+                                 capture_output=True, text=True, timeout=120)
+        assert console.returncode == 0, console.stderr
+        listed = [line.split() for line in console.stdout.splitlines() if line.startswith("link.")]
+        assert [(w[0], w[1], w[2], w[3]) for w in listed if len(w) > 3 and w[1] == "uint16"] == [
+            (name, "uint16", "status", "ro") for name in sorted(names, key=lambda n: dmap.item(n).id)]
+        value = next(line for line in console.stdout.splitlines() if line.startswith("link.joint2.unanswered ="))
+        assert int(value.split("=")[1]) >= seen["link.joint2.unanswered"]
+        os.kill(int((tmp_path / "traces" / "planner.pid").read_text()), signal.SIGTERM)  # it ends normally
+        out, err = launch.communicate(timeout=600)
+    finally:
+        if client is not None:
+            client.close()
+        if launch.poll() is None:
+            launch.kill()
+            launch.communicate()
+    assert launch.returncode == 0, out + err
+    assert "robot.planner: bus: node 'joint2' left " in err and "node 'joint1' left" not in err
+    columns = ["time_us", "kp", "motor1.speed", "encoder1.count"]
+    joint1 = rows(tmp_path / "traces" / "joint1.csv")[1:]
+    assert len(joint1) > 3 and joint1 == projected(expected, columns)[:len(joint1)]  # up to the planner's stop
+    planner = rows(tmp_path / "traces" / "planner.csv")
+    assert planner[1:] != projected(expected, planner[0])[:len(planner) - 1]  # it kept joint2's last position
+
+
 def test_a_model_without_nodes_is_not_launched(tmp_path):
     model = tmp_path / "one.elab"
     model.write_text("var x: int16\ntask t period 10 ms { }\n")

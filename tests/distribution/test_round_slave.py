@@ -89,3 +89,36 @@ def test_the_sync_the_slot_a_wrong_slot_and_the_service_map(joint):
     sim.wait(timeout=30)
     assert (out / "joint1.csv").read_text().splitlines() == [
         "time_us,kp,motor1.speed,encoder1.count", "0,2000,0,0", "60000,2000,14,0"]
+
+
+def test_a_slave_serves_its_tardy_count_on_its_service_map(joint):
+    """Rounds whose slot stops coming (the master's frames lost on the
+    bus): the joint's releases find no new target1, keep the last one (its
+    motor holds 2 x 7) and count it; the count is the input register of
+    `link.target1.tardy` in the joint's service map, read with function 4
+    at its unit id on the link, and the joint keeps answering."""
+    import json
+
+    fd, out, sim = joint
+    entry = next(i for i in json.loads((out / "joint1" / "service_map.json").read_text())["items"]
+                 if i["name"] == "link.target1.tardy")
+    assert (entry["table"], entry["access"], entry["type"], entry["kind"]) == ("input", "ro", "uint16", "status")
+    read = frame(2, 0x04, entry["address"] >> 8, entry["address"] & 0xFF, 0x00, 0x01)
+    assert ask(fd, read, 7) == frame(2, 0x04, 0x02, 0x00, 0x00)  # nothing late before the rounds
+    slot = frame(2, 0x17, 0xE1, 0x00, 0x00, 0x02, 0xE2, 0x00, 0x00, 0x01, 0x02, 0x00, 0x07)
+    for number in range(8):  # rounds 0..7 (releases at 0 .. 140 ms); the slot, writing 7, in rounds 0..2 only
+        sync = frame(2, 0x06, 0xE0, 0x00, 0x00, number)
+        assert ask(fd, sync, 8) == sync
+        if number <= 2:
+            assert len(ask(fd, slot, 9)) == 9
+    # the releases at 0 and 20 ms take the initial tokens, those at 40 and 60 ms the 7s of rounds 1 and 2;
+    # the four at 80 .. 140 ms find none
+    assert ask(fd, read, 7) == frame(2, 0x04, 0x02, 0x00, 0x04)
+    # the counter is read-only: 06 writes holding registers, and the joint has none
+    assert ask(fd, frame(2, 0x06, entry["address"] >> 8, entry["address"] & 0xFF, 0x00, 0x00), 5) == \
+        frame(2, 0x86, 0x02)
+    sim.terminate()
+    sim.wait(timeout=30)
+    # the motor follows the target 7 from the release at 40 ms (published at 60 ms) and holds it
+    assert (out / "joint1.csv").read_text().splitlines() == [
+        "time_us,kp,motor1.speed,encoder1.count", "0,2000,0,0", "60000,2000,14,0"]

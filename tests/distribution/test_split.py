@@ -65,7 +65,29 @@ def test_a_slave_is_a_modbus_rtu_slave_on_its_uart(tmp_path):
     nodes = split(lowered(tmp_path))
     assert [(i.kind, i.resource, i.settings) for i in nodes["j1"].program.interfaces] == [
         ("modbus-rtu", "uart[0]", {"baud": 115200, "parity": "even", "unit": 2})]
-    assert nodes["pc"].program.interfaces == []
+    # the master serves its status items on a debug interface of its own (no resource: where its
+    # process is told); a slave on its Modbus RTU slave
+    assert [(i.kind, i.resource, i.settings) for i in nodes["pc"].program.interfaces] == [("debug", None, {})]
+
+
+def test_each_node_gets_the_status_items_of_its_links(tmp_path):
+    """Tardy counters for the channels that cross to a node, one unanswered
+    counter per slave on the master, in slot order; read-only uint16s that
+    appear on the node's debug map and in its service map's input
+    registers. A program without nodes has none (its dump is as before)."""
+    from easylab.codegen.service import build_map, map_json
+
+    program = lowered(tmp_path)
+    assert program.status == [] and "status" not in to_json(program)
+    nodes = split(program)
+    pc, j1, j2 = (nodes[n].program for n in ("pc", "j1", "j2"))
+    assert [(s.name, s.fault, s.subject, s.type.name, s.service) for s in pc.status] == [
+        ("link.pos1.tardy", "tardy", 2, "uint16", "ro"), ("link.j1.unanswered", "unanswered", 0, "uint16", "ro"),
+        ("link.j2.unanswered", "unanswered", 1, "uint16", "ro")]
+    assert [s.name for s in j1.status] == ["link.goal1.tardy"] and [s.name for s in j2.status] == ["link.goal2.tardy"]
+    entries = [(i["name"], i["table"], i["access"], i["kind"]) for i in map_json(build_map(j1))["items"]]
+    assert entries[-1] == ("link.goal1.tardy", "input", "ro", "status")
+    assert "status" in to_json(pc) and len({pc.program_id, j1.program_id}) == 2
 
 
 def test_the_round_table(tmp_path):

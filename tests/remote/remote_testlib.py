@@ -115,3 +115,61 @@ class SimulatedProxy:
 def remote(model: Path, target: Path | str, *args: str, timeout: float = 300) -> subprocess.CompletedProcess:
     return subprocess.run([*EASYLAB, "remote", str(model), "--target", str(target), *args], capture_output=True,
                           text=True, timeout=timeout, stdin=subprocess.DEVNULL)
+
+
+class LatencyRelay:
+    """Injected latency on a real link: a TCP relay between `easylab remote`
+    (``url``, ``socket://127.0.0.1:PORT``) and a proxy's TCP link
+    (``target``, ``socket://...``) that holds the host's bytes for
+    ``stall_s`` once every ``every_s``, as a congested link does: the DOWN
+    frames sent meanwhile reach the proxy after their deadlines."""
+
+    def __init__(self, target: str, stall_s: float, every_s: float):
+        import socket
+        import threading
+
+        host, port = target.removeprefix("socket://").split(":")
+        self.upstream = (host, int(port))
+        self.stall_s, self.every_s = stall_s, every_s
+        self.server = socket.create_server(("127.0.0.1", 0))
+        self.url = f"socket://127.0.0.1:{self.server.getsockname()[1]}"
+        self._stop = threading.Event()
+        self.thread = threading.Thread(target=self._serve, name="latency-relay", daemon=True)
+        self.thread.start()
+
+    def _serve(self) -> None:
+        import select
+        import socket
+
+        self.server.settimeout(30)
+        host, _ = self.server.accept()
+        proxy = socket.create_connection(self.upstream)
+        for s in (host, proxy):
+            s.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
+        held, start = b"", time.monotonic()
+        try:
+            while not self._stop.is_set():
+                phase = (time.monotonic() - start) % self.every_s
+                stalled = self.every_s - self.stall_s <= phase  # the last stall_s of every period
+                ready, _, _ = select.select([host, proxy], [], [], 0.001)
+                for s in ready:
+                    data = s.recv(4096)
+                    if not data:
+                        return
+                    if s is proxy:
+                        host.sendall(data)
+                    else:
+                        held += data
+                if held and not stalled:
+                    proxy.sendall(held)
+                    held = b""
+        except OSError:
+            return
+        finally:
+            host.close()
+            proxy.close()
+
+    def close(self) -> None:
+        self._stop.set()
+        self.thread.join(5)
+        self.server.close()

@@ -16,6 +16,7 @@ import pytest
 
 from easylab.pipeline import lower_file
 from easylab.remote.device_model import device_model
+from easylab.remote.host import COUNTERS_EVERY_US
 from easylab.remote.link import Link
 from easylab.remote.budget import refusal
 from easylab.remote.protocol import K
@@ -160,6 +161,15 @@ LINK_LOSS = {
 }
 
 
+def downs_among(frames: int, period_us: int) -> int:
+    """The DOWN frames among ``frames`` a real-time host sent: after the
+    DOWN of instant 0, and then after a DOWN at least COUNTERS_EVERY_US of
+    logical time later, it asks for the counters (docs/remote.md,
+    "Timing"); a host killed between a DOWN and its request sent one less."""
+    every = max(1, -(-COUNTERS_EVERY_US // period_us))  # DOWN frames per request
+    return next(d for d in range(frames + 1) if d + -(-d // every) >= frames)
+
+
 @pytest.mark.realtime
 @pytest.mark.parametrize("case", LINK_LOSS)
 def test_the_actuators_reach_their_safe_values_when_the_host_dies(case, build_cache, tmp_path):
@@ -217,8 +227,9 @@ def test_the_actuators_reach_their_safe_values_when_the_host_dies(case, build_ca
     else:
         assert counters["watchdog"] == 1 and counters["overruns"] < dm.overrun_limit
     # Valid frames: our HELLO, the host's HELLO and START, its DOWN frames
-    # (one per activation, from instant 0), our second HELLO and COUNTERS.
-    downs = counters["frames"] - 5
+    # (one per activation, from instant 0) with its COUNTERS requests, our
+    # second HELLO and COUNTERS.
+    downs = downs_among(counters["frames"] - 5, period_us)
     assert downs >= 2
     last_frame_us = (downs - 1) * period_us  # the instant of the last DOWN (it came by that activation's deadline)
     level = changes(trace, datum, 10**12)
@@ -239,7 +250,7 @@ def test_easylab_proxy_builds_the_avr_proxy_for_the_atmega328p(tmp_path):
     assert proc.returncode == 0, proc.stderr
     size = re.search(r"atmega328p: flash (\d+) of \d+ bytes .*RAM (\d+) of 2048 bytes", proc.stdout)
     flash, ram = int(size.group(1)), int(size.group(2))
-    assert flash <= 5632 and ram <= 288, proc.stdout
+    assert flash <= 5760 and ram <= 288, proc.stdout
     assert proc.stdout.splitlines()[-1] == str(tmp_path / "p" / "blink_proxy.elf")
     assert "#define EL_AVR_REMOTE_UART 0u" in (tmp_path / "p" / "el_avr_config.h").read_text()
     # flashed as firmware is: through the bootloader, the proxy's image

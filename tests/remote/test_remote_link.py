@@ -200,6 +200,7 @@ def test_overruns_in_a_row_apply_the_safe_values(declared, build_cache, tmp_path
         until(lambda: link._request(K.CMD_COUNTERS)[0] == K.STATE_SAFE)
         counters = link.counters()
         assert counters["overruns"] >= model.overrun_limit
+        assert counters["tasks"] == [counters["overruns"]]  # per proxy task: acquire, the one driving a device
         assert counters["watchdog"] == 0  # K overruns come first (10 ms deadlines, watchdog 100 ms)
         link.stop()
         status, err = proxy.finish()
@@ -401,9 +402,10 @@ def test_the_tcp_link_takes_one_host_at_a_time(build_cache, tmp_path):
 
 # The proxy's frame sizes (header 5 and CRC 2 around each payload): the
 # largest DOWN it receives; the largest of UP, the HELLO answer (7),
-# COUNTERS (13) and the DEVICE answer (5 and the longest device path).
+# COUNTERS (state, six link counters and one per proxy task: 1 + 2 * (6 + tasks)) and the DEVICE
+# answer (5 and the longest device path).
 FRAME_SIZES = {
-    "blink": (5 + 4 + 1 + 2, 5 + 13 + 2),  # DOWN: mask, led.level; COUNTERS
+    "blink": (5 + 4 + 1 + 2, 5 + 15 + 2),  # DOWN: mask, led.level; COUNTERS with one task
     "pt100_sensor": (5 + 4 + 1 + 2, 5 + 5 + len("sensor.adc") + 2),  # DOWN: mask, alarm_led.level; DEVICE sensor.adc
     "line_follower": (5 + 4 + 3 * 2 + 2, 5 + 5 + len("robot.drive.m1") + 2),  # three motor speeds; DEVICE
 }
