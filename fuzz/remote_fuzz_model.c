@@ -40,7 +40,6 @@ const uint16_t el_rmt_staged_size = 3u;
 
 uint16_t el_overruns[2];
 const uint8_t el_task_count = 2u; /* COUNTERS' answer carries each task's overruns */
-uint16_t el_rmt_task_overruns[2];
 
 void fuzz_model_reset(void);
 void fuzz_model_reset(void)

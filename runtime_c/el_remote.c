@@ -13,7 +13,7 @@
 #if !defined(EL_RMT_RX_FRAME) || !defined(EL_RMT_TX_FRAME) || !defined(EL_RMT_TASKS) || \
     EL_RMT_TASKS < 1u || EL_RMT_TASKS > 32u || EL_RMT_RX_FRAME > EL_RMT_MAX_FRAME || \
     EL_RMT_TX_FRAME > EL_RMT_MAX_FRAME || EL_RMT_RX_FRAME < EL_RMT_HEADER + EL_RMT_TRAILER + 1u || \
-    EL_RMT_TX_FRAME < EL_RMT_HEADER + EL_RMT_TRAILER + 1u + 2u * EL_RMT_COUNTER_COUNT
+    EL_RMT_TX_FRAME < EL_RMT_HEADER + EL_RMT_TRAILER + 1u + 2u * (EL_RMT_COUNTER_COUNT + EL_RMT_TASKS)
 #error "el_remote_config.h (easylab proxy) sizes the frames and tables: EL_RMT_RX_FRAME, EL_RMT_TX_FRAME, EL_RMT_TASKS"
 #endif
 
@@ -33,6 +33,7 @@ static uint8_t overruns_in_a_row;
 static uint32_t release_tick[EL_RMT_TASKS];
 static bool pending[EL_RMT_TASKS];  /* released, deadline not reached */
 static bool arrived[EL_RMT_TASKS];  /* its values came (staged) */
+static uint16_t task_overruns[EL_RMT_TASKS]; /* values that came late (COUNTERS' answer) */
 
 /* The tasks released at the instant being processed. */
 static uint32_t released_now;
@@ -218,7 +219,7 @@ static void on_frame(uint16_t n)
         uint8_t tasks = el_task_count < EL_RMT_TASKS ? el_task_count : (uint8_t)EL_RMT_TASKS;
         frame[EL_RMT_HEADER] = state;
         for (i = 0u; i < EL_RMT_COUNTER_COUNT + tasks; i++) {
-            uint16_t v = i < EL_RMT_COUNTER_COUNT ? counters[i] : el_rmt_task_overruns[i - EL_RMT_COUNTER_COUNT];
+            uint16_t v = i < EL_RMT_COUNTER_COUNT ? counters[i] : task_overruns[i - EL_RMT_COUNTER_COUNT];
             frame[EL_RMT_HEADER + 1u + 2u * i] = (uint8_t)v;
             frame[EL_RMT_HEADER + 2u + 2u * i] = (uint8_t)(v >> 8);
         }
@@ -264,7 +265,7 @@ void el_remote_boot(void)
         counters[t] = 0u;
     }
     for (t = 0u; t < EL_RMT_TASKS; t++) {
-        el_rmt_task_overruns[t] = 0u;
+        task_overruns[t] = 0u;
         pending[t] = false;
         arrived[t] = false;
     }
@@ -371,8 +372,8 @@ void el_remote_publish(uint8_t task)
         if (el_overruns[task] < UINT16_MAX) {
             el_overruns[task]++;
         }
-        if (el_rmt_task_overruns[task] < UINT16_MAX) { /* late values only, not the dispatcher's lateness */
-            el_rmt_task_overruns[task]++;
+        if (task_overruns[task] < UINT16_MAX) { /* late values only, not the dispatcher's lateness */
+            task_overruns[task]++;
         }
         if (++overruns_in_a_row >= el_rmt_overrun_limit) {
             enter_safe_state();

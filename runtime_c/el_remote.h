@@ -43,7 +43,6 @@ extern const uint16_t el_rmt_in_count;
 extern const uint8_t el_rmt_safe[];                 /* safe values of the in fields, concatenated */
 extern uint8_t el_rmt_staged[];                     /* received in values, same layout */
 extern const uint16_t el_rmt_staged_size;
-extern uint16_t el_rmt_task_overruns[];              /* per proxy task: values that came late (COUNTERS) */
 
 /* ---- called by proxy.c ---------------------------------------------------- */
 void el_remote_boot(void);               /* safe values, then wait for START */

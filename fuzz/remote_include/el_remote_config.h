@@ -11,7 +11,7 @@
 #define EL_RMT_TASKS 32u
 #else
 #define EL_RMT_RX_FRAME 14u /* DOWN of both tasks: header 5, mask 4, speed 2, on 1, CRC 2 */
-#define EL_RMT_TX_FRAME 20u /* COUNTERS' answer: header 5, state 1, 6 counters u16, CRC 2 */
+#define EL_RMT_TX_FRAME 24u /* COUNTERS' answer: header 5, state 1, 6 counters and 2 tasks' overruns u16, CRC 2 */
 #define EL_RMT_TASKS 2u
 #endif
 #endif

@@ -41,7 +41,7 @@ def test_easylab_proxy_writes_the_softune_project_and_checks_its_c(tmp_path):
     config = (out / "el_f16_config.h").read_text()
     assert "#define EL_F16_REMOTE_UART 1u" in config and "#elif EL_REMOTE_BAUD == 76800UL" in config
     assert "#pragma intvect el_f16_uart1_rx_interrupt 40" in (out / "el_f16_vectors.c").read_text()
-    assert "#define EL_RMT_TX_FRAME 20u" in (out / "el_remote_config.h").read_text()
+    assert "#define EL_RMT_TX_FRAME 22u" in (out / "el_remote_config.h").read_text()
 
 
 def test_the_link_is_compiled_in_a_proxy_build_only(tmp_path):
