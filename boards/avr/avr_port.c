@@ -233,8 +233,10 @@ bool el_port_wait_tick(uint32_t tick)
 
 void el_port_idle(uint16_t max_ms)
 {
+    /* Fine-clock periods: a product, no division (EL_AVR_CLOCK_KHZ is
+     * what el_avr_clock_from_us gives for whole milliseconds). */
     uint32_t start = el_avr_clock();
-    uint32_t span = el_avr_clock_from_us((uint32_t)max_ms * 1000u);
+    uint32_t span = (uint32_t)max_ms * (uint32_t)EL_AVR_CLOCK_KHZ;
     do {
         wdt_reset();
         el_idle();
