@@ -74,7 +74,7 @@ void el_avr_early_init(void)
 
 /* ---- time ---- */
 
-static volatile uint32_t ticks;      /* LET ticks since el_port_init */
+static volatile el_wtick_t ticks;    /* LET ticks since el_port_init (el_types.h: 16 or 32 bits) */
 static volatile uint32_t isr_count;  /* Timer2 interrupts since el_port_init */
 #if EL_AVR_TICK_ISRS > 1
 static volatile uint16_t isr_left = EL_AVR_TICK_ISRS; /* interrupts left in this tick */
@@ -119,10 +119,10 @@ uint32_t el_avr_clock_from_us(uint32_t us)
     return (us / 1000u) * (uint32_t)EL_AVR_CLOCK_KHZ + ((us % 1000u) * (uint32_t)EL_AVR_CLOCK_KHZ + 999u) / 1000u;
 }
 
-static uint32_t read_ticks(void)
+static el_wtick_t read_ticks(void)
 {
     uint8_t sreg = SREG;
-    uint32_t t;
+    el_wtick_t t;
     cli();
     t = ticks;
     SREG = sreg;
@@ -187,10 +187,10 @@ bool el_port_init(int argc, char **argv)
 /* A slave of a Modbus round (docs/distribution.md; the node's generated
  * el_link.c defines it, and the build defines EL_ROUND_SLAVE): its ticks
  * follow the master's sync, not the timer. */
-int8_t el_round_gate(uint32_t tick);
+int8_t el_round_gate(uint32_t tick); /* a round keeps 32-bit ticks (el_types.h) */
 #endif
 
-bool el_port_wait_tick(uint32_t tick)
+bool el_port_wait_tick(el_wtick_t tick)
 {
 #if defined(EL_ROUND_SLAVE)
     {
@@ -212,12 +212,12 @@ bool el_port_wait_tick(uint32_t tick)
 #endif
     for (;;) {
         wdt_reset();
-        if ((int32_t)(read_ticks() - tick) >= 0) {
+        if (EL_TICK_REACHED(read_ticks(), tick)) {
             return true;
         }
         el_idle();
         cli();
-        if ((int32_t)(ticks - tick) >= 0) {
+        if (EL_TICK_REACHED(ticks, tick)) {
             sei();
             return true;
         }
@@ -252,7 +252,7 @@ void el_port_resync(void)
     uint8_t sreg = SREG;
     cli();
     /* The current tick is due now: a fresh tick period starts. */
-    ticks = (uint32_t)el_now_tick();
+    ticks = (el_wtick_t)el_now_tick();
 #if EL_AVR_TICK_ISRS > 1
     isr_left = EL_AVR_TICK_ISRS;
 #endif
@@ -261,7 +261,7 @@ void el_port_resync(void)
     SREG = sreg;
 }
 
-uint32_t el_port_real_tick(void)
+el_wtick_t el_port_real_tick(void)
 {
     return read_ticks();
 }
@@ -283,8 +283,8 @@ void el_port_irq_restore(el_irq_state_t state)
 /* ---- instants ---- */
 
 #if defined(EL_AVR_SIM) && EL_AVR_SIM
-/* The instant being processed, for the harness (read from RAM; 32 bits,
- * which the harness extends). */
+/* The instant being processed, for the harness (read from RAM; 16 or 32
+ * bits, el_tick_t, which the harness extends by the symbol's size). */
 volatile el_tick_t el_avr_sim_tick;
 #endif
 
