@@ -175,8 +175,7 @@ bool el_port_init(int argc, char **argv)
     el_avr_uart_open(EL_AVR_REMOTE_UART, EL_REMOTE_BAUD, EL_AVR_PARITY_NONE);
 #endif
     el_avr_reset_halt = 0u;
-    ticks = 0u;
-    isr_count = 0u;
+    /* ticks and isr_count are zero from boot (.bss): el_port_init runs once. */
     start_tick_timer();
     wdt_enable(EL_AVR_WDTO);
     sei();
@@ -231,20 +230,33 @@ bool el_port_wait_tick(el_wtick_t tick)
     }
 }
 
+/* Timer2 interrupts in 256 ms (a constant of the build). */
+#define ISRS_PER_256_MS \
+    ((uint32_t)(F_CPU / 1000UL * 256UL / ((uint32_t)EL_AVR_TICK_PRESCALE * ((uint32_t)EL_AVR_TICK_OCR + 1UL))))
+
 void el_port_idle(uint16_t max_ms)
 {
-    /* Fine-clock periods: a product, no division (EL_AVR_CLOCK_KHZ is
-     * what el_avr_clock_from_us gives for whole milliseconds). */
-    uint32_t start = el_avr_clock();
-    uint32_t span = (uint32_t)max_ms * (uint32_t)EL_AVR_CLOCK_KHZ;
-    do {
+    /* Timer2 interrupts rather than the fine clock: a product by a constant
+     * and a shift, rounded down (never longer than max_ms). Their count's
+     * low byte is read alone: one load, atomic. */
+    uint16_t left = (uint16_t)(((uint32_t)max_ms * ISRS_PER_256_MS) >> 8);
+    uint8_t seen = *(volatile uint8_t *)&isr_count;
+    for (;;) {
+        uint8_t now, passed;
         wdt_reset();
         el_idle();
+        if (left == 0u) {
+            return;
+        }
         set_sleep_mode(SLEEP_MODE_IDLE);
         sleep_enable();
         sleep_cpu(); /* the next interrupt: a timer period at most */
         sleep_disable();
-    } while (el_avr_clock() - start < span);
+        now = *(volatile uint8_t *)&isr_count;
+        passed = (uint8_t)(now - seen);
+        seen = now;
+        left = passed >= left ? 0u : (uint16_t)(left - passed);
+    }
 }
 
 void el_port_resync(void)
