@@ -18,7 +18,7 @@ void el_idle(void)
 
 /* The task masks are walked by shifting them right (bit 0 is the task at
  * hand): no variable shifts, and a walk ends at the last task in the mask. */
-void el_run(int argc, char **argv)
+EL_RUN_ATTRIBUTES void el_run(int argc, char **argv)
 {
     el_tick_t base = 0u;
     el_task_mask_t pending = 0u; /* released, not yet published */

@@ -49,8 +49,14 @@ void el_gen_interfaces_poll(void);             /* serve them (from el_idle) */
 
 /* ---- provided by the runtime --------------------------------------------- */
 
-/* Boot, then dispatch until the board's el_port_wait_tick says stop. */
-void el_run(int argc, char **argv);
+/* Boot, then dispatch until the board's el_port_wait_tick says stop.
+ * EL_RUN_ATTRIBUTES: what a board adds to it (board.toml's cflags; the AVR
+ * board's main keeps nothing across the call, so el_run need not save the
+ * caller's registers: OS_task). */
+#ifndef EL_RUN_ATTRIBUTES
+#define EL_RUN_ATTRIBUTES
+#endif
+EL_RUN_ATTRIBUTES void el_run(int argc, char **argv);
 
 /* Serve the interfaces: ports call it while they wait between instants
  * (MCU ports in their wait loop; the host board after serving its

@@ -375,6 +375,7 @@ uint16_t el_avr_adc_read(uint8_t ch)
 #if !defined(EL_AVR_NO_MAIN)
 int main(void)
 {
+    /* Nothing kept across el_run: it saves no registers (OS_task, board.toml). */
     el_run(0, (char **)0);
     el_port_shutdown();
     return 0;
