@@ -18,10 +18,10 @@ void el_idle(void)
 
 /* The task masks are walked by shifting them right (bit 0 is the task at
  * hand): no variable shifts, and a walk ends at the last task in the mask. */
-void el_run(int argc, char **argv)
+EL_RUN_ATTRIBUTES void el_run(int argc, char **argv)
 {
     el_tick_t base = 0u;
-    uint32_t pending = 0u; /* released, not yet published */
+    el_task_mask_t pending = 0u; /* released, not yet published */
     uint16_t i;
     uint8_t task;
 
@@ -32,28 +32,28 @@ void el_run(int argc, char **argv)
     el_gen_interfaces_boot();
     for (;;) {
         for (i = 0u; i < el_instant_count; i++) {
-            uint32_t publish, release, mask;
-            el_now = base + EL_ROM_READ_U32(&el_instants[i].tick);
-            if (!el_port_wait_tick((uint32_t)el_now)) {
+            el_task_mask_t publish, release, mask;
+            el_now = (el_tick_t)(base + EL_ROM_READ_WTICK(&el_instants[i].tick));
+            if (!el_port_wait_tick((el_wtick_t)el_now)) {
                 el_gen_shutdown();
                 el_port_shutdown();
                 return;
             }
             /* Outputs due now become visible before the inputs of tasks
              * released now are read. */
-            publish = EL_ROM_READ_U32(&el_instants[i].publish) & pending;
-            pending &= ~publish;
-            for (task = 0u; publish != 0u; task++, publish >>= 1) {
+            publish = (el_task_mask_t)(EL_ROM_READ_MASK(&el_instants[i].publish) & pending);
+            pending &= (el_task_mask_t)~publish;
+            for (task = 0u; publish != 0u; task++, publish = (el_task_mask_t)(publish >> 1)) {
                 if ((publish & 1u) != 0u) {
                     el_gen_publish(task);
                 }
             }
             el_port_inputs(el_now);
             EL_DEBUG_INSTANT(); /* queued debugger writes; halts at an instant */
-            release = EL_ROM_READ_U32(&el_instants[i].release);
+            release = EL_ROM_READ_MASK(&el_instants[i].release);
             if (release != 0u) {
                 el_gen_read_devices(release);
-                for (task = 0u, mask = release; mask != 0u; task++, mask >>= 1) {
+                for (task = 0u, mask = release; mask != 0u; task++, mask = (el_task_mask_t)(mask >> 1)) {
                     if ((mask & 1u) != 0u) {
                         el_gen_release(task);
                     }
@@ -61,21 +61,21 @@ void el_run(int argc, char **argv)
             }
             el_port_instant(el_now);
             pending |= release;
-            for (task = 0u; release != 0u; task++, release >>= 1) {
+            for (task = 0u; release != 0u; task++, release = (el_task_mask_t)(release >> 1)) {
                 if ((release & 1u) != 0u) {
-                    uint32_t late;
+                    el_wtick_t late;
                     EL_DEBUG_TASK_BEGIN(task); /* task breakpoints, step by task */
                     el_gen_body(task);
                     EL_DEBUG_TASK_END(task);
                     /* Lateness never changes the published values; it is
                      * counted so that it is never silent. */
-                    late = el_port_real_tick() - (uint32_t)el_now;
-                    if (late > EL_ROM_READ_U32(&el_task_deadline_ticks[task]) && el_overruns[task] < UINT16_MAX) {
+                    late = (el_wtick_t)(el_port_real_tick() - (el_wtick_t)el_now);
+                    if (late > EL_ROM_READ_WTICK(&el_task_deadline_ticks[task]) && el_overruns[task] < UINT16_MAX) {
                         el_overruns[task]++;
                     }
                 }
             }
         }
-        base += el_hyperperiod_ticks;
+        base = (el_tick_t)(base + el_hyperperiod_ticks);
     }
 }

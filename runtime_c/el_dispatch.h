@@ -13,20 +13,34 @@
 
 #include "el_types.h"
 
+/* A set of tasks, bit i for task i: 8, 16 or 32 bits, as many as the
+ * program's tasks need where the board narrows it (EL_TASK_MASK_BITS, the
+ * IR's `task_mask_bits`: docs/ir.md, "Dispatcher widths"), else 32. */
+#if defined(EL_TASK_MASK_BITS) && EL_TASK_MASK_BITS == 8
+typedef uint8_t el_task_mask_t;
+#define EL_ROM_READ_MASK(p) EL_ROM_READ_U8(p)
+#elif defined(EL_TASK_MASK_BITS) && EL_TASK_MASK_BITS == 16
+typedef uint16_t el_task_mask_t;
+#define EL_ROM_READ_MASK(p) EL_ROM_READ_U16(p)
+#else
+typedef uint32_t el_task_mask_t;
+#define EL_ROM_READ_MASK(p) EL_ROM_READ_U32(p)
+#endif
+
 /* One entry of the dispatch table (generated, in ROM where possible). */
 typedef struct {
-    uint32_t tick;    /* within the hyperperiod */
-    uint32_t publish; /* tasks whose deadline it is (bit i = task i) */
-    uint32_t release; /* tasks released now */
+    el_wtick_t tick;        /* within the hyperperiod */
+    el_task_mask_t publish; /* tasks whose deadline it is (bit i = task i) */
+    el_task_mask_t release; /* tasks released now */
 } el_instant_t;
 
 /* ---- provided by the generated model.c ---------------------------------- */
 extern const el_instant_t el_instants[] EL_ROM;
 extern const uint16_t el_instant_count;
-extern const uint32_t el_task_deadline_ticks[] EL_ROM;
+extern const el_wtick_t el_task_deadline_ticks[] EL_ROM;
 void el_gen_boot(void);                        /* open/start devices, actor start() */
 void el_gen_shutdown(void);                    /* actor stop(), stop/close devices */
-void el_gen_read_devices(uint32_t released);   /* read() of devices those tasks use */
+void el_gen_read_devices(el_task_mask_t released); /* read() of devices those tasks use */
 void el_gen_release(uint8_t task);             /* latch inputs into the task's copy */
 void el_gen_body(uint8_t task);                /* run the task's dataflows and charts */
 void el_gen_publish(uint8_t task);             /* outputs, channels, device write() */
@@ -35,8 +49,14 @@ void el_gen_interfaces_poll(void);             /* serve them (from el_idle) */
 
 /* ---- provided by the runtime --------------------------------------------- */
 
-/* Boot, then dispatch until the board's el_port_wait_tick says stop. */
-void el_run(int argc, char **argv);
+/* Boot, then dispatch until the board's el_port_wait_tick says stop.
+ * EL_RUN_ATTRIBUTES: what a board adds to it (board.toml's cflags; the AVR
+ * board's main keeps nothing across the call, so el_run need not save the
+ * caller's registers: OS_task). */
+#ifndef EL_RUN_ATTRIBUTES
+#define EL_RUN_ATTRIBUTES
+#endif
+EL_RUN_ATTRIBUTES void el_run(int argc, char **argv);
 
 /* Serve the interfaces: ports call it while they wait between instants
  * (MCU ports in their wait loop; the host board after serving its

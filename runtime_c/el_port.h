@@ -3,7 +3,8 @@
  * A board provides these functions (in boards/<board>/) and nothing else is
  * board-specific in the runtime. Logical time counts ticks of the model's
  * base period (EL_TICK_US microseconds, generated); tick counters wrap at
- * 2^32 and are compared wrap-safely.
+ * 2^32, or 2^16 in a narrow-tick build (el_types.h: el_wtick_t), and are
+ * compared wrap-safely.
  */
 #ifndef EL_PORT_H
 #define EL_PORT_H
@@ -18,7 +19,7 @@ bool el_port_init(int argc, char **argv);
 /* Block until logical tick `tick` has come (real-time boards), or return at
  * once (virtual time). Returns false when the board wants the run to end
  * (host: --duration reached). */
-bool el_port_wait_tick(uint32_t tick);
+bool el_port_wait_tick(el_wtick_t tick);
 
 /* Serve the interfaces for at most `max_ms` milliseconds (less if something
  * arrives): the wait of a program halted by its debugger, while logical
@@ -31,7 +32,7 @@ void el_port_resync(void);
 
 /* The real-time tick counter, for lateness (overrun) accounting. In virtual
  * time it is the logical tick being processed. */
-uint32_t el_port_real_tick(void);
+el_wtick_t el_port_real_tick(void);
 
 /* Critical sections around data shared with interrupts. Nestable through
  * the saved state. */

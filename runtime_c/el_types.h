@@ -48,12 +48,38 @@ typedef uint32_t el_time_t;
  * ticks), which nothing in a firmware notices: the port's waits and the
  * lateness count compare 32-bit ticks wrap-safely (instants are less than
  * a hyperperiod apart, which fits 32 bits), and a simulator's harness
- * extends the ticks it reads to 64 bits (sim_tick_extend). */
+ * extends the ticks it reads to 64 bits (sim_tick_extend).
+ *
+ * EL_TICK_16: a board that narrows ticks passes it for a program whose
+ * timing allows 16 bits (the IR's `tick_bits`, docs/ir.md, "Dispatcher
+ * widths"): hyperperiod and deadlines under 2^15 ticks, 2^15 ticks at
+ * least 10 s. Then the tick wraps after 2^16 ticks. A remote-execution
+ * proxy and a node of a Modbus round keep 32 bits: their links compare
+ * ticks in 32 (el_remote.c, the round's gate).
+ *
+ * el_wtick_t: the tick modulo 2^16 or 2^32, what the ports wait for and
+ * count in real time and the dispatch table's ticks within the
+ * hyperperiod; EL_TICK_REACHED compares two of them wrap-safely. */
+#if defined(EL_TICK_16) && EL_TICK_16 && !(defined(EL_REMOTE_PROXY) && EL_REMOTE_PROXY) && \
+    !defined(EL_ROUND_MASTER) && !defined(EL_ROUND_SLAVE)
+#define EL_TICK_BITS 16
+typedef uint16_t el_tick_t;
+typedef uint16_t el_wtick_t;
+#define EL_WTICK_HALF 0x8000u
+#define EL_ROM_READ_WTICK(p) EL_ROM_READ_U16(p)
+#else
 #if EL_HAS_INT64 && !(defined(EL_TICK_32) && EL_TICK_32)
 typedef uint64_t el_tick_t;
 #else
 typedef uint32_t el_tick_t;
 #endif
+typedef uint32_t el_wtick_t;
+#define EL_WTICK_HALF 0x80000000UL
+#define EL_ROM_READ_WTICK(p) EL_ROM_READ_U32(p)
+#endif
+/* Whether tick `t` has come at real tick `now` (el_wtick_t both): true from
+ * `t` on, for less than half the counter's range. */
+#define EL_TICK_REACHED(now, t) ((el_wtick_t)((el_wtick_t)(now) - (el_wtick_t)(t)) < (el_wtick_t)EL_WTICK_HALF)
 
 /* Saturate v into [lo, hi]. Arguments are evaluated more than once. */
 #define EL_CLAMP(v, lo, hi) ((v) < (lo) ? (lo) : ((v) > (hi) ? (hi) : (v)))

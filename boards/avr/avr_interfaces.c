@@ -87,7 +87,7 @@ int16_t el_port_mb_rtu_getc(void)
     }
     if (mb_in_frame) {
         /* The time stamp first: a byte arriving after it shows in the ring. */
-        uint32_t last = el_avr_uart_last_rx(EL_AVR_MODBUS_UART);
+        uint32_t last = el_avr_uart_last_rx();
         if (el_avr_uart_available(EL_AVR_MODBUS_UART) == 0u && el_avr_clock() - last >= mb_t35) {
             mb_in_frame = false; /* the silence after the last byte ends the frame */
             return EL_MB_SILENCE;

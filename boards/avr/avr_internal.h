@@ -36,22 +36,38 @@ uint32_t el_avr_clock_from_us(uint32_t us);
 #define EL_AVR_PARITY_ODD 2u
 
 /* Configure USART n (a UART the model uses: el_avr_config.h has its rings)
- * and enable its receiver, transmitter and receive interrupt. */
-void el_avr_uart_open(uint8_t n, uint32_t baud, uint8_t parity);
+ * and enable its receiver, transmitter and receive interrupt: `ubrr` the
+ * baud rate divisor in double speed, `frame` UCSRnC. False: UART n is not
+ * in use. */
+bool el_avr_uart_setup(uint8_t n, uint16_t ubrr, uint8_t frame);
+/* el_avr_uart_setup with 8 data bits, 1 stop bit, `parity` and the nearest
+ * divisor of `baud` (a constant baud rate costs no division at run time). */
+static inline void el_avr_uart_open(uint8_t n, uint32_t baud, uint8_t parity)
+{
+    uint8_t frame = (uint8_t)(_BV(UCSZ01) | _BV(UCSZ00));
+    if (baud == 0u) {
+        return;
+    }
+    if (parity == EL_AVR_PARITY_EVEN) {
+        frame |= _BV(UPM01);
+    } else if (parity == EL_AVR_PARITY_ODD) {
+        frame |= (uint8_t)(_BV(UPM01) | _BV(UPM00));
+    }
+    (void)el_avr_uart_setup(n, (uint16_t)((F_CPU + 4u * baud) / (8u * baud) - 1u), frame);
+}
 /* The next received byte, or -1. */
 int16_t el_avr_uart_getc(uint8_t n);
 /* Bytes waiting in the receive ring. */
 uint8_t el_avr_uart_available(uint8_t n);
 /* Take up to `max` received bytes; returns how many. */
 uint16_t el_avr_uart_read(uint8_t n, uint8_t *buf, uint16_t max);
-/* Queue `len` bytes for sending: all of them (waiting at most `wait_ms`
- * for room in the ring while the ring drains), or none (false). */
+/* Queue `len` bytes for sending: all of them (waiting about `wait_ms`, or
+ * longer under interrupts, for room in the ring while the ring drains), or
+ * none (false). */
 bool el_avr_uart_write(uint8_t n, const uint8_t *data, uint16_t len, uint16_t wait_ms);
-/* The fine clock (el_avr_clock) when the last byte was received. */
-uint32_t el_avr_uart_last_rx(uint8_t n);
-/* Bytes received with a framing, parity or overrun error, or lost to a
- * full ring (saturating). */
-uint16_t el_avr_uart_errors(uint8_t n);
+/* The fine clock (el_avr_clock) when the Modbus UART (EL_AVR_MODBUS_UART)
+ * last received a byte. */
+uint32_t el_avr_uart_last_rx(void);
 
 /* ---- the I2C bus (avr_twi.c; runtime_c/el_bus.h) ---- */
 

@@ -74,7 +74,7 @@ void el_avr_early_init(void)
 
 /* ---- time ---- */
 
-static volatile uint32_t ticks;      /* LET ticks since el_port_init */
+static volatile el_wtick_t ticks;    /* LET ticks since el_port_init (el_types.h: 16 or 32 bits) */
 static volatile uint32_t isr_count;  /* Timer2 interrupts since el_port_init */
 #if EL_AVR_TICK_ISRS > 1
 static volatile uint16_t isr_left = EL_AVR_TICK_ISRS; /* interrupts left in this tick */
@@ -119,10 +119,10 @@ uint32_t el_avr_clock_from_us(uint32_t us)
     return (us / 1000u) * (uint32_t)EL_AVR_CLOCK_KHZ + ((us % 1000u) * (uint32_t)EL_AVR_CLOCK_KHZ + 999u) / 1000u;
 }
 
-static uint32_t read_ticks(void)
+static el_wtick_t read_ticks(void)
 {
     uint8_t sreg = SREG;
-    uint32_t t;
+    el_wtick_t t;
     cli();
     t = ticks;
     SREG = sreg;
@@ -175,8 +175,7 @@ bool el_port_init(int argc, char **argv)
     el_avr_uart_open(EL_AVR_REMOTE_UART, EL_REMOTE_BAUD, EL_AVR_PARITY_NONE);
 #endif
     el_avr_reset_halt = 0u;
-    ticks = 0u;
-    isr_count = 0u;
+    /* ticks and isr_count are zero from boot (.bss): el_port_init runs once. */
     start_tick_timer();
     wdt_enable(EL_AVR_WDTO);
     sei();
@@ -187,10 +186,10 @@ bool el_port_init(int argc, char **argv)
 /* A slave of a Modbus round (docs/distribution.md; the node's generated
  * el_link.c defines it, and the build defines EL_ROUND_SLAVE): its ticks
  * follow the master's sync, not the timer. */
-int8_t el_round_gate(uint32_t tick);
+int8_t el_round_gate(uint32_t tick); /* a round keeps 32-bit ticks (el_types.h) */
 #endif
 
-bool el_port_wait_tick(uint32_t tick)
+bool el_port_wait_tick(el_wtick_t tick)
 {
 #if defined(EL_ROUND_SLAVE)
     {
@@ -212,12 +211,12 @@ bool el_port_wait_tick(uint32_t tick)
 #endif
     for (;;) {
         wdt_reset();
-        if ((int32_t)(read_ticks() - tick) >= 0) {
+        if (EL_TICK_REACHED(read_ticks(), tick)) {
             return true;
         }
         el_idle();
         cli();
-        if ((int32_t)(ticks - tick) >= 0) {
+        if (EL_TICK_REACHED(ticks, tick)) {
             sei();
             return true;
         }
@@ -231,18 +230,33 @@ bool el_port_wait_tick(uint32_t tick)
     }
 }
 
+/* Timer2 interrupts in 256 ms (a constant of the build). */
+#define ISRS_PER_256_MS \
+    ((uint32_t)(F_CPU / 1000UL * 256UL / ((uint32_t)EL_AVR_TICK_PRESCALE * ((uint32_t)EL_AVR_TICK_OCR + 1UL))))
+
 void el_port_idle(uint16_t max_ms)
 {
-    uint32_t start = el_avr_clock();
-    uint32_t span = el_avr_clock_from_us((uint32_t)max_ms * 1000u);
-    do {
+    /* Timer2 interrupts rather than the fine clock: a product by a constant
+     * and a shift, rounded down (never longer than max_ms). Their count's
+     * low byte is read alone: one load, atomic. */
+    uint16_t left = (uint16_t)(((uint32_t)max_ms * ISRS_PER_256_MS) >> 8);
+    uint8_t seen = *(volatile uint8_t *)&isr_count;
+    for (;;) {
+        uint8_t now, passed;
         wdt_reset();
         el_idle();
+        if (left == 0u) {
+            return;
+        }
         set_sleep_mode(SLEEP_MODE_IDLE);
         sleep_enable();
         sleep_cpu(); /* the next interrupt: a timer period at most */
         sleep_disable();
-    } while (el_avr_clock() - start < span);
+        now = *(volatile uint8_t *)&isr_count;
+        passed = (uint8_t)(now - seen);
+        seen = now;
+        left = passed >= left ? 0u : (uint16_t)(left - passed);
+    }
 }
 
 void el_port_resync(void)
@@ -250,7 +264,7 @@ void el_port_resync(void)
     uint8_t sreg = SREG;
     cli();
     /* The current tick is due now: a fresh tick period starts. */
-    ticks = (uint32_t)el_now_tick();
+    ticks = (el_wtick_t)el_now_tick();
 #if EL_AVR_TICK_ISRS > 1
     isr_left = EL_AVR_TICK_ISRS;
 #endif
@@ -259,7 +273,7 @@ void el_port_resync(void)
     SREG = sreg;
 }
 
-uint32_t el_port_real_tick(void)
+el_wtick_t el_port_real_tick(void)
 {
     return read_ticks();
 }
@@ -281,8 +295,8 @@ void el_port_irq_restore(el_irq_state_t state)
 /* ---- instants ---- */
 
 #if defined(EL_AVR_SIM) && EL_AVR_SIM
-/* The instant being processed, for the harness (read from RAM; 32 bits,
- * which the harness extends). */
+/* The instant being processed, for the harness (read from RAM; 16 or 32
+ * bits, el_tick_t, which the harness extends by the symbol's size). */
 volatile el_tick_t el_avr_sim_tick;
 #endif
 
@@ -361,6 +375,7 @@ uint16_t el_avr_adc_read(uint8_t ch)
 #if !defined(EL_AVR_NO_MAIN)
 int main(void)
 {
+    /* Nothing kept across el_run: it saves no registers (OS_task, board.toml). */
     el_run(0, (char **)0);
     el_port_shutdown();
     return 0;

@@ -24,7 +24,8 @@ from pathlib import Path
 
 from easylab.board import handlers, resources
 from easylab.board.base import BoardBase
-from easylab.board.cbuild import (compile_objects, elf_sections, include_flags, mode_flags, require_tool, run,
+from easylab.board.cbuild import (compile_objects, dispatcher_width_flags, elf_sections, include_flags, mode_flags,
+                                  require_tool, run,
                                   runtime_sources, write_files)
 from easylab.board.contract import Compiled, CompileOptions, SizeReport, Simulator
 from easylab.board.simtables import kept_symbols
@@ -100,7 +101,8 @@ class AvrBoard(BoardBase):
         require_tool(compiler, self.name, _PACKAGES)
         sources = [p for p in generated if p.suffix == ".c"] + runtime_sources(options.release) \
             + self.description.source_paths
-        flags = [*self.cflags, *mode_flags(options.release), *options.extra_cflags,
+        # The dispatcher as narrow as the program allows (docs/ir.md, "Dispatcher widths").
+        flags = [*self.cflags, *mode_flags(options.release), *dispatcher_width_flags(program), *options.extra_cflags,
                  *include_flags(out_dir, self.description)]
         objects = compile_objects(compiler, flags, sources, out_dir / "obj", out_dir)
         elf = out_dir / f"{program.name}.elf"

@@ -389,11 +389,17 @@ static void mirror_from_mcu(unsigned kinds, bool charts)
                 sim_ram_read(sim_chart_addr[c].addr, (void *)el_charts[c].active, sim_chart_addr[c].size);
 }
 
-uint64_t sim_tick_extend(uint32_t tick)
+uint64_t sim_tick_extend_bits(uint32_t tick, unsigned bits)
 {
     static uint64_t last;
-    last += (uint32_t)(tick - (uint32_t)last);
+    uint32_t mask = bits >= 32u ? 0xFFFFFFFFu : ((uint32_t)1u << bits) - 1u;
+    last += (uint32_t)(tick - (uint32_t)last) & mask;
     return last;
+}
+
+uint64_t sim_tick_extend(uint32_t tick)
+{
+    return sim_tick_extend_bits(tick, 32u);
 }
 
 void sim_instant_inputs(uint64_t tick)

@@ -151,6 +151,9 @@ extern uint64_t el_sim_now_us;  /* the logical time of the instant the firmware 
  * wraps after 2^32 ticks; instants come in order, less than 2^32 ticks
  * apart). */
 uint64_t sim_tick_extend(uint32_t tick);
+/* The same from the low `bits` bits (16 or 32: a firmware's el_tick_t;
+ * instants less than 2^bits ticks apart). */
+uint64_t sim_tick_extend_bits(uint32_t tick, unsigned bits);
 
 /* At the firmware's inputs mark of `tick`: end the run at --duration, else
  * apply the stimulus due (params and vars into RAM, device `out` data onto

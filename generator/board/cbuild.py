@@ -54,6 +54,17 @@ def mode_flags(release: bool) -> list[str]:
     return ["-DEL_RELEASE=1"] if release else ["-DEL_DEBUG=1"]
 
 
+def dispatcher_width_flags(program) -> list[str]:
+    """The program's narrowest dispatcher widths (its IR's ``tick_bits`` and
+    ``task_mask_bits``, docs/ir.md), for a board that narrows them (8-bit
+    parts: less flash and fewer cycles per instant). Every file of a build
+    must see the same flags."""
+    flags = [f"-DEL_TASK_MASK_BITS={program.task_mask_bits}"]
+    if program.tick_bits == 16:
+        flags.append("-DEL_TICK_16=1")
+    return flags
+
+
 def include_flags(out_dir: Path | None, description: BoardDescription) -> list[str]:
     """The generated files first, then the runtime, then the board's folders."""
     first = [f"-I{out_dir}"] if out_dir is not None else []

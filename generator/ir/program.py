@@ -22,6 +22,10 @@ from ..core.source import Span
 __all__ = ["Fire", "Loop", "Schedule"]  # re-exported: backends take the schedule notation from here
 
 IR_VERSION = 1
+# How late an instant may be and still be seen as due with 16-bit ticks (µs):
+# far beyond what a firmware survives (the MCU boards' watchdogs reset it
+# after about 2 s), and beyond any halt (the debugger resynchronises).
+TICK_16_HEADROOM_US = 10_000_000
 
 
 def location(span: Span | None) -> str:
@@ -315,6 +319,25 @@ class Program:
 
     def item(self, name: str) -> Item:
         return next(i for i in self.items if i.name == name)
+
+    # The dispatcher's widths (docs/ir.md, "Dispatcher widths"): derived
+    # from the timing, so not part of the dump (the program id).
+
+    @property
+    def task_mask_bits(self) -> int:
+        """Bits of the dispatcher's task masks: 8, 16 or 32, a bit per task."""
+        return next(bits for bits in (8, 16, 32) if len(self.tasks) <= bits)
+
+    @property
+    def tick_bits(self) -> int:
+        """16 when the dispatcher's ticks may wrap at 2^16, else 32: every
+        span it compares wrap-safely (a tick of the dispatch table, a gap
+        between instants, a deadline, all within the hyperperiod) is under
+        2^15 ticks, and 2^15 ticks last at least TICK_16_HEADROOM_US, so an
+        instant that late is still seen as due and counted late."""
+        longest = max([self.hyperperiod, *(t.deadline for t in self.tasks)])
+        fits = longest < 1 << 15 and (1 << 15) * self.tick_us >= TICK_16_HEADROOM_US
+        return 16 if fits else 32
 
 
 # ====================================================================== identity

@@ -52,6 +52,22 @@ def test_the_native_suites_stimuli_give_equal_traces(sim_builds, host_builds, na
     assert avr == host
 
 
+def test_16_bit_ticks_wrap_and_the_trace_stays_the_hosts(sim_builds, host_builds, tmp_path):
+    """blink's timing allows 16-bit ticks (docs/ir.md, "Dispatcher widths"):
+    the firmware's tick wraps at 2^16, 65.5 s of 1 ms ticks. Over two wraps,
+    with the param written after each, the harness extends the tick it reads
+    and the trace is the host's byte for byte."""
+    built = sim_builds["blink"]
+    nm = subprocess.run(["avr-nm", "-S", str(built.elf)], capture_output=True, text=True, check=True).stdout
+    assert any(line.split()[1:] == ["00000002", "B", "el_avr_sim_tick"] for line in nm.splitlines()), nm
+    stim = tmp_path / "wrap.csv"
+    stim.write_text("time_us,half_period\n0,500\n70000000,250\n135000000,40\n")
+    host, avr = both(sim_builds, host_builds, "blink", tmp_path, stim, "140s")
+    assert avr == host
+    last = host.splitlines()[-1].split(b",")  # time_us, half_period, led.level
+    assert int(last[0]) > 2 * 65536 * 1000 and last[1] == b"40", last
+
+
 def test_a_value_the_adc_cannot_give_is_an_error(sim_builds, tmp_path):
     stim = tmp_path / "s.csv"
     stim.write_text("time_us,sensor.raw\n0,300\n30000,1024\n")

@@ -244,7 +244,9 @@ def test_the_actuators_reach_their_safe_values_when_the_host_dies(case, build_ca
 
 
 def test_easylab_proxy_builds_the_avr_proxy_for_the_atmega328p(tmp_path):
-    """Its flash and RAM (deterministic, so a bound), its link on uart0."""
+    """Its flash and RAM (deterministic, so a bound), its link on uart0, its
+    ticks 32-bit although blink's timing allows 16 (the link's watchdog
+    counts in 32: runtime_c/el_types.h)."""
     proc = subprocess.run([*EASYLAB, "proxy", str(BLINK), "--board", "avr", "--mcu", "atmega328p", "-o",
                            str(tmp_path / "p")], capture_output=True, text=True, timeout=300, stdin=subprocess.DEVNULL)
     assert proc.returncode == 0, proc.stderr
@@ -266,6 +268,9 @@ def test_easylab_proxy_builds_the_avr_proxy_for_the_atmega328p(tmp_path):
                              stdin=subprocess.DEVNULL)
     assert missing.returncode != 0 and f"nothing built in {tmp_path / 'q'} to flash: build it first (easylab proxy" \
         in missing.stderr
+    nm = subprocess.run(["avr-nm", "-S", str(tmp_path / "p" / "blink_proxy.elf")], capture_output=True, text=True,
+                        check=True).stdout
+    assert any(line.split()[1:] == ["00000004", "b", "el_now"] for line in nm.splitlines()), nm
 
 
 def test_a_part_whose_every_uart_a_device_claims_has_no_link(tmp_path):

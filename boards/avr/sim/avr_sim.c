@@ -99,12 +99,15 @@ void sim_ram_write(uint16_t addr, const void *src, size_t n)
     memcpy(avr->data + addr, src, n);
 }
 
-/* The instant's tick: el_avr_sim_tick, 32 bits (EL_TICK_32), little-endian. */
+/* The instant's tick: el_avr_sim_tick, little-endian, 2 or 4 bytes (the
+ * firmware's el_tick_t: sim_tick_size). */
 static uint64_t read_tick(void)
 {
-    uint8_t b[4];
-    sim_ram_read(sim_tick_addr, b, sizeof b);
-    return sim_tick_extend((uint32_t)b[0] | (uint32_t)b[1] << 8 | (uint32_t)b[2] << 16 | (uint32_t)b[3] << 24);
+    uint8_t b[4] = {0u, 0u, 0u, 0u};
+    uint8_t n = sim_tick_size == 2u ? 2u : 4u;
+    sim_ram_read(sim_tick_addr, b, n);
+    return sim_tick_extend_bits((uint32_t)b[0] | (uint32_t)b[1] << 8 | (uint32_t)b[2] << 16 | (uint32_t)b[3] << 24,
+                                8u * n);
 }
 
 /* ---- hardware behind device data ---- */

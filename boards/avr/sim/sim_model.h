@@ -48,5 +48,7 @@ typedef struct {
 extern const sim_chip_t sim_chips[];
 extern const uint16_t sim_chip_count;
 extern const sim_pin_t sim_pins[];
+/* Bytes of the firmware's el_avr_sim_tick: 2 or 4 (el_types.h: el_tick_t). */
+extern const uint8_t sim_tick_size;
 
 #endif /* SIM_MODEL_H */
