@@ -297,6 +297,8 @@ class Program:
     # Where it runs, for a model of several nodes (ir/deployment.py); None for one board.
     deployment: object = None
     remote: RemoteSettings | None = None  # None: the defaults
+    # A node's DDS exports (ir/dds.py: DdsExport), from the split; empty elsewhere.
+    exports: list = field(default_factory=list)
 
     def item(self, name: str) -> Item:
         return next(i for i in self.items if i.name == name)
@@ -308,8 +310,9 @@ class Program:
 def to_json(program: Program) -> dict:
     """A canonical, JSON-serialisable dump of the IR (also hashed for the id)."""
     def conv(value):
-        if isinstance(value, Program) and value.deployment is None:  # a one-board program, as before nodes
-            return {k: conv(getattr(value, k)) for k in value.__dataclass_fields__ if k != "deployment"}
+        if isinstance(value, Program):  # a one-board program, and a node without exports, as before them
+            return {k: conv(getattr(value, k)) for k in value.__dataclass_fields__
+                    if not (k == "deployment" and value.deployment is None) and not (k == "exports" and not value.exports)}
         if isinstance(value, T.ValueType):
             return value.name
         if isinstance(value, (Schedule,)):
