@@ -1,6 +1,7 @@
 /* EasyLab host board: a node's DDS exports (see host_dds.h).
  *
- * Every export has a reliable, keep-last writer on its topic. The model
+ * Every export has a reliable, keep-last, transient-local writer on its
+ * topic. The model
  * calls el_port_export() at the instant the export has a value (ir/dds.py
  * decides when); the sample's source timestamp is that instant's logical
  * time in nanoseconds, so a subscriber sees the model's instants whatever
@@ -27,6 +28,12 @@ bool el_host_dds_start(void)
     }
     dds_qset_reliability(qos, DDS_RELIABILITY_RELIABLE, DDS_MSECS(100));
     dds_qset_history(qos, DDS_HISTORY_KEEP_LAST, el_dds_history_depth);
+    /* A reader that joins late (discovery takes a few ms) and asks for it
+     * gets the last samples; ROS 2's volatile readers match as well. */
+    dds_qset_durability(qos, DDS_DURABILITY_TRANSIENT_LOCAL);
+    /* as many samples for them as the history holds (the default keeps one) */
+    dds_qset_durability_service(qos, 0, DDS_HISTORY_KEEP_LAST, el_dds_history_depth, DDS_LENGTH_UNLIMITED,
+                                DDS_LENGTH_UNLIMITED, DDS_LENGTH_UNLIMITED);
     for (k = 0u; k < el_dds_export_count && ok; k++) {
         const el_dds_export_t *e = &el_dds_exports[k];
         dds_entity_t topic;

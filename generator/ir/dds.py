@@ -19,7 +19,9 @@ from dataclasses import dataclass
 from ..core import types as T
 
 # QoS of every export's writer: reliable, keep-last with ROS 2's default
-# depth (the `default` profile of rclcpp and rclpy), volatile.
+# depth (the `default` profile of rclcpp and rclpy), transient-local (a
+# reader that asks for it gets the last samples written before it matched;
+# ROS 2's volatile readers match too).
 HISTORY_DEPTH = 10
 
 # EasyLab type -> (std_msgs message, IDL type of its `data` field).
