@@ -204,3 +204,38 @@ def test_an_independent_ros2_subscriber_receives_every_exported_value(tmp_path):
     assert got["steps"][:-1] == [(t, value_at(header, rows, "mirror", t + 10_000)) for t, _ in got["steps"][:-1]]
     assert got["steps"][-1] == (990_000, got["level"][-1][1])  # taken at 990 ms, published at 990 ms
     assert len({v for _, v in got["steps"]}) == len(got["steps"])  # a ramp: the sequence, not one value
+
+
+ENCODERS = """time_us,encoder1.count,encoder2.count
+0,0,0
+100000,50,10
+240000,120,-30
+400000,-20,200
+"""
+
+
+def test_the_robots_export_reaches_a_ros2_subscriber_with_the_joints_values(tmp_path):
+    # the robot example in its own domain: planner on the host, both joints in simavr, in lock-step
+    (tmp_path / "robot.elab").write_text(ROBOT.read_text().replace("link ros dds domain 0", f"link ros dds domain {DOMAIN}"))
+    (tmp_path / "stimulus.csv").write_text(ENCODERS)
+    args = [*listener_args("rt/robot/planner/position1", "std_msgs::msg::dds_::Int16_", "int16")]
+    args[args.index("--idle") + 1] = "10"  # the build comes first
+    got = in_namespace(tmp_path, {"position1": args},
+                       [sys.executable, "-m", "easylab", "launch", "robot.elab", "--fast", "--duration", "600ms",
+                        "--stimulus", "stimulus.csv", "--trace-dir", "traces", "--build-dir", "build"],
+                       timeout=900)["position1"]
+    joint1 = trace(tmp_path / "traces" / "joint1.csv")
+    joint2 = trace(tmp_path / "traces" / "joint2.csv")
+    planner = trace(tmp_path / "traces" / "planner.csv")
+    # at each release of `plan` (every 20 ms from 0) the token it takes: the
+    # encoder count `control1` read two periods before (delay 2; 0 before)
+    assert [t for t, _ in got] == list(range(0, 600_000, 20_000))
+
+    def position(joint, column, t):
+        return 0 if t < 40_000 else (value_at(*joint, column, t - 40_000) + 2 ** 15) % 2 ** 16 - 2 ** 15
+
+    assert got == [(t, position(joint1, "encoder1.count", t)) for t, _ in got]
+    assert {v for _, v in got} == {0, 50, 120, -20}
+    # and `plan` computed its spread from that very value, published one period later
+    assert all(value_at(*planner, "spread", t + 20_000) == v - position(joint2, "encoder2.count", t)
+               for t, v in got[:-1])
