@@ -122,12 +122,14 @@ static void install_signals(void)
 /* ---- init and shutdown ---- */
 
 #if defined(EL_HOST_DDS)
-#include "host_dds.h" /* a node with DDS exports (docs/distribution.md) */
+#include "host_dds.h" /* a node with DDS exports or channels (docs/distribution.md) */
 #define DDS_START() el_host_dds_start()
 #define DDS_STOP() el_host_dds_stop()
+#define DDS_INPUTS(now_us) el_host_dds_inputs(now_us)
 #else
 #define DDS_START() true
 #define DDS_STOP() ((void)0)
+#define DDS_INPUTS(now_us) ((void)(now_us))
 #endif
 
 static void release_all(void)
@@ -325,6 +327,7 @@ void el_port_irq_restore(el_irq_state_t state)
 void el_port_inputs(uint64_t tick)
 {
     ROUND_MASTER(mul_sat(tick, el_tick_us), true);
+    DDS_INPUTS(mul_sat(tick, el_tick_us));
     el_host_stimulus_inputs();
 }
 

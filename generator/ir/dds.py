@@ -10,6 +10,10 @@ tables and decides nothing.
 
 A sample's source timestamp is the logical time of that instant (ns since
 the node's logical time 0), so a subscriber sees the model's instants.
+
+A channel between two PC nodes over a DDS link (:class:`DdsChannel`) is
+written by the producer's node at each publication and pushed into the
+consumer's input end once its stamp + the link's delay is due.
 """
 
 from __future__ import annotations
@@ -17,6 +21,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from ..core import types as T
+from .deployment import topic_name
 
 # QoS of every export's writer: reliable, keep-last with ROS 2's default
 # depth (the `default` profile of rclcpp and rclpy), transient-local (a
@@ -86,6 +91,56 @@ def ros_type_of(model: str, name: str, value_type: T.ValueType, values: int) -> 
     return (model, "msg", "dds_"), f"{camel}_", member
 
 
+@dataclass
+class DdsChannel:
+    """A node's end of a channel over a DDS link: ``out`` on the producer's
+    node writes each publication's tokens (one sample of ``values`` tokens,
+    stamped with its logical time d); ``in`` on the consumer's node pushes a
+    sample into the channel's input end at the first instant at or after
+    d + ``delay_us`` (the link's latency + jitter, the checker's arrival).
+    The producer publishes at ``first_us + k * period_us``: in lock-step the
+    consumer waits for every publication due by an instant."""
+
+    name: str
+    channel: int  # channel id in the node's program
+    direction: str  # out | in
+    link: str
+    domain: int
+    topic: str  # rt/<model>/<producer node>/<channel>
+    module: tuple[str, ...]
+    struct: str
+    member: str
+    value_type: T.ValueType
+    values: int  # tokens per publication of the producer
+    delay_us: int
+    first_us: int
+    period_us: int
+
+    type_name = DdsExport.type_name
+    c_type = DdsExport.c_type
+
+
+def node_dds_channels(program, node: str, channels) -> list[DdsChannel]:
+    """The node's ends of the channels that cross a DDS link, with the node
+    program's channel ids (``channels``: old id -> new id)."""
+    dep = program.deployment
+    links = {lk.name: lk for lk in dep.links}
+    found = []
+    for crossing in dep.crossings:
+        link = links[crossing.link]
+        if link.engine != "dds" or node not in (crossing.producer_node, crossing.consumer_node):
+            continue
+        ch = program.channels[crossing.channel]
+        producer = program.tasks[ch.producer_task]
+        module, struct, member = ros_type_of(program.name, ch.name, ch.type, ch.tokens_in)
+        found.append(DdsChannel(
+            ch.name, channels(ch.id), "out" if crossing.producer_node == node else "in", link.name,
+            link.settings["domain"], topic_name(program.name, crossing.producer_node, ch.name), module, struct,
+            member, ch.type, ch.tokens_in, crossing.delay_us,
+            (producer.offset + producer.deadline) * program.tick_us, producer.period * program.tick_us))
+    return found
+
+
 def node_exports(program, node: str, items, channels, tasks) -> list[DdsExport]:
     """The exports published from ``node`` of a distributed ``program``, with
     the node program's ids (``items``, ``channels``, ``tasks``: old id -> new
@@ -111,8 +166,8 @@ def node_exports(program, node: str, items, channels, tasks) -> list[DdsExport]:
     return found
 
 
-def idl_text(exports: list[DdsExport]) -> str:
-    """The IDL of every type the exports use, each once (for idlc)."""
+def idl_text(exports: list) -> str:
+    """The IDL of every type the exports (and DDS channel ends) use, each once (for idlc)."""
     seen: dict[str, str] = {}
     for e in exports:
         if e.type_name in seen:
@@ -124,4 +179,5 @@ def idl_text(exports: list[DdsExport]) -> str:
     return "// DDS types of the exports (generated from the IR; docs/distribution.md)\n" + "".join(seen.values())
 
 
-__all__ = ["DdsExport", "HISTORY_DEPTH", "idl_text", "node_exports", "ros_type_of"]
+__all__ = ["DdsChannel", "DdsExport", "HISTORY_DEPTH", "idl_text", "node_dds_channels", "node_exports",
+           "ros_type_of"]

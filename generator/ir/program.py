@@ -299,6 +299,8 @@ class Program:
     remote: RemoteSettings | None = None  # None: the defaults
     # A node's DDS exports (ir/dds.py: DdsExport), from the split; empty elsewhere.
     exports: list = field(default_factory=list)
+    # A node's ends of channels over DDS links (ir/dds.py: DdsChannel), from the split; empty elsewhere.
+    dds_channels: list = field(default_factory=list)
 
     def item(self, name: str) -> Item:
         return next(i for i in self.items if i.name == name)
@@ -310,9 +312,10 @@ class Program:
 def to_json(program: Program) -> dict:
     """A canonical, JSON-serialisable dump of the IR (also hashed for the id)."""
     def conv(value):
-        if isinstance(value, Program):  # a one-board program, and a node without exports, as before them
+        if isinstance(value, Program):  # a one-board program, and a node without DDS, as before them
             return {k: conv(getattr(value, k)) for k in value.__dataclass_fields__
-                    if not (k == "deployment" and value.deployment is None) and not (k == "exports" and not value.exports)}
+                    if not (k == "deployment" and value.deployment is None)
+                    and not (k in ("exports", "dds_channels") and not getattr(value, k))}
         if isinstance(value, T.ValueType):
             return value.name
         if isinstance(value, (Schedule,)):

@@ -18,7 +18,7 @@ from dataclasses import dataclass, replace
 from math import gcd
 
 from ..core import expr as I
-from .dds import node_exports
+from .dds import node_dds_channels, node_exports
 from .deployment import Crossing, NodeSpec
 from .program import Chart, Dataflow, Instant, Interface, Program, Task, program_id
 
@@ -116,6 +116,7 @@ def _node_program(program: Program, node: NodeSpec) -> NodeProgram:
                            new_devices, new_specs, new_instances, new_dataflows, new_charts, new_channels,
                            new_tasks, instants, _link_interfaces(program, node.name))
     node_program.exports = node_exports(program, node.name, items, channels, tasks)
+    node_program.dds_channels = node_dds_channels(program, node.name, channels)
     node_program.program_id = program_id(node_program)
     inputs, outputs = [], []
     for crossing in dep.crossings:

@@ -239,3 +239,71 @@ def test_the_robots_export_reaches_a_ros2_subscriber_with_the_joints_values(tmp_
     # and `plan` computed its spread from that very value, published one period later
     assert all(value_at(*planner, "spread", t + 20_000) == v - position(joint2, "encoder2.count", t)
                for t, v in got[:-1])
+
+
+# ---------------------------------------------------------------- channels between two PCs
+
+PAIR = """\
+model pair "two PCs: a ramp crosses DDS"
+import std
+node a board host
+node b board host
+link lan dds domain 44 latency 5 ms {
+    peer a
+    peer b
+}
+channel steps: int16 delay 2 over lan
+var mirror: int16
+dataflow Produce {
+    ramp = Ramp<int16>(slope = 3)
+    ramp.y -> steps
+}
+dataflow Consume {
+    steps -> mirror
+}
+task produce on a period 10 ms { run Produce }
+task consume on b period 10 ms offset 3 ms { run Consume }
+"""
+
+
+def test_a_channel_over_dds_needs_the_delay_its_links_latency_asks(tmp_path):
+    model = tmp_path / "pair.elab"
+    model.write_text(PAIR.replace("delay 2 over", "delay 1 over"))
+    check = easylab("check", str(model))
+    assert check.returncode != 0
+    assert "a value reaches task 'consume' up to 5000 us after task 'produce' publishes it; it needs 1 more " \
+           "initial token(s)" in check.stderr + check.stdout
+    program, _ = lower_file(_write(tmp_path / "ok.elab", PAIR))
+    nodes = split(program)
+    (out,), (end,) = nodes["a"].program.dds_channels, nodes["b"].program.dds_channels
+    assert (out.direction, end.direction, out.topic, end.topic) == ("out", "in", "rt/pair/a/steps", "rt/pair/a/steps")
+    # published at produce's deadlines (10 ms, 20 ms, ...), usable 5 ms later
+    assert (end.delay_us, end.first_us, end.period_us, end.values) == (5000, 10_000, 10_000, 1)
+    assert nodes["a"].program.exports == [] == nodes["b"].program.exports
+
+
+def _write(path: Path, text: str) -> Path:
+    path.write_text(text)
+    return path
+
+
+@pytest.mark.parametrize("pace", [["--fast"], pytest.param([], marks=pytest.mark.realtime)],
+                         ids=["lock-step", "real-time"])
+def test_two_pcs_over_dds_trace_the_single_node_run(tmp_path, pace):
+    model = _write(tmp_path / "pair.elab", PAIR)
+    ref = easylab("run", str(model), "--fast", "--duration", "1s", "--trace", str(tmp_path / "reference.csv"))
+    assert ref.returncode == 0, ref.stderr
+    problem = namespace_problem()
+    if problem:
+        pytest.fail(f"the DDS channel test runs in a private network namespace: {problem}")
+    run = subprocess.run(namespace_command([sys.executable, "-m", "easylab", "launch", "pair.elab", *pace,
+                                            "--duration", "1s", "--trace-dir", "traces", "--build-dir", "build"]),
+                         cwd=tmp_path, capture_output=True, text=True, timeout=600)
+    assert run.returncode == 0, run.stdout + run.stderr
+    assert "DDS" not in run.stderr, run.stderr  # no timeout, no lost token
+    ref_header, reference = trace(tmp_path / "reference.csv")
+    header, rows = trace(tmp_path / "traces" / "b.csv")
+    # node b's trace starts at its first instant (3 ms), the whole model's at 0: the same values from there
+    assert header == ref_header and rows[0] == [3000, *reference[0][1:]]
+    assert rows[1:] == reference[1:]
+    assert len(rows) > 90 and rows[1] == [33_000, 3]  # published at 10 ms, taken at 23 ms, mirrored at 33 ms
