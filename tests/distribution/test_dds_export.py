@@ -22,6 +22,7 @@ from easylab.ir.dds import idl_text, ros_type_of
 from easylab.ir.program import to_json
 from easylab.ir.split import split
 from easylab.pipeline import lower_file
+from distribution_testlib import variant
 
 ROOT = Path(__file__).resolve().parents[2]
 ROBOT = ROOT / "examples" / "robot" / "robot.elab"
@@ -181,6 +182,19 @@ def test_exports_without_cyclone_dds_say_what_to_install(tmp_path):
            "cyclonedds-dev and cyclonedds-tools" in run.stderr, run.stderr
 
 
+def test_an_export_on_a_board_without_dds_is_an_error_naming_the_node(tmp_path):
+    model = _write(tmp_path / "arm.elab", variant("    peer pc\n}", "    peer pc\n    peer j1\n}").replace(
+        "export pos1 over lan", "var level: int32\nexport level over lan").replace(
+        "    e1 -> pos1\n", "    e1 -> pos1\n    e1 -> level\n"))
+    expected = ("node 'j1': a DDS peer with exports or channels needs a board with DDS (board.toml: dds = true), "
+                "and board 'avr' has none: put them on a PC node")
+    check = easylab("check", str(model))
+    assert check.returncode != 0 and "node 'j1' (board avr, atmega328p): a DDS peer" in check.stdout + check.stderr
+    run = easylab("build", str(model), "-o", str(tmp_path / "b"))
+    assert run.returncode != 0 and expected in run.stderr, run.stdout + run.stderr
+    assert not (tmp_path / "b" / "pc").exists()  # refused before any node is built
+
+
 # ---------------------------------------------------------------- on the wire
 
 
@@ -307,3 +321,41 @@ def test_two_pcs_over_dds_trace_the_single_node_run(tmp_path, pace):
     assert header == ref_header and rows[0] == [3000, *reference[0][1:]]
     assert rows[1:] == reference[1:]
     assert len(rows) > 90 and rows[1] == [33_000, 3]  # published at 10 ms, taken at 23 ms, mirrored at 33 ms
+
+
+MULTI = """\
+model multi
+import std
+node pc board host
+link ros dds domain 42 {
+    peer pc
+}
+channel fine_steps: int16 delay 2
+var got: int16
+dataflow P {
+    r = Ramp<int16>(slope = 1)
+    r.y -> fine_steps
+}
+dataflow C {
+    d = Downsample<int16>(factor = 2)
+    fine_steps -> d.x
+    d.y -> got
+}
+task p on pc period 10 ms { run P }
+task c on pc period 20 ms { run C }
+export fine_steps over ros
+"""
+
+
+def test_several_tokens_per_release_are_one_sample_of_the_models_own_type(tmp_path):
+    run = easylab("build", str(_write(tmp_path / "multi.elab", MULTI)), "-o", str(tmp_path / "b"))
+    assert run.returncode == 0, run.stdout + run.stderr
+    assert "@final struct FineSteps_ { short data[2]; };" in (tmp_path / "b" / "pc" / "el_dds_types.idl").read_text()
+    args = ["--domain", str(DOMAIN), "--topic", "rt/multi/pc/fine_steps", "--type", "multi::msg::dds_::FineSteps_",
+            "--field", "int16", "--length", "2", "--seconds", "120", "--idle", "2"]
+    got = in_namespace(tmp_path, {"fine": args}, [str(tmp_path / "b" / "pc" / "multi.pc"), "--duration", "200ms",
+                                                  "--trace", "pc.csv"])["fine"]
+    # each release of c (every 20 ms) takes two tokens: the initial two, then the ramp's pairs
+    assert got == [(t, [0, 0] if t == 0 else [t // 10_000 - 1, t // 10_000]) for t in range(0, 200_000, 20_000)]
+    header, rows = trace(tmp_path / "pc.csv")
+    assert all(value_at(header, rows, "got", t + 20_000) == v[1] for t, v in got[:-1])  # Downsample keeps the last
