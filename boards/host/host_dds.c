@@ -24,6 +24,7 @@
 #include <string.h>
 
 static bool write_failed; /* a failed write is reported once */
+static bool overflowed;   /* so is a full input end */
 static bool gave_up;      /* a lock-step wait timed out: reported once, no more waits */
 
 static dds_duration_t timeout(void)
@@ -118,7 +119,7 @@ static bool open_row(uint8_t k)
 bool el_host_dds_start(void)
 {
     uint8_t k;
-    write_failed = gave_up = false;
+    write_failed = overflowed = gave_up = false;
     for (k = 0u; k < el_dds_topic_count; k++) {
         if (!open_row(k)) {
             el_host_dds_stop();
@@ -167,7 +168,7 @@ void el_port_export(uint8_t index, const void *values)
 }
 
 /* Push the samples of input row k due by now, oldest first (one writer:
- * they come in the order of their stamps); true if one was pushed. */
+ * they come in the order of their stamps). */
 static void push_due(uint8_t k, uint64_t now_us)
 {
     const el_dds_topic_t *e = &el_dds_topics[k];
@@ -181,8 +182,8 @@ static void push_due(uint8_t k, uint64_t now_us)
         (void)dds_take_mask(el_dds_endpoints[k], samples, &info, 1, 1, DDS_ANY_STATE);
         if (!info.valid_data)
             continue; /* the writer's end: no value */
-        if (e->push(e->data, e->values) < e->values && !write_failed) {
-            write_failed = true;
+        if (e->push(e->data, e->values) < e->values && !overflowed) {
+            overflowed = true;
             fprintf(stderr, "%s: DDS: the input end of '%s' is full: tokens dropped\n", el_host_prog, e->topic);
         }
         el_dds_last_us[k] = (int64_t)stamp;
