@@ -10,14 +10,16 @@ MODEL   ?= examples/pt100_sensor.elab
 
 # Debian packages the project uses: cross compilers and simulators for the
 # boards, Modbus peers, fuzzing and sanitizer runtimes, Graphviz, tmux, and
-# Chromium with its driver for the service panel's browser tests.
+# Chromium with its driver for the service panel's browser tests, Eclipse
+# Cyclone DDS (libddsc, idlc in its tools) for the PC nodes' DDS exports.
 # (The PIC18 board's sdcc with the pic16 port is built from Debian's source
 # by boards/pic18/toolchain/build.sh: `make setup` runs it once.)
 DEB_PACKAGES := gcc make pkg-config graphviz tmux socat \
 	gcc-avr avr-libc binutils-avr simavr libsimavr-dev libelf-dev avrdude \
 	sdcc sdcc-libraries sdcc-ucsim gputils gpsim gpsim-dev libglib2.0-dev g++ dpkg-dev \
 	mbpoll libmodbus-dev clang libclang-rt-14-dev clang-tidy valgrind gtkwave \
-	chromium chromium-driver
+	chromium chromium-driver \
+	cyclonedds-dev cyclonedds-tools
 
 .PHONY: setup deps venv toolchains test demo bench clean help flash sim
 

@@ -78,13 +78,19 @@ def build_nodes(program: Program, out_dir: Path, extra_cflags: list[str] | None 
     """Build each node of a distributed program on its own board into
     ``out_dir/<node>/`` (an MCU node with its board's simulator, for
     ``easylab launch``); the builds by node name (docs/distribution.md)."""
+    from .board.nodes import dds_problem
     from .codegen.link import link_defines, link_files
     from .ir.split import split
 
     if program.deployment is None:
         raise BuildError(f"model '{program.name}' has no nodes: build it for one board")
+    nodes = split(program)
+    for name, node in nodes.items():  # before any build
+        dds = dds_problem(load_board(node.node.board, board_path), node.program)
+        if dds:
+            raise BuildError(f"node '{name}': {dds}")
     built = {}
-    for name, node in split(program).items():
+    for name, node in nodes.items():
         board = load_board(node.node.board, board_path)
         cflags = [*(extra_cflags or ()), *link_defines(node)]
         built[name] = build(node.program, node.node.board, out_dir / name, cflags, None, release,

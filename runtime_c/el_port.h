@@ -56,6 +56,13 @@ void el_port_instant(el_tick_t tick);
 bool el_port_nv_read(uint16_t offset, void *data, uint16_t size);
 bool el_port_nv_write(uint16_t offset, const void *data, uint16_t size);
 
+/* A node with DDS exports (docs/distribution.md, "DDS") calls this when
+ * export `index` has a value: at a publication of its var's writer, or a
+ * release of its channel's consumer (the tokens it takes); `values` holds
+ * the export's values. Only a board whose nodes may be DDS peers defines
+ * it, and only a program with exports calls it. */
+void el_port_export(uint8_t index, const void *values);
+
 /* Called once when the run ends (host: --duration); MCU ports never return. */
 void el_port_shutdown(void);
 

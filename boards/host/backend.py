@@ -15,6 +15,8 @@ from easylab.board.contract import Compiled, CompileOptions, SizeReport, Simulat
 from easylab.core.errors import BuildError
 from easylab.ir.program import Device, Program
 
+from . import dds
+
 
 class HostBoard(BoardBase):
     """Every resource claim is accepted (a process has no pins to run out
@@ -43,11 +45,13 @@ class HostBoard(BoardBase):
         chain = self.description.toolchain
         compiler = options.cc or chain.cc
         require_tool(compiler, self.name, chain.debian_package if compiler == chain.cc else None)
+        dds_sources, dds_cflags, dds_libs = dds.build_files(program, out_dir, self.description.folder)
         sources = [p for p in generated if p.suffix == ".c"] + runtime_sources(options.release) \
-            + self.description.source_paths
+            + self.description.source_paths + dds_sources
         exe = out_dir / program.name
-        cmd = [compiler, *chain.cflags, *mode_flags(options.release), *options.extra_cflags,
-               *include_flags(out_dir, self.description), "-o", str(exe), *map(str, sources), *chain.ldflags]
+        cmd = [compiler, *chain.cflags, *mode_flags(options.release), *options.extra_cflags, *dds_cflags,
+               *include_flags(out_dir, self.description), "-o", str(exe), *map(str, sources), *chain.ldflags,
+               *dds_libs]
         proc = subprocess.run(cmd, capture_output=True, text=True)
         if proc.returncode != 0:
             raise BuildError(f"{compiler} failed:\n{proc.stdout}{proc.stderr}".rstrip())

@@ -121,8 +121,20 @@ static void install_signals(void)
 
 /* ---- init and shutdown ---- */
 
+#if defined(EL_HOST_DDS)
+#include "host_dds.h" /* a node with DDS exports or channels (docs/distribution.md) */
+#define DDS_START() el_host_dds_start()
+#define DDS_STOP() el_host_dds_stop()
+#define DDS_INPUTS(now_us) el_host_dds_inputs(now_us)
+#else
+#define DDS_START() true
+#define DDS_STOP() ((void)0)
+#define DDS_INPUTS(now_us) ((void)(now_us))
+#endif
+
 static void release_all(void)
 {
+    DDS_STOP();
     if (!el_host_trace_close())
         exit_status = EL_HOST_EXIT_IO;
     el_host_stimulus_free();
@@ -158,7 +170,8 @@ bool el_port_init(int argc, char **argv)
     /* Inputs first, then the trace: a failed run creates no trace file. */
     if ((el_host_settings.stimulus_path != NULL && !el_host_stimulus_load(el_host_settings.stimulus_path)) ||
         !el_host_nv_open(el_host_settings.nvram_path) ||
-        (el_host_settings.trace_path != NULL && !el_host_trace_open(el_host_settings.trace_path))) {
+        (el_host_settings.trace_path != NULL && !el_host_trace_open(el_host_settings.trace_path)) ||
+        !DDS_START()) {
         release_all();
         exit_status = EL_HOST_EXIT_USAGE;
         return false;
@@ -314,6 +327,7 @@ void el_port_irq_restore(el_irq_state_t state)
 void el_port_inputs(uint64_t tick)
 {
     ROUND_MASTER(mul_sat(tick, el_tick_us), true);
+    DDS_INPUTS(mul_sat(tick, el_tick_us));
     el_host_stimulus_inputs();
 }
 

@@ -10,6 +10,15 @@ from ..ir.split import split
 from .registry import load_board
 
 
+def dds_problem(board, program: Program) -> str | None:
+    """Why a node's program with DDS exports or channel ends cannot go on
+    ``board`` (one whose board.toml lacks ``dds = true``), else None."""
+    if not (program.exports or program.dds_channels) or board.description.raw.get("dds", False):
+        return None
+    return (f"a DDS peer with exports or channels needs a board with DDS (board.toml: dds = true), and board "
+            f"'{board.name}' has none: put them on a PC node")
+
+
 def node_problems(program: Program, board_path: list[str] | tuple[str, ...] = ()) -> list[str]:
     """What keeps each node's program off its board (a resource its part
     lacks, a pin claimed twice, a driver the board has not), one message
@@ -19,7 +28,11 @@ def node_problems(program: Program, board_path: list[str] | tuple[str, ...] = ()
     for name, node in split(program).items():
         where = f"node '{name}' (board {node.node.board}{f', {node.node.mcu}' if node.node.mcu else ''})"
         try:
-            load_board(node.node.board, board_path).configure(node.node.mcu).check(node.program)
+            board = load_board(node.node.board, board_path)
+            dds = dds_problem(board, node.program)
+            if dds:
+                raise BuildError(dds)
+            board.configure(node.node.mcu).check(node.program)
         except BuildError as err:
             problems.append(f"{where}: {err}")
     return problems

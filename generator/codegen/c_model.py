@@ -506,6 +506,12 @@ class _Builder:
 
     # -------------------------------------------------------------- tasks
 
+    def _exports(self, task: Task, kind: str, target: int) -> list:
+        """(index, export) of the node's DDS exports of ``target`` that this
+        task's publication (a var) or release (a channel) publishes (ir/dds.py)."""
+        return [(k, e) for k, e in enumerate(getattr(self.p, "exports", ()))
+                if e.kind == kind and e.target == target and task.id in e.trigger_tasks]
+
     def task_view(self, task: Task) -> TaskView:
         fields, release, body, publish = [], [], [], []
         for item_id in task.reads:
@@ -521,6 +527,8 @@ class _Builder:
             fields.append(f"{ch.type.c_name} ch{ch.id}[{ch.tokens_out}];")
             fields.append(f"uint16_t ch{ch.id}_n;")
             release.append(f"el_ch{ch.id}_take(el_t{task.id}.ch{ch.id}); el_t{task.id}.ch{ch.id}_n = 0u;")
+            release += [f"el_port_export({k}u, el_t{task.id}.ch{ch.id}); /* DDS: {e.topic} */"
+                        for k, e in self._exports(task, "channel", ch.id)]
         for ch_id in task.channels_out:
             ch = self.p.channels[ch_id]
             fields.append(f"{ch.type.c_name} ch{ch.id}[{ch.tokens_in}];")
@@ -540,6 +548,10 @@ class _Builder:
                 publish.append(f"EL_COPY({iv.c_name}, el_t{task.id}.{iv.local}, {n}u);")
             else:
                 publish.append(f"{iv.c_name} = el_t{task.id}.{iv.local};")
+        for item_id in task.writes:
+            iv = self.items[item_id]
+            publish += [f"el_port_export({k}u, {'' if iv.item.count > 1 else '&'}{iv.c_name}); /* DDS: {e.topic} */"
+                        for k, e in self._exports(task, "var", item_id)]
         for ch_id in task.channels_out:
             publish.append(f"el_ch{ch_id}_put(el_t{task.id}.ch{ch_id});")
         for kind, ident_ in task.runs:

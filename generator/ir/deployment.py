@@ -51,6 +51,7 @@ class Crossing:
     link: str
     producer_node: str
     consumer_node: str
+    delay_us: int = 0  # over DDS: a value published at d is usable from d + delay_us (latency + jitter)
 
 
 @dataclass

@@ -309,7 +309,7 @@ def _deployment(model: CheckedModel, timing: Timing, program: Program, low: _Low
     task_nodes = {t.id: model.task_nodes[t.name] for t in program.tasks}
     device_nodes = {d.id: model.device_nodes[d.path] for d in program.devices}
     plan = timing.links
-    crossings = [Crossing(low.channel_index[name], c.link, c.producer_node, c.consumer_node)
+    crossings = [Crossing(low.channel_index[name], c.link, c.producer_node, c.consumer_node, c.dds_delay_us)
                  for name, c in (plan.carriages.items() if plan else ())]
     exports = []
     for e in model.exports:

@@ -316,6 +316,10 @@ class Program:
     remote: RemoteSettings | None = None  # None: the defaults
     # Fault counters of the links the program runs over (ir/status.py); empty for one board.
     status: list[Status] = field(default_factory=list)
+    # A node's DDS exports (ir/dds.py: DdsExport), from the split; empty elsewhere.
+    exports: list = field(default_factory=list)
+    # A node's ends of channels over DDS links (ir/dds.py: DdsChannel), from the split; empty elsewhere.
+    dds_channels: list = field(default_factory=list)
 
     def item(self, name: str) -> Item:
         return next(i for i in self.items if i.name == name)
@@ -346,9 +350,9 @@ class Program:
 def to_json(program: Program) -> dict:
     """A canonical, JSON-serialisable dump of the IR (also hashed for the id)."""
     def conv(value):
-        if isinstance(value, Program):  # no nodes, no status items: the dump (and id) of a program before them
+        if isinstance(value, Program):  # a one-board program, a node without DDS or status items: as before them
             return {k: conv(getattr(value, k)) for k in value.__dataclass_fields__
-                    if not (k in ("deployment", "status") and not getattr(value, k))}
+                    if not (k in ("deployment", "status", "exports", "dds_channels") and not getattr(value, k))}
         if isinstance(value, T.ValueType):
             return value.name
         if isinstance(value, (Schedule,)):

@@ -20,6 +20,7 @@ from dataclasses import dataclass, replace
 from math import gcd
 
 from ..core import expr as I
+from .dds import node_dds_channels, node_exports
 from .deployment import Crossing, NodeSpec
 from .program import Chart, Dataflow, Instant, Interface, Program, Task, program_id
 from .status import node_status
@@ -117,6 +118,8 @@ def _node_program(program: Program, node: NodeSpec) -> NodeProgram:
     node_program = Program(f"{program.name}.{node.name}", program.title, program.source, 0, tick, hyper, new_items,
                            new_devices, new_specs, new_instances, new_dataflows, new_charts, new_channels,
                            new_tasks, instants, _link_interfaces(program, node.name))
+    node_program.exports = node_exports(program, node.name, items, channels, tasks)
+    node_program.dds_channels = node_dds_channels(program, node.name, channels)
     inputs, outputs = [], []
     for crossing in dep.crossings:
         end = _end(crossing, node.name, channels, program)

@@ -37,6 +37,12 @@
  * cycles, the firmware stopped); 1 an error during the run (trace write,
  * crash, a stimulus value the hardware cannot produce); 2 a bad command
  * line or input file.
+ *
+ * Bus timing (bench/bench_distribution.py): with EASYLAB_UART_LOG=DIR in
+ * the environment, DIR/<program>.uart.csv gets a line per UART byte,
+ * `cycle,uart,dir,byte,cycles_per_byte`: `rx` when the byte enters the
+ * UART (its reception ends cycles_per_byte later than the one before it),
+ * `tx` when the firmware writes it (its transmission starts then).
  */
 #include "sim_model.h"
 #include "sim_chips.h"
@@ -309,9 +315,33 @@ static void watch_pins(void)
 
 /* ---- UARTs ---- */
 
+static FILE *uart_log; /* EASYLAB_UART_LOG: every byte with its cycle */
+
+static void uart_log_open(void)
+{
+    const char *dir = getenv("EASYLAB_UART_LOG");
+    char path[4096];
+    if (dir == NULL || dir[0] == '\0')
+        return;
+    if (snprintf(path, sizeof path, "%s/%s.uart.csv", dir, el_host_prog) >= (int)sizeof path ||
+        (uart_log = fopen(path, "w")) == NULL) {
+        el_host_error("EASYLAB_UART_LOG: cannot write %s/%s.uart.csv", dir, el_host_prog);
+        return;
+    }
+    fputs("cycle,uart,dir,byte,cycles_per_byte\n", uart_log);
+}
+
+static void uart_log_byte(const sim_link_t *u, const char *dir, uint8_t byte)
+{
+    if (uart_log != NULL)
+        fprintf(uart_log, "%llu,%c,%s,%u,%llu\n", (unsigned long long)avr->cycle, u->name, dir, (unsigned)byte,
+                (unsigned long long)uarts[u - sim_links].uart->cycles_per_byte);
+}
+
 static void uart_output(struct avr_irq_t *irq, uint32_t value, void *param)
 {
     (void)irq;
+    uart_log_byte((sim_link_t *)param, "tx", (uint8_t)value);
     sim_link_output((sim_link_t *)param, (uint8_t)value);
 }
 
@@ -372,6 +402,7 @@ static void feed_uarts(void)
             continue;
         in = avr_io_getirq(avr, AVR_IOCTL_UART_GETIRQ((uint32_t)u->name), UART_IRQ_INPUT);
         while (sent < u->in_len && !uarts[n].xoff && !uart_fifo_isfull(&uarts[n].uart->input)) {
+            uart_log_byte(u, "rx", u->in[sent]);
             avr_raise_irq(in, u->in[sent]);
             sent++;
         }
@@ -473,6 +504,7 @@ int main(int argc, char **argv)
     }
 
     hook_uarts();
+    uart_log_open();
     /* Inputs first (the chips' memories, then sim_start's): a failed start
      * creates no trace file. */
     if (!sim_chips_init(avr, sim_opt.chips) || !sim_start(eeprom))
@@ -503,5 +535,7 @@ int main(int argc, char **argv)
     }
     if (!sim_chips_save())
         sim_exit_status = SIM_EXIT_RUN;
+    if (uart_log != NULL && fclose(uart_log) != 0)
+        el_host_error("EASYLAB_UART_LOG: writing the log failed");
     return sim_finish(avr->cycle, slept_cycles, eeprom_bytes());
 }
