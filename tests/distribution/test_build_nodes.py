@@ -92,6 +92,20 @@ def test_every_node_on_the_link_gets_the_round(tmp_path):
     assert "= { 0, 1, 1 };" in slave
 
 
+def test_a_slave_without_outputs_answers_its_status_alone(tmp_path):
+    """j2 of the tests' arm only takes a value: the master's slot for it
+    reads the status register alone (and compiles warning-free)."""
+    from distribution_testlib import ROBOT as ARM
+
+    model = tmp_path / "arm.elab"
+    model.write_text(ARM)
+    run = easylab("build", str(model), "-o", str(tmp_path / "b"))
+    assert run.returncode == 0, run.stdout + run.stderr
+    master = (tmp_path / "b" / "pc" / "el_link.c").read_text()
+    slot = master[master.index("static void el_lk_slot1("):]
+    assert "uint16_t w[1], i, n;" in slot[:200] and "answer[7]" in slot[:200]
+
+
 def test_a_relay_between_two_slaves_is_not_built_yet(tmp_path):
     import pytest
 
