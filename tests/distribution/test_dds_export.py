@@ -87,11 +87,12 @@ def in_namespace(tmp_path: Path, listeners: dict[str, list[str]], node: list[str
     if problem:
         pytest.fail(f"the DDS acceptance test runs in a private network namespace: {problem}")
     lines = []
-    for name, args in listeners.items():
+    for n, (name, args) in enumerate(listeners.items()):
         cmd = " ".join(map(_quote, [sys.executable, str(LISTENER), "--transient-local", *args]))
-        lines.append(f"{cmd} > {_quote(str(tmp_path / name))}.jsonl &")
-    for name in listeners:
-        lines.append(f"until grep -q ready {_quote(str(tmp_path / name))}.jsonl; do sleep 0.05; done")
+        lines.append(f"{cmd} > {_quote(str(tmp_path / name))}.jsonl & listener{n}=$!")
+    for n, name in enumerate(listeners):  # a listener that dies before it is ready ends the run at once
+        lines.append(f"until grep -q ready {_quote(str(tmp_path / name))}.jsonl; do kill -0 $listener{n} 2>/dev/null "
+                     f"|| {{ echo 'the listener {name} ended before it was ready' >&2; exit 3; }}; sleep 0.05; done")
     lines += [" ".join(map(_quote, node)) + " > node.out 2>&1; echo $? > node.rc", "wait"]
     proc = subprocess.run(namespace_command(["sh", "-c", "\n".join(lines)]), cwd=tmp_path, capture_output=True,
                           text=True, timeout=timeout)
