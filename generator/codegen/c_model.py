@@ -24,6 +24,7 @@ from ..core import types as T
 from ..ir.program import ActorSpec, Buffer, Chart, Dataflow, Fire, Item, Loop, Program, Task
 from .c_syntax import C_KIND_ENUM, C_TYPE_ENUM, ExprWriter, c_literal, ident, type_param_macros
 from .impl_files import split_impl
+from .status_view import StatusView, status_views
 
 NONE_STEP = 0xFF
 # A schedule with circular buffers (not single-appearance) longer than this
@@ -49,41 +50,6 @@ class ItemView:
     @property
     def addr(self) -> str:
         return self.c_name if self.item.count > 1 else f"&{self.c_name}"
-
-
-@dataclass
-class StatusView:
-    """A status item (docs/ir.md, "Status items") as C: the uint16 counter
-    that holds it and its declaration."""
-
-    item: Item
-    c_name: str  # an lvalue of type uint16_t
-    c_extern: str
-
-    @property
-    def addr(self) -> str:
-        return f"&{self.c_name}"
-
-
-# The counter a firmware keeps for each fault (model.c.j2, link.c.j2).
-_FIRMWARE_COUNTERS = {"tardy": ("el_ch{subject}_tardy", "extern uint16_t el_ch{subject}_tardy;"),
-                      "unanswered": ("el_round_silent[{subject}]", "extern uint16_t el_round_silent[];")}
-
-
-def status_views(program: Program, library: bool) -> list[StatusView]:
-    """The status items' counters: in local execution's interfaces library
-    ``el_interp_status[id]`` (the interpreter keeps them), in a firmware
-    the counter its link code keeps."""
-    views = []
-    for st in program.status:
-        if library:
-            views.append(StatusView(st, f"el_interp_status[{st.id}]", "extern uint16_t el_interp_status[];"))
-        elif st.fault in _FIRMWARE_COUNTERS:
-            name, decl = _FIRMWARE_COUNTERS[st.fault]
-            views.append(StatusView(st, name.format(subject=st.subject), decl.format(subject=st.subject)))
-        else:
-            raise ValueError(f"status item {st.name}: counted by the host of remote execution, not by a firmware")
-    return views
 
 
 @dataclass
