@@ -199,6 +199,7 @@ def test_an_export_on_a_board_without_dds_is_an_error_naming_the_node(tmp_path):
 # ---------------------------------------------------------------- on the wire
 
 
+@pytest.mark.realtime  # the node runs in real time: a subscriber starved by a loaded machine loses samples
 def test_an_independent_ros2_subscriber_receives_every_exported_value(tmp_path):
     run = easylab("build", str(counter_model(tmp_path)), "-o", str(tmp_path / "b"))
     assert run.returncode == 0, run.stdout + run.stderr
@@ -348,6 +349,7 @@ export fine_steps over ros
 """
 
 
+@pytest.mark.realtime  # (as above)
 def test_several_tokens_per_release_are_one_sample_of_the_models_own_type(tmp_path):
     run = easylab("build", str(_write(tmp_path / "multi.elab", MULTI)), "-o", str(tmp_path / "b"))
     assert run.returncode == 0, run.stdout + run.stderr
