@@ -7,7 +7,10 @@ import re
 import subprocess
 import sys
 import time
+from dataclasses import dataclass
 from pathlib import Path
+
+import pytest
 
 from easylab.pipeline import lower_file
 from easylab.remote.proxy import build_proxy
@@ -115,6 +118,44 @@ class SimulatedProxy:
 def remote(model: Path, target: Path | str, *args: str, timeout: float = 300) -> subprocess.CompletedProcess:
     return subprocess.run([*EASYLAB, "remote", str(model), "--target", str(target), *args], capture_output=True,
                           text=True, timeout=timeout, stdin=subprocess.DEVNULL)
+
+
+# A real-time run whose host a loaded machine delays past K deadlines in a
+# row ends in the proxy's safe state, as it must (and says so): such a run
+# is tried again, at most this many times in all; a wrong trace never is.
+REAL_TIME_ATTEMPTS = 3
+LATE_HOST = "the proxy applied its safe values"
+
+
+@dataclass
+class RealTimeRun:
+    proc: subprocess.CompletedProcess  # easylab remote
+    elapsed: float  # its wall-clock seconds
+    proxy_stderr: str
+    run_dir: Path  # remote.csv, the proxy's own files
+
+
+def real_time_run(tmp_path: Path, start_proxy, model: Path, *args: str) -> RealTimeRun:
+    """`easylab remote MODEL --target LINK --trace run_dir/remote.csv ARGS`
+    against ``start_proxy(run_dir)`` (a started SimulatedProxy), tried
+    again when the host was late (LATE_HOST), at most REAL_TIME_ATTEMPTS
+    times; the test fails when every attempt was."""
+    late = []
+    for attempt in range(REAL_TIME_ATTEMPTS):
+        run_dir = tmp_path / f"run{attempt}"
+        run_dir.mkdir()
+        proxy = start_proxy(run_dir)
+        try:
+            started = time.monotonic()
+            proc = remote(model, proxy.link, "--trace", str(run_dir / "remote.csv"), *args)
+            elapsed = time.monotonic() - started
+        finally:
+            err = proxy.end()
+        if proc.returncode != 0 and LATE_HOST in proc.stderr:
+            late.append(proc.stderr.strip())
+            continue
+        return RealTimeRun(proc, elapsed, err, run_dir)
+    pytest.fail(f"the host was late in every one of {REAL_TIME_ATTEMPTS} runs:\n" + "\n".join(late))
 
 
 class LatencyRelay:

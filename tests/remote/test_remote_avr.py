@@ -21,7 +21,8 @@ from easylab.remote.link import Link
 from easylab.remote.budget import refusal
 from easylab.remote.protocol import K
 from easylab.remote.proxy import build_proxy
-from remote_testlib import EASYLAB, EXAMPLES, SimulatedProxy, device_columns, native_of, remote, run_native
+from remote_testlib import (EASYLAB, EXAMPLES, LATE_HOST, REAL_TIME_ATTEMPTS, SimulatedProxy, device_columns, native_of,
+                            real_time_run, remote, run_native)
 
 BLINK = EXAMPLES / "blink.elab"
 PT100 = EXAMPLES / "pt100_sensor.elab"
@@ -68,11 +69,6 @@ MCU = {"blink": "atmega328p", "cd_to_dat": "atmega328p", "line_follower": "atmeg
 REAL_TIME = [(name, mcu, baud) for name, mcu in MCU.items() for baud in (115200, 1_000_000)]
 
 
-# A run whose host a loaded machine delays past K deadlines in a row ends
-# in the proxy's safe state, as it must (and says so): such a run is tried
-# again, at most this many times in all; a wrong trace never is.
-REAL_TIME_ATTEMPTS = 3
-LATE_HOST = "the proxy applied its safe values"
 
 
 @pytest.mark.realtime
@@ -95,26 +91,11 @@ def test_the_avr_proxy_in_real_time_gives_the_native_trace(name, mcu, baud, buil
     run_native(native_of(build_cache, model), native, duration, stimulus)
     built = avr_proxy(build_cache, model, mcu, baud)
     devices = device_columns(stimulus, model, tmp_path / "devices.csv") if stimulus is not None else None
-    late = []
-    for attempt in range(REAL_TIME_ATTEMPTS):
-        run_dir = tmp_path / f"run{attempt}"
-        run_dir.mkdir()
-        inputs = ["--stimulus", str(devices)] if devices is not None else []
-        proxy = avr_proxy_process(built, run_dir / "link", *inputs, "--trace", str(run_dir / "proxy.csv"))
-        try:
-            traced = run_dir / "remote.csv"
-            started = time.monotonic()
-            proc = remote(model, proxy.link, "--baud", str(baud), "--duration", duration, "--trace", str(traced),
-                          *given)
-            elapsed = time.monotonic() - started
-        finally:
-            err = proxy.end()
-        if proc.returncode != 0 and LATE_HOST in proc.stderr:
-            late.append(proc.stderr.strip())
-            continue
-        break
-    else:
-        pytest.fail(f"the host was late in every one of {REAL_TIME_ATTEMPTS} runs:\n" + "\n".join(late))
+    inputs = ["--stimulus", str(devices)] if devices is not None else []
+    run = real_time_run(tmp_path, lambda d: avr_proxy_process(built, d / "link", *inputs, "--trace", str(d / "proxy.csv")),
+                        model, "--baud", str(baud), "--duration", duration, *given)
+    proc, elapsed, err, run_dir = run.proc, run.elapsed, run.proxy_stderr, run.run_dir
+    traced = run_dir / "remote.csv"
     assert proc.returncode == 0, proc.stderr
     if device_model(program).items:  # (a model without devices exchanges no frames: nothing paces it)
         assert elapsed >= 1.0  # paced by the proxy's clock

@@ -10,7 +10,6 @@ from __future__ import annotations
 
 import re
 import subprocess
-import time
 from pathlib import Path
 
 import pytest
@@ -19,12 +18,11 @@ from easylab.board.registry import load_board
 from easylab.board.resources import Resolved
 from easylab.pipeline import lower_file
 from easylab.remote.proxy import build_proxy
-from remote_testlib import EASYLAB, EXAMPLES, ROOT, SimulatedProxy, device_columns, native_of, remote, run_native
+from remote_testlib import (EASYLAB, EXAMPLES, ROOT, SimulatedProxy, device_columns, native_of, real_time_run, remote,
+                            run_native)
 
 VARIANTS = ROOT / "boards" / "pic18" / "conformance"
 BLINK = EXAMPLES / "blink.elab"
-LATE_HOST = "the proxy applied its safe values"
-REAL_TIME_ATTEMPTS = 3  # as for the AVR proxy: a loaded machine may delay the host past K deadlines
 
 
 def pic18_proxy(build_cache, model: Path, mcu: str = "pic18f4520", baud: int = 115200):
@@ -82,24 +80,9 @@ def test_the_pic18_proxy_in_real_time_gives_the_native_trace(build_cache, tmp_pa
     run_native(native_of(build_cache, model), native, "1s", stimulus)
     built = pic18_proxy(build_cache, model)
     devices = device_columns(stimulus, model, tmp_path / "devices.csv")
-    late = []
-    for attempt in range(REAL_TIME_ATTEMPTS):
-        run_dir = tmp_path / f"run{attempt}"
-        run_dir.mkdir()
-        proxy = pic18_proxy_process(built, run_dir / "link", "--stimulus", str(devices))
-        try:
-            traced = run_dir / "remote.csv"
-            started = time.monotonic()
-            proc = remote(model, proxy.link, "--duration", "1s", "--trace", str(traced), "--stimulus", str(stimulus))
-            elapsed = time.monotonic() - started
-        finally:
-            err = proxy.end()
-        if proc.returncode != 0 and LATE_HOST in proc.stderr:
-            late.append(proc.stderr.strip())
-            continue
-        break
-    else:
-        pytest.fail(f"the host was late in every one of {REAL_TIME_ATTEMPTS} runs:\n" + "\n".join(late))
+    run = real_time_run(tmp_path, lambda d: pic18_proxy_process(built, d / "link", "--stimulus", str(devices)),
+                        model, "--duration", "1s", "--stimulus", str(stimulus))
+    proc, elapsed, err, traced = run.proc, run.elapsed, run.proxy_stderr, run.run_dir / "remote.csv"
     assert proc.returncode == 0, proc.stderr
     assert elapsed >= 1.0  # paced by the proxy's clock
     assert traced.read_bytes() == native.read_bytes(), err
