@@ -92,6 +92,23 @@ static int16_t uart1_getc(void)
     return c;
 }
 
+#if (defined(EL_F16_DEBUG_UART) && defined(EL_DEBUG_SERVER) && EL_DEBUG_SERVER) || \
+    (defined(EL_F16_REMOTE_UART) && defined(EL_REMOTE_PROXY) && EL_REMOTE_PROXY)
+/* What the ring holds, up to `max` bytes (the debug server's and the proxy's link). */
+static uint16_t uart1_read(uint8_t *buf, uint16_t max)
+{
+    uint16_t n = 0u;
+    while (n < max) {
+        int16_t c = uart1_getc();
+        if (c < 0) {
+            break;
+        }
+        buf[n++] = (uint8_t)c;
+    }
+    return n;
+}
+#endif
+
 /* Queue `len` bytes whole, waiting up to `wait_ms` for room; false: none queued. */
 static bool uart1_write(const uint8_t *data, uint16_t len, uint16_t wait_ms)
 {
@@ -127,15 +144,7 @@ void el_f16_debug_open(void)
 
 uint16_t el_debug_port_read(uint8_t *buf, uint16_t max)
 {
-    uint16_t n = 0u;
-    while (n < max) {
-        int16_t c = uart1_getc();
-        if (c < 0) {
-            break;
-        }
-        buf[n++] = (uint8_t)c;
-    }
-    return n;
+    return uart1_read(buf, max);
 }
 
 bool el_debug_port_write(const uint8_t *frame, uint16_t len)
@@ -164,15 +173,7 @@ void el_f16_remote_open(void)
 
 uint16_t el_remote_port_read(uint8_t *buf, uint16_t max)
 {
-    uint16_t n = 0u;
-    while (n < max) {
-        int16_t c = uart1_getc();
-        if (c < 0) {
-            break;
-        }
-        buf[n++] = (uint8_t)c;
-    }
-    return n;
+    return uart1_read(buf, max);
 }
 
 bool el_remote_port_write(const uint8_t *frame, uint16_t len)
