@@ -104,7 +104,8 @@ class AvrBoard(BoardBase):
         # The dispatcher as narrow as the program allows (docs/ir.md, "Dispatcher widths").
         flags = [*self.cflags, *mode_flags(options.release), *dispatcher_width_flags(program), *options.extra_cflags,
                  *include_flags(out_dir, self.description)]
-        objects = compile_objects(compiler, flags, sources, out_dir / "obj", out_dir)
+        objects = compile_objects(compiler, flags, sources, out_dir / "obj", out_dir,
+                                  self.description.toolchain.file_cflags)
         elf = out_dir / f"{program.name}.elf"
         # Every item and chart stays in a simulation build, even one no code
         # reads: the harness traces it from RAM.
@@ -228,9 +229,13 @@ class AvrBoard(BoardBase):
                 f"#define EL_AVR_CLOCK_KHZ {self.clock_hz // t.prescale // 1000}u", "#define EL_AVR_WDTO WDTO_2S", ""]),
             "el_avr_devices.h": "/* no devices */\n"})
         elf = work_dir / f"{source.stem}.elf"
-        run([self.description.toolchain.cc, *self.cflags, *mode_flags(True), *include_flags(work_dir, self.description),
-             "-o", str(elf), str(source), *(p for p in self.description.source_paths if p.name != "avr_interfaces.c"),
-             *self.description.toolchain.ldflags], f"building {source.name} for the {self.part.name}", _PACKAGES)
+        chain = self.description.toolchain
+        # The port's files with their own options, as a firmware compiles them.
+        objects = compile_objects(chain.cc, [*self.cflags, *mode_flags(True), *include_flags(work_dir, self.description)],
+                                  [source, *(p for p in self.description.source_paths if p.name != "avr_interfaces.c")],
+                                  work_dir / "obj", file_flags=chain.file_cflags)
+        run([chain.cc, f"-mmcu={self.part.name}", "-Os", "-o", str(elf), *map(str, objects), *chain.ldflags],
+            f"building {source.name} for the {self.part.name}", _PACKAGES)
         harness = simulator.build_harness(self, work_dir, simulator.port_program_tables(self, elf),
                                           work_dir / f"{source.stem}-sim")
         report = work_dir / "uart0.txt"

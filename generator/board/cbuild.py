@@ -84,15 +84,20 @@ def run(cmd: list[str], what: str, package: str | None = None) -> subprocess.Com
 
 
 def compile_objects(compiler: str, flags: list[str], sources: list[Path], obj_dir: Path,
-                    generated_dir: Path | None = None) -> list[Path]:
+                    generated_dir: Path | None = None, file_flags: dict | None = None) -> list[Path]:
     """Compile each source to an object in ``obj_dir``, in parallel; a
     generated file's object is NAME_gen.o so it cannot clash with a
-    runtime or board file of the same name."""
+    runtime or board file of the same name. ``file_flags``: further options
+    of some runtime or board files, by file name, after ``flags`` (a
+    generated file gets none: its name is the model's to choose)."""
     obj_dir.mkdir(parents=True, exist_ok=True)
+    file_flags = file_flags or {}
 
     def one(src: Path) -> tuple[Path, subprocess.CompletedProcess]:
-        obj = obj_dir / (src.stem + ("_gen" if src.parent == generated_dir else "") + ".o")
-        return obj, subprocess.run([compiler, *flags, "-c", "-o", str(obj), str(src)], capture_output=True,
+        generated = src.parent == generated_dir
+        obj = obj_dir / (src.stem + ("_gen" if generated else "") + ".o")
+        own = () if generated else file_flags.get(src.name, ())
+        return obj, subprocess.run([compiler, *flags, *own, "-c", "-o", str(obj), str(src)], capture_output=True,
                                    text=True)
 
     with ThreadPoolExecutor(max_workers=4) as pool:

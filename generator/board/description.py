@@ -22,6 +22,9 @@ class Toolchain:
     ldflags: tuple[str, ...] = ()
     debian_package: str | None = None  # named when the compiler is missing
     tools: dict = field(default_factory=dict)  # further tools by role (objcopy, size, nm, ...)
+    # Options for some files only, after cflags, by file name (the C file's
+    # name without its folder): [toolchain.file_cflags].
+    file_cflags: dict = field(default_factory=dict)
 
     def tool(self, role: str, default: str) -> str:
         return str(self.tools.get(role, default))
@@ -67,9 +70,11 @@ def read_description(folder: Path) -> BoardDescription:
         raise BoardError(f"{path}: broken board description: {err}") from None
     try:
         chain = data["toolchain"]
-        tools = {k: v for k, v in chain.items() if k not in ("cc", "cflags", "ldflags", "debian_package")}
+        tools = {k: v for k, v in chain.items()
+                 if k not in ("cc", "cflags", "ldflags", "debian_package", "file_cflags")}
+        file_cflags = {str(name): tuple(str(f) for f in flags) for name, flags in chain.get("file_cflags", {}).items()}
         toolchain = Toolchain(str(chain["cc"]), tuple(chain.get("cflags", [])), tuple(chain.get("ldflags", [])),
-                              chain.get("debian_package"), tools)
+                              chain.get("debian_package"), tools, file_cflags)
         backend = str(data["backend"])
         if ":" not in backend:
             raise ValueError(f"backend = \"{backend}\" must name a file and a class, as in \"backend.py:MyBoard\"")

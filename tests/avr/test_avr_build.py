@@ -254,3 +254,27 @@ def test_make_sim_runs_the_harness():
     assert proc.returncode == 0, proc.stderr
     assert "--board avr --mcu atmega328p --sim" in proc.stdout
     assert "build/sim/blink-atmega328p/blink-sim --uart0 pty:build/sim/blink-atmega328p/uart0" in proc.stdout
+
+
+# ---------------------------------------------------------------- options per file
+
+
+def test_options_per_file_reach_only_their_runtime_or_port_file(tmp_path):
+    """board.toml's [toolchain.file_cflags]: after the common flags, for the
+    named runtime or port file only; a generated file of the same name
+    gets none. The AVR board names el_debug.c there."""
+    from easylab.board.cbuild import compile_objects
+    from easylab.board.description import read_description
+
+    chain = read_description(ROOT / "boards" / "avr").toolchain
+    assert chain.file_cflags["el_debug.c"] and "file_cflags" not in chain.tools
+    port, generated = tmp_path / "port", tmp_path / "gen"
+    port.mkdir(), generated.mkdir()
+    check = "#if MARK != {}\n#error MARK\n#endif\nint {};\n"
+    (port / "marked.c").write_text(check.format(2, "marked"))
+    (port / "other.c").write_text(check.format(1, "other"))
+    (generated / "marked.c").write_text(check.format(1, "marked_gen"))
+    objects = compile_objects(chain.cc, ["-mmcu=atmega328p", "-Os", "-Werror", "-DMARK=1"],
+                              [port / "marked.c", port / "other.c", generated / "marked.c"], tmp_path / "obj",
+                              generated, {"marked.c": ["-UMARK", "-DMARK=2"]})
+    assert [o.name for o in objects] == ["marked.o", "other.o", "marked_gen.o"]
