@@ -233,7 +233,7 @@ def test_easylab_proxy_builds_the_avr_proxy_for_the_atmega328p(tmp_path):
     assert proc.returncode == 0, proc.stderr
     size = re.search(r"atmega328p: flash (\d+) of \d+ bytes .*RAM (\d+) of 2048 bytes", proc.stdout)
     flash, ram = int(size.group(1)), int(size.group(2))
-    assert flash <= 5760 and ram <= 288, proc.stdout
+    assert flash <= 4864 and ram <= 288, proc.stdout
     assert proc.stdout.splitlines()[-1] == str(tmp_path / "p" / "blink_proxy.elf")
     assert "#define EL_AVR_REMOTE_UART 0u" in (tmp_path / "p" / "el_avr_config.h").read_text()
     # flashed as firmware is: through the bootloader, the proxy's image
