@@ -48,6 +48,7 @@ class Firmware:
         self.link = tmp / f"{self.exe.name}.pty"
         self.trace = tmp / f"{self.exe.name}.trace.csv"
         self.map_path = self.maps_dir(tmp) / "debug_map.json"
+        self.starts_halted = halt
         spec = transport or f"pty:{self.link}"
         cmd = self.command(spec, halt, list(args))
         if fast:
@@ -75,8 +76,13 @@ class Firmware:
         return DebugMap.load(self.map_path)
 
     def client(self, timeout: float = 2.0) -> DebugClient:
+        """A client of the debug link; the first one of a program started
+        halted returns once the program is (a process may answer before it
+        reaches its first halt)."""
         c = DebugClient.open(str(self.link), timeout)
         c.hello()
+        if self.starts_halted and not self.clients:
+            self.wait_halted(c)
         self.clients.append(c)
         return c
 

@@ -62,7 +62,6 @@ def test_writes_change_the_behaviour_in_the_trace(builds, firmware):
     fw = firmware(builds["pneumatic_cylinder"], duration="100ms")
     c = fw.client()
     m = fw.map
-    fw.wait_halted(c)  # (a process may answer before its first halt: a write then would be queued)
     assert c.write(m.item("start_cmd").id, "bool", True) == K.APPLIED  # halted at an instant: at once
     c.bp_set(K.P_STEP, 0, 1)  # Cylinder.Extending
     c.run()
