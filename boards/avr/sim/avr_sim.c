@@ -428,13 +428,13 @@ static uint8_t *eeprom_bytes(void)
 /* ---- the run ---- */
 
 /* In real time a sleeping CPU must still take what a peer sends within
- * 100 us (a remote-execution host's values are due at a deadline of 1 ms):
+ * 20 us (a remote-execution host's values are due at a deadline of 1 ms):
  * this timer bounds every sleep, so the loop below feeds the UARTs. */
 static avr_cycle_count_t wake_to_listen(avr_t *a, avr_cycle_count_t when, void *param)
 {
     (void)a;
     (void)param;
-    return when + sim_clock_hz / 10000u;
+    return when + sim_clock_hz / 50000u;
 }
 
 /* The CPU sleeps until the next event: skip to it at once (and count the
@@ -515,7 +515,7 @@ int main(int argc, char **argv)
         avr->data[GPIOR2_ADDR] = 0xA5u;
 
     if (!sim_opt.fast)
-        avr_cycle_timer_register(avr, sim_clock_hz / 10000u, wake_to_listen, NULL);
+        avr_cycle_timer_register(avr, sim_clock_hz / 50000u, wake_to_listen, NULL);
     for (;;) {
         state = avr_run(avr);
         if (state == cpu_Done || state == cpu_Crashed || sim_stop || sim_stop_signal)
