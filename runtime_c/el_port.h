@@ -21,6 +21,14 @@ bool el_port_init(int argc, char **argv);
  * (host: --duration reached). */
 bool el_port_wait_tick(el_wtick_t tick);
 
+#if defined(EL_ROUND_SLAVE)
+/* A slave of a Modbus round (docs/distribution.md; the node's generated
+ * el_link.c defines it): its ticks follow the master's sync, not its timer,
+ * so its el_port_wait_tick asks this first (a round keeps 32-bit ticks:
+ * el_types.h). 1: the tick may run now; 0: wait for the sync. */
+int8_t el_round_gate(uint32_t tick);
+#endif
+
 /* Serve the interfaces for at most `max_ms` milliseconds (less if something
  * arrives): the wait of a program halted by its debugger, while logical
  * time stands still. */

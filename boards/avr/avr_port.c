@@ -182,13 +182,6 @@ bool el_port_init(int argc, char **argv)
     return true;
 }
 
-#if defined(EL_ROUND_SLAVE)
-/* A slave of a Modbus round (docs/distribution.md; the node's generated
- * el_link.c defines it, and the build defines EL_ROUND_SLAVE): its ticks
- * follow the master's sync, not the timer. */
-int8_t el_round_gate(uint32_t tick); /* a round keeps 32-bit ticks (el_types.h) */
-#endif
-
 bool el_port_wait_tick(el_wtick_t tick)
 {
 #if defined(EL_ROUND_SLAVE)
