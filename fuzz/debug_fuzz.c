@@ -127,7 +127,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
         EL_DEBUG_PROBE(EL_DBG_P_CHART, 0u, 0u);
         EL_DEBUG_PROBE(EL_DBG_P_STEP, (uint16_t)(k % 2u), 1u);
         EL_DEBUG_PROBE(EL_DBG_P_TRANSITION, 1u, (uint16_t)(k % 3u));
-        EL_DEBUG_PROBE_ACTOR(el_dbg_actors[k % 3u]);
+        EL_DEBUG_PROBE_ACTOR(k % 3u);
         el_debug_task_end();
         el_debug_poll();
 #if defined(EL_DEBUG_BOARD_COMMANDS) && EL_DEBUG_BOARD_COMMANDS

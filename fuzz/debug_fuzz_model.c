@@ -18,7 +18,6 @@ static uint32_t t32 = 2000u;
 static int16_t arr[3];
 static bool dev_in;
 static struct { int32_t integral; int16_t window[4]; } actor0;
-static struct { uint8_t el_unused; } actor1, actor2;
 static uint8_t slots0[1] = {0xFFu};
 static uint8_t slots1[2] = {0u, 2u};
 
@@ -45,8 +44,7 @@ const el_dbg_item_t el_dbg_items[14] EL_ROM = {
     { (void *)&u32, 1u, EL_DBG_NONE16, EL_DBG_T_U32, EL_DBG_K_VAR, EL_DBG_F_READ | EL_DBG_F_WRITE },
 };
 const uint16_t el_dbg_item_count = 14u;
-const void *const el_dbg_actors[3] EL_ROM = { &actor0, &actor1, &actor2 };
-const uint16_t el_dbg_actor_count = 3u;
+const uint16_t el_dbg_actor_count = 3u; /* actor0 and two stateless ones */
 const el_dbg_chart_t el_dbg_charts[2] EL_ROM = {
     { slots0, 1u, 3u, 2u },
     { slots1, 2u, 4u, 3u },

@@ -70,6 +70,34 @@
     EL_DBG_TX_ENTRIES > EL_DBG_TX_MAX || EL_DBG_WRITE_ENTRIES > EL_DBG_WRITE_QUEUE || EL_DBG_BP_SLOTS > EL_DBG_BP_MAX
 #error "el_debug_config.h: a size beyond the protocol's limits"
 #endif
+/* What the model has (el_debug_config.h, generated from its debug tables):
+ * code for what it lacks is left out, so a model pays only for the probe
+ * kinds and value kinds it uses; the protocol is the same (a chart id is
+ * E_ID in a model without charts either way). Without the config (the
+ * fuzz target, a board that does not generate it) everything is in. */
+#ifndef EL_DBG_HAS_CHARTS
+#define EL_DBG_HAS_CHARTS 1 /* charts: their probe points and stack */
+#endif
+#ifndef EL_DBG_RANGES_UNSIGNED
+#define EL_DBG_RANGES_UNSIGNED 1 /* a range on an unsigned integer, time or bool item */
+#endif
+#ifndef EL_DBG_RANGES_SIGNED
+#define EL_DBG_RANGES_SIGNED 1 /* ... on a signed integer item */
+#endif
+#ifndef EL_DBG_RANGES_FLOAT
+#define EL_DBG_RANGES_FLOAT 1 /* ... on a float32 item */
+#endif
+#define HAS_RANGES (EL_DBG_RANGES_UNSIGNED || EL_DBG_RANGES_SIGNED || EL_DBG_RANGES_FLOAT)
+#ifndef EL_DBG_HAS_ARRAYS
+#define EL_DBG_HAS_ARRAYS 1 /* an item of more than one element */
+#endif
+/* The elements of an item whose table entry is `it`. */
+#if EL_DBG_HAS_ARRAYS
+#define ELEMENTS(it) ((it).count)
+#else
+#define ELEMENTS(it) 1u
+#endif
+
 /* The in-place encoding below needs no COBS block of 254 bytes or more. */
 #if EL_DBG_FRAME > 253u
 #error "el_debug.c: a frame of more than 253 bytes needs a COBS encoder with long blocks"
@@ -209,6 +237,7 @@ static void move_value(uint8_t *dst, const uint8_t *src, uint8_t size)
     }
 }
 
+#if HAS_RANGES
 static uint32_t le32(const uint8_t *in, uint8_t size)
 {
     uint32_t v = 0u;
@@ -217,6 +246,7 @@ static uint32_t le32(const uint8_t *in, uint8_t size)
     }
     return v;
 }
+#endif
 
 /* Copy an entry of the debug tables (EL_ROM) into RAM. */
 static void rom_copy(void *dst, const void *rom, uint8_t n)
@@ -244,11 +274,15 @@ static bool load_item(uint16_t id, el_dbg_item_t *it)
  * the sign bit set, a negative one negated (-0 keys as +0; a NaN orders
  * beyond the infinities, so it is out of any finite range as a float
  * comparison has it). */
+#if HAS_RANGES
 static uint32_t order_key(uint8_t type, uint32_t u)
 {
+#if EL_DBG_RANGES_FLOAT
     if (type == EL_DBG_T_F32) {
         return (u & 0x80000000uL) != 0u ? (uint32_t)0u - u : (u | 0x80000000uL); /* -0: 0 - 0x80000000, +0's key */
     }
+#endif
+#if EL_DBG_RANGES_SIGNED
     if (type == EL_DBG_T_I8) {
         u = (uint32_t)(int32_t)(int8_t)(uint8_t)u; /* sign-extended */
     } else if (type == EL_DBG_T_I16) {
@@ -257,31 +291,49 @@ static uint32_t order_key(uint8_t type, uint32_t u)
         return u; /* unsigned, time, bool */
     }
     return u ^ 0x80000000uL;
+#else
+    (void)type;
+    return u; /* only unsigned ranges (and floats, above) in this model */
+#endif
 }
+#endif
 
 /* The item's range into *r; false when writes are not checked. */
 static bool load_range(const el_dbg_item_t *it, el_dbg_range_t *r)
 {
+#if HAS_RANGES
     if ((it->flags & EL_DBG_F_RANGE) == 0u || it->range == EL_DBG_NONE16) {
         return false;
     }
     rom_copy(r, &el_dbg_ranges[it->range], (uint8_t)sizeof *r);
     return true;
+#else
+    (void)it;
+    (void)r;
+    return false; /* no item of this model has a range */
+#endif
 }
 
 /* Is `in` (type_size bytes, little-endian) an acceptable value of the item? */
 static uint8_t check_value(const el_dbg_item_t *it, const uint8_t *in)
 {
-    el_dbg_range_t r;
-    uint32_t key;
     if (it->type == EL_DBG_T_BOOL && in[0] > 1u) {
         return EL_DBG_E_VALUE;
     }
-    if (!load_range(it, &r)) {
-        return EL_DBG_OK;
+#if HAS_RANGES
+    {
+        el_dbg_range_t r;
+        uint32_t key;
+        if (!load_range(it, &r)) {
+            return EL_DBG_OK;
+        }
+        key = order_key(it->type, le32(in, type_size(it->type)));
+        return (key >= order_key(it->type, r.lo.u) && key <= order_key(it->type, r.hi.u)) ? EL_DBG_OK
+                                                                                            : EL_DBG_E_RANGE;
     }
-    key = order_key(it->type, le32(in, type_size(it->type)));
-    return (key >= order_key(it->type, r.lo.u) && key <= order_key(it->type, r.hi.u)) ? EL_DBG_OK : EL_DBG_E_RANGE;
+#else
+    return EL_DBG_OK;
+#endif
 }
 
 /* Move an entry's element between memory and the entry. */
@@ -400,17 +452,6 @@ void el_debug_probe(uint8_t kind, uint16_t a, uint16_t b)
     }
 }
 
-void el_debug_probe_actor(const void *self)
-{
-    uint16_t i;
-    for (i = 0u; i < el_dbg_actor_count; i++) {
-        if (EL_ROM_READ_PTR(&el_dbg_actors[i]) == self) {
-            el_debug_probe(EL_DBG_P_ACTOR, i, 0u);
-            return;
-        }
-    }
-}
-
 void el_debug_instant(void)
 {
     /* Serve the host once per instant even when the board's wait leaves
@@ -458,6 +499,7 @@ static bool valid_point(uint8_t kind, uint16_t a, uint16_t b)
     case EL_DBG_P_ACTOR:
         a_limit = el_dbg_actor_count;
         break;
+#if EL_DBG_HAS_CHARTS
     case EL_DBG_P_CHART:
     case EL_DBG_P_STEP:
     case EL_DBG_P_TRANSITION:
@@ -468,6 +510,7 @@ static bool valid_point(uint8_t kind, uint16_t a, uint16_t b)
             b_limit = kind == EL_DBG_P_STEP ? c.step_count : c.transition_count;
         }
         break;
+#endif
     default:
         return false;
     }
@@ -563,7 +606,7 @@ static uint8_t do_access(bool write, const uint8_t *p, uint8_t n)
                 st = EL_DBG_E_LENGTH;
             } else if ((it.flags & EL_DBG_F_WRITE) == 0u) {
                 st = EL_DBG_E_READ_ONLY;
-            } else if (elem >= it.count) {
+            } else if (elem >= ELEMENTS(it)) {
                 st = EL_DBG_E_VALUE;
             } else {
                 st = check_value(&it, p + 4);
@@ -578,7 +621,7 @@ static uint8_t do_access(bool write, const uint8_t *p, uint8_t n)
             }
             break; /* one element of one item */
         }
-        for (elem = 0u; elem < it.count && st == EL_DBG_OK && !resp_full; elem++) {
+        for (elem = 0u; elem < ELEMENTS(it) && st == EL_DBG_OK && !resp_full; elem++) {
             st = submit(&e);
             e.addr += e.size;
         }
@@ -630,18 +673,22 @@ static uint8_t do_bp_clear(uint8_t slot)
 
 static void put_stack(void)
 {
-    uint8_t c;
     put32((uint32_t)el_now_tick());
     put_location();
     put8(running_task);
     put16(loc_kind == EL_DBG_P_ACTOR ? loc_a : EL_DBG_NONE16);
     put8(el_dbg_chart_count);
-    for (c = 0u; c < el_dbg_chart_count; c++) {
-        el_dbg_chart_t chart;
-        rom_copy(&chart, &el_dbg_charts[c], (uint8_t)sizeof chart);
-        put8(chart.slot_count);
-        put_bytes(chart.slots, chart.slot_count);
+#if EL_DBG_HAS_CHARTS
+    {
+        uint8_t c;
+        for (c = 0u; c < el_dbg_chart_count; c++) {
+            el_dbg_chart_t chart;
+            rom_copy(&chart, &el_dbg_charts[c], (uint8_t)sizeof chart);
+            put8(chart.slot_count);
+            put_bytes(chart.slots, chart.slot_count);
+        }
     }
+#endif
 }
 
 static void put_hello(void)
@@ -988,31 +1035,34 @@ static bool cobs_decode(void)
     return true;
 }
 
+/* One received byte: a frame ends at its delimiter. */
+static void rx_byte(uint8_t b)
+{
+    if (b != EL_DBG_DELIMITER) {
+        if (rx_len < sizeof rx_buf) {
+            rx_buf[rx_len] = b;
+        }
+        if (rx_len <= sizeof rx_buf) {
+            rx_len++;
+        }
+    } else {
+        if (rx_len > sizeof rx_buf) {
+            count(EL_DBG_C_OVERSIZE);
+        } else if (rx_len != 0u) { /* a delimiter alone ends no frame */
+            if (cobs_decode()) {
+                handle_frame((uint8_t)(rx_len - 1u));
+            } else {
+                count(EL_DBG_C_TRUNCATED);
+            }
+        }
+        rx_len = 0u;
+    }
+}
+
 void el_debug_rx(const uint8_t *data, uint16_t len)
 {
-    uint16_t i;
-    uint8_t b;
-    for (i = 0u; i < len; i++) {
-        b = data[i];
-        if (b != EL_DBG_DELIMITER) {
-            if (rx_len < sizeof rx_buf) {
-                rx_buf[rx_len] = b;
-            }
-            if (rx_len <= sizeof rx_buf) {
-                rx_len++;
-            }
-        } else {
-            if (rx_len > sizeof rx_buf) {
-                count(EL_DBG_C_OVERSIZE);
-            } else if (rx_len != 0u) { /* a delimiter alone ends no frame */
-                if (cobs_decode()) {
-                    handle_frame((uint8_t)(rx_len - 1u));
-                } else {
-                    count(EL_DBG_C_TRUNCATED);
-                }
-            }
-            rx_len = 0u;
-        }
+    while (len-- != 0u) {
+        rx_byte(*data++);
     }
 }
 
@@ -1025,14 +1075,9 @@ void el_debug_boot(void)
 
 void el_debug_poll(void)
 {
-    uint8_t chunk[16], k;
-    uint16_t n;
-    for (k = 0u; k < (EL_DBG_POLL_BYTES + sizeof chunk - 1u) / sizeof chunk; k++) {
-        n = el_debug_port_read(chunk, (uint16_t)sizeof chunk);
-        if (n == 0u) {
-            break;
-        }
-        el_debug_rx(chunk, n > sizeof chunk ? (uint16_t)sizeof chunk : n);
+    uint8_t b, k;
+    for (k = 0u; k < EL_DBG_POLL_BYTES && el_debug_port_read(&b, 1u) != 0u; k++) {
+        rx_byte(b);
     }
     if (reset_pending) {
         reset_pending = false;

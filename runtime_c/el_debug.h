@@ -13,7 +13,8 @@
  *   EL_DEBUG_TASK_END(task)     dispatcher, after it
  *   EL_DEBUG_PROBE(kind, a, b)  model.c: chart evolutions, step
  *                               activations, transitions (EL_DBG_P_...)
- *   EL_DEBUG_PROBE_ACTOR(self)  model.c: an actor instance fires
+ *   EL_DEBUG_PROBE_ACTOR(id)    model.c: an actor instance (its id in
+ *                               the debug tables) fires
  * A probe costs one test of el_dbg_armed unless a breakpoint, a step or a
  * break request is pending.
  *
@@ -78,7 +79,6 @@ typedef struct {
 extern const el_dbg_item_t el_dbg_items[];
 extern const uint16_t el_dbg_item_count;
 extern const el_dbg_range_t el_dbg_ranges[];
-extern const void *const el_dbg_actors[]; /* state of each actor instance, by id */
 extern const uint16_t el_dbg_actor_count;
 extern const el_dbg_chart_t el_dbg_charts[];
 extern const uint8_t el_dbg_chart_count;
@@ -121,7 +121,6 @@ void el_debug_instant(void);
 void el_debug_task_begin(uint8_t task);
 void el_debug_task_end(void);
 void el_debug_probe(uint8_t kind, uint16_t a, uint16_t b);
-void el_debug_probe_actor(const void *self);
 
 /* ---- provided by the board's debug transport --------------------------- */
 uint16_t el_debug_port_read(uint8_t *buf, uint16_t max);
@@ -142,8 +141,7 @@ bool el_debug_put(const uint8_t *data, uint16_t n);
 #define EL_DEBUG_TASK_END(task) el_debug_task_end()
 #define EL_DEBUG_PROBE(kind, a, b) \
     do { if (el_dbg_armed != 0u) { el_debug_probe((kind), (a), (b)); } } while (0)
-#define EL_DEBUG_PROBE_ACTOR(self) \
-    do { if (el_dbg_armed != 0u) { el_debug_probe_actor(self); } } while (0)
+#define EL_DEBUG_PROBE_ACTOR(actor) EL_DEBUG_PROBE(EL_DBG_P_ACTOR, (actor), 0u)
 
 #else /* no debug server: the hooks compile to nothing */
 
@@ -151,7 +149,7 @@ bool el_debug_put(const uint8_t *data, uint16_t n);
 #define EL_DEBUG_TASK_BEGIN(task) ((void)0)
 #define EL_DEBUG_TASK_END(task) ((void)0)
 #define EL_DEBUG_PROBE(kind, a, b) ((void)0)
-#define EL_DEBUG_PROBE_ACTOR(self) ((void)0)
+#define EL_DEBUG_PROBE_ACTOR(actor) ((void)0)
 
 #endif /* EL_DEBUG_SERVER */
 

@@ -102,9 +102,10 @@ class CModel:
 
 
 class _Builder:
-    def __init__(self, program: Program, board) -> None:
+    def __init__(self, program: Program, board, probes: bool = False) -> None:
         self.p = program
         self.board = board
+        self.probes = probes  # the debugger's probes of actor firings
         self.items = [self._item_view(i) for i in program.items]
         self.buffers: list[str] = []
 
@@ -379,6 +380,8 @@ class _Builder:
         for name, expr in inst.runtime_args.items():
             args.append(ExprWriter(item_ref).write(expr))
         call = f"el_spec{spec.id}_{spec.c_name}_step({', '.join(args)});"
+        if self.probes:  # the debugger's probe of this firing: the instance's id is its debug actor id
+            lines.append(f"{ind}EL_DEBUG_PROBE_ACTOR({inst.id}u);")
         if decls or pre or post:
             lines.append(f"{ind}{{ /* {inst.name} */")
             lines.extend(f"{ind}    {s}" for s in decls + pre)
@@ -529,10 +532,12 @@ class _Builder:
         return TaskView(task, fields, release, body, publish)
 
 
-def build_view(program: Program, board, library: bool = False) -> CModel:
+def build_view(program: Program, board, library: bool = False, probes: bool = False) -> CModel:
     """The view of a program that the C templates print (``library``: for
-    local execution's interfaces library rather than a firmware)."""
-    b = _Builder(program, board)
+    local execution's interfaces library rather than a firmware;
+    ``probes``: a debug build with a debug interface, whose actor firings
+    call the debugger's probe)."""
+    b = _Builder(program, board, probes)
     specs = [b.spec_view(s) for s in program.specs]
     states = [(specs[i.spec].state_type, f"el_a{i.id}_{ident(i.name)}",
                f"{program.dataflows[i.dataflow].name}.{i.name} ({i.location})") for i in program.instances]

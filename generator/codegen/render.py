@@ -79,7 +79,8 @@ def render_interfaces(program: Program, board: Target, template_dir: Path | None
 
 
 def _view_with_interfaces(program: Program, board: Target, release: bool, library: bool = False) -> CModel:
-    view = build_view(program, board, library)
+    probes = not release and not library and debug.has_debug_interface(program)
+    view = build_view(program, board, library, probes)
     for hook in INTERFACE_HOOKS:
         boot, poll = hook(program, release)
         view.interface_boot.extend(boot)

@@ -93,7 +93,7 @@ def _render_actor_block(view: SpecView) -> str:
     """The firmware's actor code for one specialisation (templates/actor.c.j2,
     which model.c.j2 includes), without the debugger's probe: a plug-in is
     not linked with the debug server."""
-    return environment().get_template("actor.c.j2").render(s=view, debug=False)
+    return environment().get_template("actor.c.j2").render(s=view)
 
 
 def _wrapper(spec: ActorSpec, view: SpecView) -> str:

@@ -109,6 +109,37 @@ def test_read_only_range_and_type_checks(builds, firmware):
 
 
 @on_boards
+def test_a_model_with_unsigned_ranges_only_still_checks_them(builds, firmware):
+    """blink's server is compiled without signed and float range keys
+    (el_debug_config.h): its uint16 range is checked at both ends."""
+    fw = firmware(builds["blink"])
+    c = fw.client()
+    half = fw.map.item("half_period")
+    for bad in (9, 5001, 65535):
+        with pytest.raises(DebugError) as e:
+            c.write(half.id, "uint16", bad)
+        assert e.value.status == K.E_RANGE
+    for good in (10, 5000):
+        assert c.write(half.id, "uint16", good) == K.APPLIED
+        assert c.read(ids(fw, "half_period")) == [good]
+
+
+@on_boards
+def test_an_element_of_an_item_of_several_is_written_alone(builds, firmware):
+    """pt100_sensor's moving-average window (uint16 x 8): a write sets one
+    element, a read returns all of them, an element beyond is E_VALUE."""
+    fw = firmware(builds["pt100_sensor"])
+    c = fw.client()
+    window = fw.map.item("Acquire.avg.window")
+    before = c.read(ids(fw, "Acquire.avg.window"))[0]
+    assert c.write(window.id, "uint16", 4321, elem=5) == K.APPLIED
+    assert c.read(ids(fw, "Acquire.avg.window"))[0] == before[:5] + [4321] + before[6:]
+    with pytest.raises(DebugError) as e:
+        c.write(window.id, "uint16", 1, elem=8)
+    assert e.value.status == K.E_VALUE
+
+
+@on_boards
 def test_a_transaction_of_16_writes_is_never_seen_half_applied(builds, firmware):
     fw = firmware(builds["tx16"], halt=False, fast=False)  # real time: commits land between instants
     c = fw.client()

@@ -94,3 +94,24 @@ def test_the_server_compiles_warning_free(cc, tmp_path):
         proc = subprocess.run([cc, *flags, "-c", str(src), "-o", str(tmp_path / "x.o")], capture_output=True,
                               text=True)
         assert proc.returncode == 0, proc.stderr
+
+
+def test_the_server_is_compiled_for_what_the_model_has():
+    """el_debug_config.h switches off the server's code for what a model
+    lacks (runtime_c/el_debug.c): blink has no charts, no item of several
+    elements and ranges on unsigned items only; pneumatic_cylinder has a
+    chart and a signed range, pt100_sensor items of several elements;
+    the fuzz target's tables (no config) keep everything. Actor firings
+    call the probe with the instance's id, in debug builds only."""
+    _, blink = render(EXAMPLES / "blink.elab")
+    config = blink["el_debug_config.h"]
+    for switch in ("HAS_CHARTS 0", "HAS_ARRAYS 0", "RANGES_UNSIGNED 1", "RANGES_SIGNED 0", "RANGES_FLOAT 0"):
+        assert f"#define EL_DBG_{switch}\n" in config, config
+    assert "EL_DEBUG_PROBE_ACTOR(0u);" in blink["model.c"]
+    _, cylinder = render(EXAMPLES / "pneumatic_cylinder.elab")
+    config = cylinder["el_debug_config.h"]
+    for switch in ("HAS_CHARTS 1", "RANGES_SIGNED 1", "RANGES_FLOAT 0"):
+        assert f"#define EL_DBG_{switch}\n" in config, config
+    assert "#define EL_DBG_HAS_ARRAYS 1\n" in render(EXAMPLES / "pt100_sensor.elab")[1]["el_debug_config.h"]
+    _, release = render(EXAMPLES / "blink.elab", release=True)
+    assert "PROBE" not in release["model.c"]
