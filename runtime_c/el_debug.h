@@ -25,6 +25,15 @@
  *   el_debug_port_reset  restart the firmware from boot; returns only on
  *                        failure
  * and it calls el_port_idle/el_port_resync as el_port.h says.
+ *
+ * The frame given to el_debug_port_write is the server's response buffer,
+ * and the server writes that buffer only while it handles a request, that
+ * is when el_debug_rx meets a frame's delimiter (0x00) among the bytes
+ * el_debug_port_read returned. A board may therefore send straight from
+ * the buffer, without copying it: its read must then return nothing while
+ * a frame is still going out, and no bytes after a delimiter (the next
+ * request waits in its receive buffer), so that no request is handled
+ * before the last response is out.
  */
 #ifndef EL_DEBUG_H
 #define EL_DEBUG_H

@@ -1,10 +1,16 @@
 /* EasyLab AVR board: the transports of the debug and service interfaces.
  *
  * Debug (runtime_c/el_debug.h): on the model's debug UART
- * (EL_AVR_DEBUG_UART, opened by el_port_init at EL_AVR_DEBUG_BAUD, 8N1).
- * A frame waits up to EL_AVR_DEBUG_TX_WAIT_MS for room in the transmit
- * ring, else it is dropped (the server counts it). Reset: the watchdog
- * restarts the MCU from boot.
+ * (EL_AVR_DEBUG_UART, opened by el_port_init at EL_AVR_DEBUG_BAUD, 8N1),
+ * which has no transmit ring: a response goes out straight from the
+ * server's buffer. The server writes that buffer only when it meets a
+ * request's delimiter among the bytes el_debug_port_read gave it, so the
+ * read hands out nothing while a response goes out (the request waits in
+ * the receive ring, which holds an encoded frame) and stops after a
+ * delimiter (one request answered per read). A write can therefore find
+ * the transmitter busy only when the server's promise is broken; it is
+ * then refused at once (the server counts it in C_TX_DROPPED). Reset: the
+ * watchdog restarts the MCU from boot once the reply is out.
  *
  * Modbus RTU (runtime_c/el_modbus_port.h): on the model's Modbus UART,
  * with the model's baud rate and parity, 8 data bits, 1 stop bit. The end
@@ -27,10 +33,6 @@
 
 #if defined(EL_DEBUG_SERVER) && EL_DEBUG_SERVER && defined(EL_AVR_DEBUG_UART)
 
-#ifndef EL_AVR_DEBUG_TX_WAIT_MS
-#define EL_AVR_DEBUG_TX_WAIT_MS 50u
-#endif
-
 /* In .noinit RAM (avr_port.c): 0x5A asks el_port_init to halt at the first instant. */
 extern uint8_t el_avr_reset_halt;
 
@@ -41,7 +43,7 @@ uint16_t el_debug_port_read(uint8_t *buf, uint16_t max)
 
 bool el_debug_port_write(const uint8_t *frame, uint16_t len)
 {
-    return el_avr_uart_write(EL_AVR_DEBUG_UART, frame, len, EL_AVR_DEBUG_TX_WAIT_MS);
+    return el_avr_uart_write(EL_AVR_DEBUG_UART, frame, len, 0u);
 }
 
 bool el_debug_port_reset(uint8_t flags)

@@ -59,11 +59,16 @@ static inline void el_avr_uart_open(uint8_t n, uint32_t baud, uint8_t parity)
 int16_t el_avr_uart_getc(uint8_t n);
 /* Bytes waiting in the receive ring. */
 uint8_t el_avr_uart_available(uint8_t n);
-/* Take up to `max` received bytes; returns how many. */
+/* Take up to `max` received bytes; returns how many. On a UART without a
+ * transmit ring (EL_AVR_UARTn_TX 0: the debug UART), none while a write
+ * is still going out, and none after a zero byte (a COBS frame's end). */
 uint16_t el_avr_uart_read(uint8_t n, uint8_t *buf, uint16_t max);
 /* Queue `len` bytes for sending: all of them (waiting about `wait_ms`, or
  * longer under interrupts, for room in the ring while the ring drains), or
- * none (false). */
+ * none (false). A UART without a transmit ring sends from `data` itself
+ * (1 to 255 bytes), which must stay as it is until a read of that UART
+ * returns bytes again; it never waits, and refuses a write while one goes
+ * out. */
 bool el_avr_uart_write(uint8_t n, const uint8_t *data, uint16_t len, uint16_t wait_ms);
 /* The fine clock (el_avr_clock) when the Modbus UART (EL_AVR_MODBUS_UART)
  * last received a byte. */

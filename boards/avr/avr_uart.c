@@ -7,6 +7,13 @@
  * last one, for its t3.5 silence); the data-register-empty interrupt sends
  * from the transmit ring and switches itself off when the ring is empty.
  *
+ * A UART whose EL_AVR_UARTn_TX is 0 has no transmit ring: a write sends
+ * straight from the caller's bytes, and while they go out a read takes
+ * nothing; a read also stops after a zero byte (a COBS frame's end). Only
+ * the debug UART is one (el_avr_config.h): the debug server writes its
+ * response buffer only on a request's delimiter it read (el_debug.h), so
+ * the response being sent stays as it is. One pointer and count serve.
+ *
  * Each function is expanded once per UART in use with that UART's
  * registers, rings and ring sizes as constants (`UART(n)`, a compound
  * literal the compiler folds): every access is a direct load or store,
@@ -37,13 +44,16 @@
  * besides the rings. */
 typedef struct {
     volatile uint8_t rx_head, rx_tail; /* head: the ISR writes; tail: we read */
+} uart_rx_state_t;
+typedef struct {
     volatile uint8_t tx_head, tx_tail; /* head: we write; tail: the ISR sends */
-} uart_state_t;
+} uart_tx_state_t;
 
 /* A UART as constants: its registers, state, rings and ring sizes. */
 typedef struct {
     volatile uint8_t *base;
-    uart_state_t *s;
+    uart_rx_state_t *r;
+    uart_tx_state_t *t;
     uint8_t *rx;
     uint8_t *tx;
     uint8_t rx_size;
@@ -51,14 +61,19 @@ typedef struct {
     uint8_t n;
 } uart_t;
 
-#define UART_DEFINE(n)                                     \
-    static uint8_t uart##n##_rx[EL_AVR_UART##n##_RX];      \
-    static uint8_t uart##n##_tx[EL_AVR_UART##n##_TX];      \
-    static uart_state_t uart##n##_state;
+/* A UART without a transmit ring keeps its transmit indices and a 1-byte
+ * ring (ISO C has no empty arrays) that no code reaches: the linker drops
+ * them. */
+#define UART_DEFINE(n)                                                              \
+    static uint8_t uart##n##_rx[EL_AVR_UART##n##_RX];                               \
+    static uint8_t uart##n##_tx[EL_AVR_UART##n##_TX + (EL_AVR_UART##n##_TX == 0u)]; \
+    static uart_rx_state_t uart##n##_rx_state;                                      \
+    static uart_tx_state_t uart##n##_tx_state;
 
-#define UART(n)                                                                              \
-    ((uart_t){(volatile uint8_t *)&(UCSR##n##A), &uart##n##_state, uart##n##_rx, uart##n##_tx, \
-              (uint8_t)(EL_AVR_UART##n##_RX), (uint8_t)(EL_AVR_UART##n##_TX), (uint8_t)(n)})
+#define UART(n)                                                                                 \
+    ((uart_t){(volatile uint8_t *)&(UCSR##n##A), &uart##n##_rx_state, &uart##n##_tx_state,       \
+              uart##n##_rx, uart##n##_tx, (uint8_t)(EL_AVR_UART##n##_RX), (uint8_t)(EL_AVR_UART##n##_TX), \
+              (uint8_t)(n)})
 
 /* The index after i in a ring of `size`. */
 #define NEXT(i, size) ((uint8_t)((uint8_t)((i) + 1u) == (size) ? 0u : (uint8_t)((i) + 1u)))
@@ -75,34 +90,55 @@ static volatile uint32_t modbus_last_rx;
 #define STAMPS(u) 0
 #endif
 
+/* The UART without a transmit ring (at most one: the #error below) sends
+ * from `direct_next`, `direct_left` bytes left; its interrupt is on only
+ * while some are. */
+#define DIRECT(u) ((u).tx_size == 0u)
+#if (defined(EL_AVR_UART0_TX) && EL_AVR_UART0_TX == 0) + (defined(EL_AVR_UART1_TX) && EL_AVR_UART1_TX == 0) \
+    + (defined(EL_AVR_UART2_TX) && EL_AVR_UART2_TX == 0) + (defined(EL_AVR_UART3_TX) && EL_AVR_UART3_TX == 0) > 1
+#error "el_avr_config.h: one UART at most without a transmit ring (EL_AVR_UARTn_TX 0)"
+#endif
+static const uint8_t *volatile direct_next;
+static volatile uint8_t direct_left;
+
 /* A byte received with a framing, parity or overrun error, or with no room
  * in the ring, is dropped: the protocols on top check their frames. */
 INLINE void rx_isr(uart_t u)
 {
     uint8_t status = u.base[REG_A];
     uint8_t c = u.base[REG_DR];
-    uint8_t head = u.s->rx_head;
+    uint8_t head = u.r->rx_head;
     uint8_t next = NEXT(head, u.rx_size);
 #if defined(EL_AVR_MODBUS_UART)
     if (STAMPS(u)) {
         modbus_last_rx = el_avr_clock();
     }
 #endif
-    if ((status & RX_ERRORS) == 0u && next != u.s->rx_tail) {
+    if ((status & RX_ERRORS) == 0u && next != u.r->rx_tail) {
         u.rx[head] = c;
-        u.s->rx_head = next;
+        u.r->rx_head = next;
     }
 }
 
 INLINE void udre_isr(uart_t u)
 {
-    uint8_t tail = u.s->tx_tail;
-    if (tail != u.s->tx_head) {
+    uint8_t tail;
+    if (DIRECT(u)) {
+        const uint8_t *next = direct_next;
+        u.base[REG_DR] = *next++;
+        direct_next = next;
+        if (--direct_left == 0u) {
+            u.base[REG_B] &= (uint8_t)~_BV(UDRIE0);
+        }
+        return;
+    }
+    tail = u.t->tx_tail;
+    if (tail != u.t->tx_head) {
         u.base[REG_DR] = u.tx[tail];
         tail = NEXT(tail, u.tx_size);
-        u.s->tx_tail = tail;
+        u.t->tx_tail = tail;
     }
-    if (tail == u.s->tx_head) {
+    if (tail == u.t->tx_head) {
         u.base[REG_B] &= (uint8_t)~_BV(UDRIE0);
     }
 }
@@ -111,8 +147,12 @@ INLINE void open_of(uart_t u, uint16_t ubrr, uint8_t frame)
 {
     ATOMIC_BLOCK(ATOMIC_RESTORESTATE) {
         u.base[REG_B] = 0u;
-        u.s->rx_head = u.s->rx_tail = 0u;
-        u.s->tx_head = u.s->tx_tail = 0u;
+        u.r->rx_head = u.r->rx_tail = 0u;
+        if (DIRECT(u)) {
+            direct_left = 0u;
+        } else {
+            u.t->tx_head = u.t->tx_tail = 0u;
+        }
         /* simavr computes the bit time when UBRRnL is written: U2X and
          * the frame format first, UBRRnL last. */
         u.base[REG_A] = _BV(U2X0);
@@ -125,18 +165,18 @@ INLINE void open_of(uart_t u, uint16_t ubrr, uint8_t frame)
 
 INLINE int16_t getc_of(uart_t u)
 {
-    uint8_t tail = u.s->rx_tail, c;
-    if (tail == u.s->rx_head) {
+    uint8_t tail = u.r->rx_tail, c;
+    if (tail == u.r->rx_head) {
         return -1;
     }
     c = u.rx[tail];
-    u.s->rx_tail = NEXT(tail, u.rx_size);
+    u.r->rx_tail = NEXT(tail, u.rx_size);
     return (int16_t)c;
 }
 
 INLINE uint8_t available_of(uart_t u)
 {
-    uint8_t head = u.s->rx_head, tail = u.s->rx_tail;
+    uint8_t head = u.r->rx_head, tail = u.r->rx_tail;
     return (uint8_t)(head >= tail ? head - tail : u.rx_size - tail + head);
 }
 
@@ -144,8 +184,14 @@ INLINE uint16_t read_of(uart_t u, uint8_t *buf, uint16_t max)
 {
     uint16_t got = 0u;
     int16_t c;
+    if (DIRECT(u) && direct_left != 0u) {
+        return 0u;
+    }
     while (got < max && (c = getc_of(u)) >= 0) {
         buf[got++] = (uint8_t)c;
+        if (DIRECT(u) && c == 0) {
+            break;
+        }
     }
     return got;
 }
@@ -153,7 +199,7 @@ INLINE uint16_t read_of(uart_t u, uint8_t *buf, uint16_t max)
 /* Free bytes in the transmit ring (one slot stays empty). */
 INLINE uint8_t tx_room(uart_t u)
 {
-    uint8_t head = u.s->tx_head, tail = u.s->tx_tail;
+    uint8_t head = u.t->tx_head, tail = u.t->tx_tail;
     uint8_t used = (uint8_t)(head >= tail ? head - tail : u.tx_size - tail + head);
     return (uint8_t)(u.tx_size - 1u - used);
 }
@@ -162,6 +208,19 @@ INLINE bool write_of(uart_t u, const uint8_t *data, uint16_t len, uint16_t wait_
 {
     uint8_t head, polls = 10u;
     uint16_t i;
+    if (DIRECT(u)) {
+        /* Never waits: the caller's bytes must not change before they are
+         * out, so a caller writes only once the last write is done. */
+        if (len == 0u || len > UINT8_MAX || direct_left != 0u) {
+            return false;
+        }
+        direct_next = data;
+        direct_left = (uint8_t)len;
+        /* Not atomic, and need not be: with nothing left to send the
+         * interrupt is off, the only other writer of UCSRnB. */
+        u.base[REG_B] |= _BV(UDRIE0);
+        return true;
+    }
     if (len >= u.tx_size) {
         return false;
     }
@@ -181,12 +240,12 @@ INLINE bool write_of(uart_t u, const uint8_t *data, uint16_t len, uint16_t wait_
             polls = 10u;
         }
     }
-    head = u.s->tx_head;
+    head = u.t->tx_head;
     for (i = 0u; i < len; i++) {
         u.tx[head] = data[i];
         head = NEXT(head, u.tx_size);
     }
-    u.s->tx_head = head;
+    u.t->tx_head = head;
     ATOMIC_BLOCK(ATOMIC_RESTORESTATE) {
         u.base[REG_B] |= _BV(UDRIE0);
     }

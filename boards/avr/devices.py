@@ -209,8 +209,6 @@ def device_views(program: Program, board) -> list[DeviceView]:
 
 def _ring_sizes(mcu: Mcu, use: str) -> tuple[int, int]:
     """(RX, TX) ring bytes of a UART by what it carries (at most 256 each)."""
-    if use == "debug":  # a whole encoded frame (163 bytes) must fit in TX
-        return (64, 168) if mcu.small else (192, 255)
     if use == "modbus-rtu":  # a whole ADU (256 bytes) arrives while a task may run
         return (128, 64) if mcu.small else (255, 128)
     return (32, 4)  # line camera: frames of 4 bytes, listen only
@@ -267,22 +265,23 @@ def config_header(program: Program, board, res: Resolved, release: bool) -> str:
         if u["use"] == "debug" and release:
             lines.append(f"/* uart{n}: the debug interface, absent from release builds */")
             continue
-        rx, tx = _ring_sizes(mcu, u["use"])
-        if u["use"] == "debug" and board.model_sized_debug_buffers:
-            # An encoded frame of the model's size (el_debug_config.h) and its delimiter each way
-            # (the host sends one request at a time and waits for its response: WINDOW 1); a ring
-            # of n bytes holds n - 1.
-            ring = "(EL_DBG_FRAME + EL_DBG_FRAME / 254u + 3u)"
-            lines.append(f'#include "el_debug_config.h" /* uart{n}: debug; EL_DBG_FRAME */')
-            lines.append(f"#define EL_AVR_UART{n}_RX {ring}")
-            lines.append(f"#define EL_AVR_UART{n}_TX {ring}")
-        else:
-            lines.append(f"#define EL_AVR_UART{n}_RX {rx}u /* uart{n}: {u['use']} */")
-            lines.append(f"#define EL_AVR_UART{n}_TX {tx}u")
         if u["use"] == "debug":
+            # RX: an encoded request (COBS and its delimiter) of the model's largest frame
+            # (el_debug_config.h) or the protocol's, which waits there while the response goes out
+            # (the host sends one request at a time: WINDOW 1); a ring of n bytes holds n - 1.
+            # No TX ring: responses go out straight from the debug server's buffer (avr_interfaces.c).
+            frame = "EL_DBG_FRAME" if board.model_sized_debug_buffers else "EL_DBG_MAX_FRAME"
+            header = "el_debug_config.h" if board.model_sized_debug_buffers else "el_debug_protocol.h"
+            lines.append(f'#include "{header}" /* uart{n}: debug; {frame} */')
+            lines.append(f"#define EL_AVR_UART{n}_RX ({frame} + {frame} / 254u + 3u)")
+            lines.append(f"#define EL_AVR_UART{n}_TX 0u")
             lines.append(f"#define EL_AVR_DEBUG_UART {n}u")
             lines.append(f"#define EL_AVR_DEBUG_BAUD {int(u.get('baud', 115200))}UL")
-        elif u["use"] == "modbus-rtu":
+            continue
+        rx, tx = _ring_sizes(mcu, u["use"])
+        lines.append(f"#define EL_AVR_UART{n}_RX {rx}u /* uart{n}: {u['use']} */")
+        lines.append(f"#define EL_AVR_UART{n}_TX {tx}u")
+        if u["use"] == "modbus-rtu":
             lines.append(f"#define EL_AVR_MODBUS_UART {n}u")
             lines.append(f"#define EL_AVR_MODBUS_TX {tx}u")
     lines += _i2c_config(board, res) + _spi_config(board, res) + remote_link(board, res)

@@ -27,7 +27,7 @@ STACK = 256  # bytes kept for the stack (the build's own check)
 
 BLINK_RELEASE_GOAL = (1536, 64)  # flash, RAM
 BLINK_DEBUG_GOAL = (4096, 300)
-BLINK_DEBUG_BOUND = (4840, 300)  # achieved: the flash goal is not met (this keeps it from growing), the RAM goal is
+BLINK_DEBUG_BOUND = (4754, 300)  # achieved: the flash goal is not met (this keeps it from growing), the RAM goal is
 SERVER_GOAL = (2560, 160)
 SERVER_BOUND = (2848, 160)  # achieved: the flash goal is not met, the RAM goal is
 
@@ -46,9 +46,9 @@ def test_blink_release_links_no_service_layer_and_no_64_bit_arithmetic(tmp_path)
 
 
 def test_blink_debug_links_no_32_bit_division_and_no_fine_clock(tmp_path):
-    """The debug UART's baud divisor is a constant's, its write waits
-    without a clock, el_port_idle counts timer interrupts: no 32-bit
-    division, no fine clock; the dispatcher's tick is 16-bit."""
+    """The debug UART's baud divisor is a constant's, its write never
+    waits, el_port_idle counts timer interrupts: no 32-bit division, no
+    fine clock; the dispatcher's tick is 16-bit."""
     built = avr_build(ROOT / "examples/blink.elab", tmp_path / "b")
     names = set(_symbols(built.elf))
     assert not names & {"__udivmodsi4", "__divmodsi4", "el_avr_clock", "el_avr_clock_from_us"}, names

@@ -174,6 +174,58 @@ def test_the_debug_interface_answers_on_a_tcp_uart(sim_builds):
         proc.wait(timeout=10)
 
 
+def test_the_debug_uart_sends_each_response_whole_from_the_servers_buffer(tmp_path):
+    """The 328P's debug UART has no transmit ring: a response goes out from
+    the server's own buffer, so the server must take no further request
+    until it is out. Requests sent back to back (as many as its receive
+    ring holds) each get their whole response, in order, with nothing
+    dropped; RESET's reply goes out before the watchdog restarts the MCU,
+    which comes back halted at its first instant (RESET_HALT)."""
+    import re
+
+    from avr_testlib import ROOT, avr_build, debug_client_class
+    from easylab.host_tools.debug_protocol import K, decode_frame, encode_frame
+    from easylab.host_tools.transport import TransportTimeout
+
+    built = avr_build(ROOT / "examples/blink.elab", tmp_path / "s", "--sim")
+    program_id = int((tmp_path / "s" / "model.c").read_text().split("Program id 0x")[1][:8], 16)
+    proc = subprocess.Popen([str(built.simulator), "--uart0", "tcp:0", "--wait"], stderr=subprocess.PIPE, text=True)
+    try:
+        port = int(re.search(r"uart0 on tcp 127\.0\.0\.1:(\d+)", proc.stderr.readline()).group(1))
+        client = debug_client_class().open(f"socket://127.0.0.1:{port}", timeout=2.0)
+        try:
+            client.hello()
+            before = client.counters()
+            seqs = [(client.seq + 1 + k) & 0xFF for k in range(5)]
+            burst = b"".join(encode_frame(seq, K.CMD_GET_PROGRAM_ID) for seq in seqs)
+            assert len(burst) < 33  # blink's receive ring (EL_DBG_FRAME 30 + 3) holds them all
+            client.t.send(burst)
+            answers = [decode_frame(client.t.recv(2.0)) for _ in seqs]
+            assert answers == [(seq, K.CMD_GET_PROGRAM_ID | K.RESPONSE, bytes([K.OK]) + program_id.to_bytes(4, "little"))
+                               for seq in seqs]
+            client.seq = seqs[-1]
+            after = client.counters()
+            assert after["tx_dropped"] == before["tx_dropped"] and after["frames"] == before["frames"] + 6
+            client.retries = 0  # RESET's reply must come the first time
+            client.reset(halt=True)
+            deadline = time.monotonic() + 5
+            while True:  # the restarted MCU answers once its receiver is on
+                try:
+                    time.sleep(0.05)
+                    hello = client.hello()
+                    break
+                except TransportTimeout:
+                    assert time.monotonic() < deadline
+            assert hello.program_id == program_id
+            flags = client.flags()
+            assert flags.halted and flags.why == "start" and flags.tick == 0
+        finally:
+            client.close()
+    finally:
+        proc.kill()
+        proc.wait()
+
+
 ENCODERS = {
     # pins with pin-change interrupts of every group simavr simulates, and
     # external interrupts (INTn)
