@@ -4,9 +4,15 @@ there again at the next run with the same --nvram file)."""
 
 from __future__ import annotations
 
+import os
+import select
 import subprocess
+import termios
 import time
+import tty
 from pathlib import Path
+
+from easylab.host_tools.debug_protocol import crc16  # CRC-16/MODBUS
 
 
 class ModbusOnPty:
@@ -72,3 +78,56 @@ def check_persist_round_trip(exe: Path, uart: str, tmp_path: Path, eeprom_bytes:
         client.close()
     finally:
         h.stop()
+
+
+def _rtu(*pdu: int) -> bytes:
+    frame = bytes(pdu)
+    return frame + crc16(frame).to_bytes(2, "little")
+
+
+def _replies_to_two_frames_written_together(exe: Path, uart: str, tmp_path: Path, *options: str) -> bytes:
+    """pt100_sensor's Modbus RTU slave (unit 17 on `uart`) in real time: two
+    requests written to its pty in one write, once the firmware answers."""
+    tmp_path.mkdir()
+    link = tmp_path / uart
+    proc = subprocess.Popen([str(exe), f"--{uart}", f"pty:{link}", "--wait", *options], stderr=subprocess.PIPE,
+                            text=True)
+    try:
+        deadline = time.monotonic() + 20
+        while not link.exists() and time.monotonic() < deadline:
+            time.sleep(0.05)
+        fd = os.open(link, os.O_RDWR | os.O_NOCTTY)
+        tty.setraw(fd)
+        one, two = _rtu(17, 3, 0, 0, 0, 1), _rtu(17, 3, 0, 2, 0, 1)  # holding registers 0 and 2
+        got = b""
+        while not got and time.monotonic() < deadline:  # the first request may meet a firmware still booting
+            termios.tcflush(fd, termios.TCIFLUSH)
+            os.write(fd, one)
+            got = _read_for(fd, 0.5)
+        assert got == _rtu(17, 3, 2, 0x03, 0xE8), got  # cal_gain 1000
+        os.write(fd, one + two)
+        replies = _read_for(fd, 1.5)
+        os.close(fd)
+        return replies
+    finally:
+        proc.terminate()
+        proc.wait(timeout=10)
+
+
+def _read_for(fd: int, seconds: float) -> bytes:
+    got, end = b"", time.monotonic() + seconds
+    while (left := end - time.monotonic()) > 0:
+        if select.select([fd], [], [], left)[0]:
+            got += os.read(fd, 256)
+    return got
+
+
+def check_rtu_frames_kept_apart(exe: Path, uart: str, tmp_path: Path) -> None:
+    """A pty keeps no pauses: two Modbus RTU requests that reach it together
+    (a master's frames while the harness was held up by a busy machine) are
+    one long frame to pt100_sensor's slave, which answers nothing; with
+    --rtu-frames the harness hands them over as a wire would, a silence
+    between them, and both are answered."""
+    assert _replies_to_two_frames_written_together(exe, uart, tmp_path / "plain") == b""
+    assert _replies_to_two_frames_written_together(exe, uart, tmp_path / "framed", "--rtu-frames") == \
+        _rtu(17, 3, 2, 0x03, 0xE8) + _rtu(17, 3, 2, 0x03, 0x20)  # cal_gain 1000, alarm_high 800

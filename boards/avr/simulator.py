@@ -222,7 +222,7 @@ def build_harness(board, out_dir: Path, model_source: str, exe: Path) -> Path:
     folder = board.description.folder
     host = load_board("host").description.folder
     sources = [folder / s for s in spec.get("sources", [])] + [host / s for s in spec.get("host_sources", [])] \
-        + [model_c]
+        + [runtime_dir() / s for s in spec.get("runtime_sources", [])] + [model_c]
     run([cc, *spec.get("cflags", []), f"-I{folder / 'sim'}", f"-I{host}", f"-I{runtime_dir()}", "-o", str(exe),
          *map(str, sources), *pc.stdout.split(), *spec.get("ldflags", [])], "building the simulator")
     return exe

@@ -4,7 +4,8 @@
  * serial port, or the pty of the slave's UART in `easylab launch`), opened
  * raw at the first frame, which waits EASYLAB_BUS_SETTLE_MS (default 200)
  * for a slave started with the line. In real time, frames on one line are
- * at least EASYLAB_BUS_GAP_US (default 5000) apart, so that a slave whose
+ * at least EASYLAB_BUS_GAP_US (default 5000) apart (a silence from the end
+ * of one, once it is out, to the start of the next), so that a slave whose
  * receiver ends frames at the t3.5 silence sees the sync and its slot as
  * two frames; in lock-step (--fast) every frame is answered, the sync too
  * (el_link.c). A slave that does not answer within EASYLAB_BUS_TIMEOUT_MS
@@ -170,6 +171,9 @@ bool el_port_bus_send(const char *node, const uint8_t *frame, uint16_t len)
         }
         done = (uint16_t)(done + (uint16_t)n);
     }
+    /* A serial port's write returns with the frame still going out: the
+     * pause starts once it is out (a pty takes it at once). */
+    (void)tcdrain(line->fd);
     line->quiet_from_us = now_us();
     return true;
 }

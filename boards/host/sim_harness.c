@@ -2,6 +2,8 @@
  * sim_harness.h). */
 #include "sim_harness.h"
 
+#include "el_crc16.h"
+
 #include <arpa/inet.h>
 #include <errno.h>
 #include <fcntl.h>
@@ -38,8 +40,8 @@ static void usage(FILE *f, const char *firmware_option, const char *simulator)
 {
     fprintf(f,
             "usage: %s [--fast] [--duration T] [--cycles N] [--stimulus FILE.csv] [--trace FILE.csv|FILE.vcd]\n"
-            "          [--pins FILE.csv|FILE.vcd] [--nvram FILE] [--uartN pty:LINK|tcp:PORT|file:PATH|null] [--wait]\n"
-            "          [--wait] [--halt] [%s FILE] [--report] [--help]\n"
+            "          [--pins FILE.csv|FILE.vcd] [--nvram FILE] [--uartN pty:LINK|tcp:PORT|file:PATH|null]\n"
+            "          [--rtu-frames] [--wait] [--halt] [%s FILE] [--report] [--help]\n"
             "Runs the %s firmware of model %s in %s.\n"
             "  --fast            flat out (default: in step with the wall clock)\n"
             "  --duration T      end at the first instant at or after T (10s, 500ms, 250us, 2m, 1h)\n"
@@ -51,6 +53,9 @@ static void usage(FILE *f, const char *firmware_option, const char *simulator)
             "  --nvram FILE      the EEPROM (%lu bytes), read at start and written at the end\n"
             "%s"
             "  --uartN SPEC      UART N (of %s) on a pseudo-terminal (symlink LINK), TCP port, file or nothing\n"
+            "  --rtu-frames      in real time, the UARTs' clients speak Modbus RTU: each frame reaches\n"
+            "                    the MCU followed by 5 ms of silence, even when frames came together\n"
+            "                    (the pauses of a wire, which a pty does not keep)\n"
             "  --wait            hold the CPU until every pty and TCP UART has a client\n"
             "  --halt            halt at the first instant for the debugger (the host's --debug ...,halt)\n"
             "  %-17s run this firmware (default: %s)\n"
@@ -119,6 +124,8 @@ int sim_parse_args(int argc, char **argv, const char *firmware_option, const cha
             sim_opt.fast = true;
         } else if (strcmp(a, "--wait") == 0) {
             sim_opt.wait = true;
+        } else if (strcmp(a, "--rtu-frames") == 0) {
+            sim_opt.rtu_frames = true;
         } else if (strcmp(a, "--halt") == 0) {
             sim_opt.halt = true;
         } else if (strcmp(a, "--report") == 0) {
@@ -274,8 +281,74 @@ void sim_link_service(sim_link_t *u)
     }
 }
 
+/* Does p[0..n) start with a whole Modbus RTU frame (4 bytes or more, the
+ * CRC over them and their CRC 0)? */
+static bool starts_with_frame(const uint8_t *p, size_t n)
+{
+    uint16_t crc = EL_CRC16_INIT;
+    size_t i;
+    for (i = 0; i < n; i++) {
+        crc = el_crc16_update(crc, p + i, 1u);
+        if (i >= 3u && crc == 0u)
+            return true;
+    }
+    return false;
+}
+
+static uint64_t cycles_of_ns(uint64_t ns)
+{
+    return ns * sim_clock_hz / 1000000000u;
+}
+
+static bool keeps_frames_apart(void)
+{
+    return sim_opt.rtu_frames && !sim_opt.fast; /* in lock-step every frame is answered before the next */
+}
+
+size_t sim_link_ready(sim_link_t *u, uint64_t cycle, bool idle, uint64_t char_cycles)
+{
+    uint16_t crc;
+    size_t i, len;
+    if (!keeps_frames_apart() || u->in_len == 0u)
+        return u->in_len;
+    if (u->frame_ended) {
+        if (!idle)
+            return 0u;
+        if (!u->idle_seen) {
+            u->idle_seen = true;
+            u->idle_from = cycle;
+        }
+        if (cycle - u->idle_from < char_cycles + cycles_of_ns(SIM_RTU_PAUSE_NS))
+            return 0u;
+        u->frame_ended = false;
+        u->frame_crc = EL_CRC16_INIT;
+        u->frame_len = 0u;
+    }
+    /* The frame ends where its CRC checks and a whole frame follows (frames
+     * that came together); a frame still coming goes on as it comes. */
+    crc = u->frame_len != 0u ? u->frame_crc : EL_CRC16_INIT;
+    len = u->frame_len;
+    for (i = 0; i + 1u < u->in_len; i++) {
+        crc = el_crc16_update(crc, u->in + i, 1u);
+        if (++len >= 4u && crc == 0u && starts_with_frame(u->in + i + 1u, u->in_len - i - 1u))
+            return i + 1u;
+    }
+    return u->in_len;
+}
+
 void sim_link_consume(sim_link_t *u, size_t n)
 {
+    if (keeps_frames_apart() && n != 0u) {
+        u->frame_crc = el_crc16_update(u->frame_len != 0u ? u->frame_crc : EL_CRC16_INIT, u->in, (uint16_t)n);
+        u->frame_len += n;
+        /* what went ends a frame (nothing follows yet, or a whole frame
+         * does): a silence follows */
+        if (u->frame_len >= 4u && u->frame_crc == 0u &&
+            (n == u->in_len || starts_with_frame(u->in + n, u->in_len - n))) {
+            u->frame_ended = true;
+            u->idle_seen = false;
+        }
+    }
     memmove(u->in, u->in + n, u->in_len - n);
     u->in_len -= n;
 }

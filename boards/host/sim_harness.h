@@ -84,7 +84,13 @@ typedef struct {
     bool wait;
     bool halt;
     bool report;
+    bool rtu_frames;      /* --rtu-frames */
 } sim_options_t;
+
+/* --rtu-frames: the silence after a frame, as a master of `easylab launch`
+ * leaves it on a line (host_bus.c's EASYLAB_BUS_GAP_US, after its frame is
+ * out): more than Modbus RTU's t3.5 at 9600 baud and above. */
+#define SIM_RTU_PAUSE_NS 5000000u
 
 extern sim_options_t sim_opt;
 
@@ -107,6 +113,12 @@ typedef struct {
     bool link_made;
     uint8_t in[4096];     /* bytes from the client for the MCU */
     size_t in_len;
+    /* --rtu-frames: the Modbus RTU frame being handed to the MCU */
+    uint16_t frame_crc;   /* the CRC of its bytes handed so far */
+    size_t frame_len;
+    bool frame_ended;     /* the bytes handed end a frame: the next waits for the pause */
+    bool idle_seen;
+    uint64_t idle_from;   /* the cycle the MCU's receiver was first seen idle after it */
 } sim_link_t;
 
 extern sim_link_t sim_links[4];
@@ -115,6 +127,13 @@ extern sim_link_t sim_links[4];
 bool sim_links_open(void);
 /* Accept a TCP client, read what clients sent into in[]. */
 void sim_link_service(sim_link_t *u);
+/* How many of in[]'s first bytes may go to the MCU's UART at `cycle`; its
+ * receiver is `idle` when it holds none of the bytes handed to it (the
+ * last one may still be coming in: `char_cycles`, a character's time).
+ * All of them, except with --rtu-frames in real time: the bytes of one
+ * Modbus RTU frame; the next once the frame is in and SIM_RTU_PAUSE_NS
+ * have passed. */
+size_t sim_link_ready(sim_link_t *u, uint64_t cycle, bool idle, uint64_t char_cycles);
 /* Drop the first n bytes of in[] (the MCU took them). */
 void sim_link_consume(sim_link_t *u, size_t n);
 /* A byte the MCU sent. */

@@ -128,6 +128,7 @@ def build_harness(board, out_dir: Path, model_source: str, exe: Path) -> Path:
     cflags = [*spec.get("cflags", []), *includes]
     cxxflags = [*spec.get("cxxflags", []), *includes, "-I/usr/include/gpsim", *pc.stdout.split()]
     objects = [_object(cc, cflags, host / s, obj_dir) for s in spec.get("host_sources", [])]
+    objects += [_object(cc, cflags, runtime_dir() / s, obj_dir) for s in spec.get("runtime_sources", [])]
     objects += [_object(cxx, cxxflags, folder / s, obj_dir) for s in spec.get("cxx_sources", [])]
     objects.append(_object(cc, cflags, model_c, obj_dir, cache=False))
     run([cxx, "-o", str(exe), *map(str, objects), *spec.get("ldflags", [])], "building the simulator")

@@ -107,6 +107,8 @@ def cmd_launch(args) -> int:
             result = built[name]
             cmd = [str(result.simulator or result.executable)] + (["--fast"] if args.fast else [])
             cmd += ["--wait", "--trace", str(trace_dir / f"{name}.csv")]
+            if result.simulator:  # the sync and the slot stay two frames on a busy machine
+                cmd.append("--rtu-frames")
             uart = slaves[name].replace("[", "").replace("]", "")
             bus = (trace_dir / f"{name}.bus").resolve()
             bus.unlink(missing_ok=True)

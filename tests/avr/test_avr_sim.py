@@ -12,7 +12,7 @@ from pathlib import Path
 
 import pytest
 
-from sim_modbus import check_persist_round_trip
+from sim_modbus import check_persist_round_trip, check_rtu_frames_kept_apart
 from avr_testlib import ROOT, run, stimulus_of
 
 NATIVE = ROOT / "tests" / "native" / "data"
@@ -136,6 +136,10 @@ def test_a_uart_on_a_pty_serves_modbus_rtu_and_the_eeprom_persists(sim_builds, t
     USART1), and the EEPROM: a persist param written over Modbus is there
     again in the next run with the same --nvram file."""
     check_persist_round_trip(sim_builds["pt100_sensor"].simulator, "uart1", tmp_path, 4096)
+
+
+def test_rtu_frames_that_come_together_reach_the_slave_apart(sim_builds, tmp_path):
+    check_rtu_frames_kept_apart(sim_builds["pt100_sensor"].simulator, "uart1", tmp_path)
 
 
 def test_the_uart_link_and_harness_files_of_a_build(sim_builds):

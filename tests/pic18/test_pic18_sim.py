@@ -11,7 +11,7 @@ from pathlib import Path
 
 import pytest
 
-from sim_modbus import check_persist_round_trip
+from sim_modbus import check_persist_round_trip, check_rtu_frames_kept_apart
 from pic18_testlib import DATA, MODELS, ROOT, changes, pic18_build, pins_rows, run
 
 DRIVERS_STIMULUS = DATA / "drivers.stimulus.csv"
@@ -158,6 +158,10 @@ def test_persist_params_written_over_modbus_are_in_the_eeprom_at_the_next_run(pt
     there again in the next run with the same --nvram file (the
     PIC18F4620's 1024 bytes: EEADRH)."""
     check_persist_round_trip(pt100_rtu.simulator, "uart0", tmp_path, 1024)
+
+
+def test_rtu_frames_that_come_together_reach_the_slave_apart(pt100_rtu, tmp_path):
+    check_rtu_frames_kept_apart(pt100_rtu.simulator, "uart0", tmp_path)
 
 
 @pytest.mark.parametrize("name, mcu, duration", [("pneumatic_cylinder", "pic18f4620", "3600ms"),

@@ -256,9 +256,10 @@ public:
         sim_link_t *u = &sim_links[0];
         _RCREG *rc = dynamic_cast<_RCREG *>(cpu->registers[RCREG]->getReg());
         unsigned rcsta = reg(RCSTA);
-        if (scheduled || u->in_len == 0u || rc == nullptr || (rcsta & 0x90u) != 0x90u) /* SPEN, CREN */
+        if (scheduled || u->in_len == 0u || rc == nullptr || (rcsta & 0x90u) != 0x90u /* SPEN, CREN */
+            || sim_link_ready(u, get_cycles().get(), rc->fifo_sp == 0u, char_cycles(rcsta)) == 0u)
             return;
-        guint64 frame = bit_cycles() * ((rcsta & 0x40u) ? 11u : 10u);
+        guint64 frame = char_cycles(rcsta);
         if (rc->fifo_sp == 0u) { /* not the FIFO's second place: see the top of the file */
             unsigned byte = u->in[0];
             if (rcsta & 0x40u) /* RX9: the 9th bit carries the parity the model's interface uses */
@@ -271,6 +272,11 @@ public:
     }
 
 private:
+    /* A character on the wire: start bit, 8 or 9 data bits (RX9), stop bit. */
+    static guint64 char_cycles(unsigned rcsta)
+    {
+        return bit_cycles() * ((rcsta & 0x40u) ? 11u : 10u);
+    }
     static unsigned ninth_bit(uint8_t v)
     {
         unsigned ones = 0;
