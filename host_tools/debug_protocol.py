@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import random
 import struct
+import time
 from dataclasses import dataclass, field
 from types import SimpleNamespace
 
@@ -312,6 +313,18 @@ class DebugClient:
         fields = struct.unpack_from("<BHBIHHBBBBBB", body)
         self.hello_info = Hello(*fields)
         return self.hello_info
+
+    def hello_again(self, timeout: float = 5.0) -> Hello:
+        """HELLO, asked until the firmware answers within ``timeout`` s: a
+        firmware restarted by RESET answers once its receiver is on again."""
+        deadline = time.monotonic() + timeout
+        while True:
+            try:
+                time.sleep(0.05)
+                return self.hello()
+            except TransportTimeout:
+                if time.monotonic() >= deadline:
+                    raise
 
     def program_id(self) -> int:
         return struct.unpack("<I", self.request(K.CMD_GET_PROGRAM_ID, what="getProgramId"))[0]
