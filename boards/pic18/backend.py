@@ -34,6 +34,10 @@ from . import devices, linkmap, sdcc, sdcc_quirks, simulator
 from .parts import Mcu, read_mcus
 
 
+# A part with this much RAM or less gets model-sized debug buffers.
+SMALL_RAM = 2048
+
+
 class Pic18Board(BoardBase):
     has_simulator = True
 
@@ -59,6 +63,13 @@ class Pic18Board(BoardBase):
     @property
     def nv_size(self) -> int | None:
         return self.part.eeprom if self.part else None
+
+    @property
+    def model_sized_debug_buffers(self) -> bool:
+        """The PIC18F4520's 1.5 KB: the debug server's frames, queues and
+        the debug EUSART's rings as large as the model needs (the
+        PIC18F4620 keeps the protocol's largest)."""
+        return bool(self.part and self.part.ram <= SMALL_RAM)
 
     # ---------------------------------------------------------------- code
 
@@ -182,7 +193,7 @@ class Pic18Board(BoardBase):
                 msg = (f"error: gplink could not place the program's sections in the {mcu.name}'s memory, though "
                        f"in all they fit (each RAM section must fit within a 256-byte bank)")
         if not options.release and any(i.kind == "debug" for i in program.interfaces):
-            msg += "; the debug server takes about 15 KB of program memory: a --release build has none"
+            msg += "; the debug server takes about 14 KB of program memory: a --release build has none"
         if measured.ram > mcu.ram and options.schedule != "min-buffer" and any(df.buffers for df in program.dataflows):
             msg += "; dataflow buffers shrink with --schedule min-buffer"
         bigger = [m for m in self.all_mcus.values() if m.flash > mcu.flash]

@@ -205,8 +205,15 @@ def config_header(program: Program, board, res: Resolved, release: bool) -> str:
         if u["use"] == "debug" and release:
             lines.append(f"/* uart{n}: the debug interface, absent from release builds */")
             continue
-        rx, tx = _ring_sizes(mcu, u["use"])
-        lines += [f"#define EL_PIC18_UART_RX {rx}u /* uart{n}: {u['use']} */", f"#define EL_PIC18_UART_TX {tx}u"]
+        if u["use"] == "debug" and board.model_sized_debug_buffers:
+            # an encoded frame of the model's largest (el_debug_config.h), its COBS code and
+            # delimiter each way; a ring of n bytes holds n - 1
+            lines += [f'#include "el_debug_config.h" /* uart{n}: debug; EL_DBG_FRAME */',
+                      f"#define EL_PIC18_UART_RX (EL_DBG_FRAME + 3u)",
+                      f"#define EL_PIC18_UART_TX (EL_DBG_FRAME + 3u)"]
+        else:
+            rx, tx = _ring_sizes(mcu, u["use"])
+            lines += [f"#define EL_PIC18_UART_RX {rx}u /* uart{n}: {u['use']} */", f"#define EL_PIC18_UART_TX {tx}u"]
         if u["use"] == "debug":
             lines.append(f"#define EL_PIC18_DEBUG_BAUD {int(u.get('baud', 115200))}UL")
         elif u["use"] == "modbus-rtu":

@@ -160,6 +160,45 @@ def test_persist_params_written_over_modbus_are_in_the_eeprom_at_the_next_run(pt
     check_persist_round_trip(pt100_rtu.simulator, "uart0", tmp_path, 1024)
 
 
+def test_the_debug_server_of_a_pic18f4520_with_model_sized_buffers_answers(tmp_path):
+    """blink's debug build on the PIC18F4520 (1.5 KB of RAM: buffers sized
+    from the model) in gpsim: the debugger identifies it, reads and writes
+    an item, is refused a value out of its range, halts it and lets it go."""
+    import re
+    import subprocess
+
+    from easylab.host_tools.debug_protocol import K, DebugClient, DebugError
+
+    built = pic18_build(ROOT / "examples" / "blink.elab", tmp_path / "s", "--sim")
+    dmap = (tmp_path / "s" / "debug_map.json").read_text()
+    program_id = int(re.search(r'"program_id": "0x([0-9a-f]+)"', dmap).group(1), 16)
+    proc = subprocess.Popen([str(built.simulator), "--uart0", "tcp:0", "--wait"], stderr=subprocess.PIPE, text=True)
+    try:
+        port = int(re.search(r"uart0 on tcp 127\.0\.0\.1:(\d+)", proc.stderr.readline()).group(1))
+        client = DebugClient.open(f"socket://127.0.0.1:{port}", timeout=3.0)
+        try:
+            hello = client.hello()
+            assert hello.program_id == program_id and hello.max_frame == 30  # the model's frame, not 160
+            assert client.read([(0, "uint16", 1)]) == [500]  # half_period
+            with pytest.raises(DebugError) as e:
+                client.write(0, "uint16", 5001)  # range 10..5000
+            assert e.value.status == K.E_RANGE
+            client.halt()
+            deadline = time.monotonic() + 10
+            while not client.flags().halted:
+                assert time.monotonic() < deadline
+                time.sleep(0.05)
+            assert client.write(0, "uint16", 250) == K.APPLIED  # halted at an instant: at once
+            assert client.read([(0, "uint16", 1)]) == [250]
+            client.run()
+            assert not client.flags().halted
+        finally:
+            client.close()
+    finally:
+        proc.terminate()
+        proc.wait(timeout=10)
+
+
 def test_rtu_frames_that_come_together_reach_the_slave_apart(pt100_rtu, tmp_path):
     check_rtu_frames_kept_apart(pt100_rtu.simulator, "uart0", tmp_path)
 
