@@ -16,7 +16,8 @@ cycles, the footprint of the debug server, the Modbus response time.
    memory: the program with one side minus the program with neither.
    Goal: at most 1.10x the cycles of hand-written C.
 2. Program memory and RAM of blink with and without the debug server (the
-   PIC18F4620, and the PIC18F4520's release build), and which examples fit.
+   PIC18F4620 and the PIC18F4520, whose debug buffers are sized from the
+   model), and which examples fit.
 3. The Modbus slave's answer to a 125-register read, in cycles.
 
 Writes out_dir/pic18.json and prints a table. Run: python bench/bench_pic18.py [out_dir]
