@@ -253,6 +253,7 @@ def test_step_advances_exactly_one_unit(builds, firmware):
 
 
 @on_boards
+@pytest.mark.realtime  # counts ticks against the wall clock: a starved simulator falls behind it
 def test_break_run_and_resync_in_real_time(builds, firmware):
     fw = firmware(builds["pneumatic_cylinder"], halt=False, fast=False)  # tick 5 ms, real time
     c = fw.client()
