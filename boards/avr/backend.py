@@ -33,7 +33,7 @@ from easylab.core.errors import BuildError
 from easylab.ir.program import Program
 
 from . import devices, simulator
-from .parts import Mcu, read_mcus
+from .parts import read_mcus
 
 # Bytes of RAM left for the stack at the least: interrupt handlers, the
 # dispatcher and the deepest actor call chain.
@@ -50,24 +50,6 @@ class AvrBoard(BoardBase):
         self.drivers: dict[str, dict] = description.table("drivers")
         self.clock_hz = int(description.raw.get("clock_hz", 16_000_000))
         self.watchdog_ms = int(description.raw.get("watchdog_ms", 2000))
-        self.part: Mcu | None = None
-
-    # ---------------------------------------------------------------- configuration
-
-    def configure(self, mcu: str | None = None, sim: bool = False) -> AvrBoard:
-        board = super().configure(mcu, sim)
-        board.part = self.all_mcus[board.mcu]
-        return board
-
-    @property
-    def nv_size(self) -> int | None:
-        return self.part.eeprom if self.part else None
-
-    @property
-    def model_sized_debug_buffers(self) -> bool:
-        """The ATmega328P's 2 KB: the debug server's frames as large as the
-        model needs (the ATmega2560 keeps the protocol's largest)."""
-        return bool(self.part and self.part.small)
 
     @property
     def cflags(self) -> list[str]:

@@ -29,7 +29,7 @@ from easylab.core.paths import runtime_dir
 from easylab.ir.program import Device, Program
 
 from . import project, proxy, simulator
-from .part import Mcu, read_mcus, uart1_rate
+from .part import read_mcus, uart1_rate
 
 _FRONT_END_DEFINES = ["-DEL_BOARD_STDINT"]
 
@@ -41,12 +41,6 @@ class F16Board(BoardBase):
         super().__init__(description)
         self.all_mcus = read_mcus(description.table("mcu"))
         self.drivers: dict[str, dict] = description.table("drivers")
-        self.part: Mcu | None = None
-
-    def configure(self, mcu: str | None = None, sim: bool = False) -> F16Board:
-        board = super().configure(mcu, sim)
-        board.part = self.all_mcus[board.mcu]
-        return board
 
     @property
     def nv_size(self) -> int | None:

@@ -31,11 +31,7 @@ from easylab.core.paths import runtime_dir
 from easylab.ir.program import Program
 
 from . import devices, linkmap, sdcc, sdcc_quirks, simulator
-from .parts import Mcu, read_mcus
-
-
-# A part with this much RAM or less gets model-sized debug buffers.
-SMALL_RAM = 2048
+from .parts import read_mcus
 
 
 class Pic18Board(BoardBase):
@@ -46,30 +42,11 @@ class Pic18Board(BoardBase):
         self.all_mcus = read_mcus(description.table("mcu"))
         self.drivers: dict[str, dict] = description.table("drivers")
         self.clock_hz = int(description.raw.get("clock_hz", 40_000_000))
-        self.part: Mcu | None = None
 
     @property
     def fcy(self) -> int:
         """Instruction cycles per second (four clocks each)."""
         return self.clock_hz // 4
-
-    # ---------------------------------------------------------------- configuration
-
-    def configure(self, mcu: str | None = None, sim: bool = False) -> Pic18Board:
-        board = super().configure(mcu, sim)
-        board.part = self.all_mcus[board.mcu]
-        return board
-
-    @property
-    def nv_size(self) -> int | None:
-        return self.part.eeprom if self.part else None
-
-    @property
-    def model_sized_debug_buffers(self) -> bool:
-        """The PIC18F4520's 1.5 KB: the debug server's frames, queues and
-        the debug EUSART's rings as large as the model needs (the
-        PIC18F4620 keeps the protocol's largest)."""
-        return bool(self.part and self.part.ram <= SMALL_RAM)
 
     # ---------------------------------------------------------------- code
 

@@ -22,11 +22,20 @@ class BoardBase:
     #: A simulation build exists (``--sim``).
     has_simulator = False
 
+    #: Parts of at most this much RAM (bytes) size the debug server's
+    #: buffers from the model (model_sized_debug_buffers).
+    SMALL_RAM = 2048
+
     def __init__(self, description: BoardDescription):
         self.description = description
         self.name = description.folder.name
         self.mcu: str | None = None
         self.sim = False
+        # A board with parts (board.toml's [mcu.*]) reads them into
+        # all_mcus (objects with `ram` and, where the part has one,
+        # `eeprom`, in bytes); configure sets `part` to the chosen one.
+        self.all_mcus: dict = {}
+        self.part = None
 
     # ---------------------------------------------------------------- configuration
 
@@ -46,10 +55,14 @@ class BoardBase:
             raise BuildError(f"board '{self.name}' has no simulator (--sim)")
         board = copy.copy(self)
         board.mcu, board.sim = chosen, bool(sim)
+        board.part = self.all_mcus.get(chosen) if chosen is not None else None
         return board
 
     @property
     def nv_size(self) -> int | None:
+        """The EEPROM's bytes: the part's, else board.toml's `nv_size`."""
+        if self.part is not None and getattr(self.part, "eeprom", None) is not None:
+            return self.part.eeprom
         value = self.description.raw.get("nv_size")
         return int(value) if value is not None else None
 
@@ -57,8 +70,10 @@ class BoardBase:
     def model_sized_debug_buffers(self) -> bool:
         """Whether a debug build sizes the server's frame buffers from the
         model (codegen/debug.py: buffer_sizes) instead of the protocol's
-        largest frame: parts short of RAM (board.toml
-        `model_sized_debug_buffers`; a backend may decide by MCU)."""
+        largest frame: parts short of RAM (SMALL_RAM or less), else
+        board.toml's `model_sized_debug_buffers`."""
+        if self.part is not None:
+            return self.part.ram <= self.SMALL_RAM
         return bool(self.description.raw.get("model_sized_debug_buffers", False))
 
     @property
