@@ -148,11 +148,9 @@ def analog_problems(program: Program, mcu: Mcu) -> list[str]:
 # ====================================================================== generated files
 
 
-def _ring_sizes(mcu: Mcu, use: str) -> tuple[int, int]:
-    """(RX, TX) ring bytes of the EUSART by what it carries (at most 255)."""
+def _ring_sizes(mcu: Mcu) -> tuple[int, int]:
+    """(RX, TX) ring bytes of the EUSART carrying Modbus RTU (at most 255)."""
     small = mcu.ram <= 2048
-    if use == "debug":  # a whole encoded frame (163 bytes) must fit in TX
-        return (64, 168) if small else (192, 255)
     return (128, 64) if small else (255, 128)  # Modbus: a whole ADU arrives while a task may run
 
 
@@ -205,14 +203,18 @@ def config_header(program: Program, board, res: Resolved, release: bool) -> str:
         if u["use"] == "debug" and release:
             lines.append(f"/* uart{n}: the debug interface, absent from release builds */")
             continue
-        if u["use"] == "debug" and board.model_sized_debug_buffers:
-            # an encoded frame of the model's largest (el_debug_config.h), its COBS code and
-            # delimiter each way; a ring of n bytes holds n - 1
-            lines += [f'#include "el_debug_config.h" /* uart{n}: debug; EL_DBG_FRAME */',
-                      f"#define EL_PIC18_UART_RX (EL_DBG_FRAME + 3u)",
-                      f"#define EL_PIC18_UART_TX (EL_DBG_FRAME + 3u)"]
+        if u["use"] == "debug":
+            # RX: an encoded request of the model's largest frame (el_debug_config.h) or the
+            # protocol's, its COBS code and delimiter (a ring of n bytes holds n - 1), which waits
+            # there while the response goes out; no TX ring: responses go out straight from the
+            # debug server's buffer (pic18_uart.c)
+            frame = "EL_DBG_FRAME" if board.model_sized_debug_buffers else "EL_DBG_MAX_FRAME"
+            header = "el_debug_config.h" if board.model_sized_debug_buffers else "el_debug_protocol.h"
+            lines += [f'#include "{header}" /* uart{n}: debug; {frame} */',
+                      f"#define EL_PIC18_UART_RX ({frame} + 3u)",
+                      "#define EL_PIC18_UART_TX 0u"]
         else:
-            rx, tx = _ring_sizes(mcu, u["use"])
+            rx, tx = _ring_sizes(mcu)
             lines += [f"#define EL_PIC18_UART_RX {rx}u /* uart{n}: {u['use']} */", f"#define EL_PIC18_UART_TX {tx}u"]
         if u["use"] == "debug":
             lines.append(f"#define EL_PIC18_DEBUG_BAUD {int(u.get('baud', 115200))}UL")

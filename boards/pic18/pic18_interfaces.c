@@ -4,9 +4,12 @@
  * refuses both: a second UART the part lacks).
  *
  * Debug (runtime_c/el_debug.h): 8N1 at the model's baud rate, opened by
- * el_port_init. A frame waits up to EL_PIC18_DEBUG_TX_WAIT_MS for room in
- * the transmit ring, else it is dropped (the server counts it). Reset: the
- * RESET instruction; RESET_HALT survives it in el_pic18_kept.
+ * el_port_init. No transmit ring: a response goes out straight from the
+ * server's buffer, and the transport's read takes nothing meanwhile (the
+ * next request waits in the receive ring), so a write never finds the
+ * transmitter busy unless the server's promise is broken; it is then
+ * refused (the server counts it). Reset: the RESET instruction once the
+ * reply is out; RESET_HALT survives it in el_pic18_kept.
  *
  * Modbus RTU (runtime_c/el_modbus_port.h): the model's baud rate and
  * parity, 8 data bits, 1 stop bit. A frame ends with a silence of 3.5
@@ -24,10 +27,6 @@
 
 #if defined(EL_DEBUG_SERVER) && EL_DEBUG_SERVER && defined(EL_PIC18_DEBUG_BAUD)
 
-#ifndef EL_PIC18_DEBUG_TX_WAIT_MS
-#define EL_PIC18_DEBUG_TX_WAIT_MS 50u
-#endif
-
 uint16_t el_debug_port_read(uint8_t *buf, uint16_t max)
 {
     return el_pic18_uart_read(buf, max);
@@ -35,7 +34,7 @@ uint16_t el_debug_port_read(uint8_t *buf, uint16_t max)
 
 bool el_debug_port_write(const uint8_t *frame, uint16_t len)
 {
-    return el_pic18_uart_write(frame, len, EL_PIC18_DEBUG_TX_WAIT_MS);
+    return el_pic18_uart_write(frame, len, 0u);
 }
 
 bool el_debug_port_reset(uint8_t flags)

@@ -5,7 +5,10 @@
  * EL_PIC18_UART_RX / EL_PIC18_UART_TX, 2 to 255 bytes). The receive
  * interrupt stores bytes and the fine clock of the last one (Modbus'
  * t3.5 silence); the transmit interrupt sends from the ring and switches
- * itself off when the ring is empty. The baud rate generator runs in
+ * itself off when the ring is empty. With EL_PIC18_UART_TX 0 (the debug
+ * interface's UART) there is no transmit ring: a write sends straight
+ * from the caller's bytes, which the debug server leaves alone until it
+ * reads again (el_debug.h), and a read takes nothing while they go out. The baud rate generator runs in
  * 16-bit mode with BRGH: baud = Fcy / (SPBRG + 1) (115200 baud: 86,
  * -0.2 %). Parity is the 9th bit, computed and checked here.
  */
@@ -38,9 +41,15 @@ void el_pic18_uart_flush_polled(void)
 #if defined(EL_PIC18_UART_RX)
 
 static uint8_t rx[EL_PIC18_UART_RX];
-static uint8_t tx[EL_PIC18_UART_TX];
 static volatile uint8_t rx_head, rx_tail; /* head: the interrupt writes; tail: we read */
+#define DIRECT (EL_PIC18_UART_TX == 0)
+#if DIRECT
+static const uint8_t *volatile direct_next; /* the caller's bytes going out */
+static volatile uint8_t direct_left;
+#else
+static uint8_t tx[EL_PIC18_UART_TX];
 static volatile uint8_t tx_head, tx_tail; /* head: we write; tail: the interrupt sends */
+#endif
 static volatile uint32_t last_rx;
 static volatile uint16_t errors;
 static uint8_t parity_mode;
@@ -69,6 +78,15 @@ static void count_error(void)
     }
 }
 
+/* One byte to the transmitter, its parity in the 9th bit. */
+static void send(uint8_t c)
+{
+    if (parity_mode != EL_PIC18_PARITY_NONE) {
+        TXSTAbits.TX9D = parity_bit(c);
+    }
+    TXREG = c;
+}
+
 /* From the interrupt handler (pic18_hw.c). */
 void el_pic18_uart_isr(void)
 {
@@ -92,19 +110,27 @@ void el_pic18_uart_isr(void)
         rx_head = next;
     }
     if (PIE1bits.TXIE && PIR1bits.TXIF) {
+#if DIRECT
+        if (direct_left != 0u) {
+            const uint8_t *next = direct_next;
+            send(*next);
+            direct_next = next + 1;
+            direct_left--;
+        }
+        if (direct_left == 0u) {
+            PIE1bits.TXIE = 0;
+        }
+#else
         uint8_t tail = tx_tail;
         if (tail != tx_head) {
-            uint8_t c = tx[tail];
-            if (parity_mode != EL_PIC18_PARITY_NONE) {
-                TXSTAbits.TX9D = parity_bit(c);
-            }
-            TXREG = c;
+            send(tx[tail]);
             tail = NEXT(tail, EL_PIC18_UART_TX);
             tx_tail = tail;
         }
         if (tail == tx_head) {
             PIE1bits.TXIE = 0;
         }
+#endif
     }
 }
 
@@ -121,7 +147,11 @@ void el_pic18_uart_open(uint32_t baud, uint8_t parity)
     PIE1bits.RCIE = 0;
     PIE1bits.TXIE = 0;
     rx_head = rx_tail = 0u;
+#if DIRECT
+    direct_left = 0u;
+#else
     tx_head = tx_tail = 0u;
+#endif
     errors = 0u;
     parity_mode = parity;
     TRISCbits.TRISC6 = 1; /* the EUSART drives TX itself */
@@ -156,6 +186,11 @@ uint16_t el_pic18_uart_read(uint8_t *buf, uint16_t max)
 {
     uint16_t got = 0u;
     int16_t c;
+#if DIRECT
+    if (direct_left != 0u) { /* the bytes going out are the server's: it may not answer again yet */
+        return 0u;
+    }
+#endif
     while (got < max && (c = el_pic18_uart_getc()) >= 0) {
         buf[got++] = (uint8_t)c;
     }
@@ -164,6 +199,18 @@ uint16_t el_pic18_uart_read(uint8_t *buf, uint16_t max)
 
 bool el_pic18_uart_write(const uint8_t *data, uint16_t len, uint16_t wait_ms)
 {
+#if DIRECT
+    /* Never waits: the caller's bytes must stay as they are until they are
+     * out, so it writes only once the last write is done. */
+    (void)wait_ms;
+    if (len == 0u || len > 255u || direct_left != 0u) {
+        return false;
+    }
+    direct_next = data;
+    direct_left = (uint8_t)len;
+    PIE1bits.TXIE = 1;
+    return true;
+#else
     uint32_t start, span;
     uint8_t head;
     uint16_t i;
@@ -192,6 +239,7 @@ bool el_pic18_uart_write(const uint8_t *data, uint16_t len, uint16_t wait_ms)
     tx_head = head;
     PIE1bits.TXIE = 1;
     return true;
+#endif
 }
 
 uint32_t el_pic18_uart_last_rx(void)

@@ -42,17 +42,19 @@ def test_a_debug_build_fits_the_pic18f4620(blink_4620, build_cache):
 
 def test_blinks_debug_build_fits_the_pic18f4520_with_buffers_sized_from_the_model(tmp_path):
     """The PIC18F4520's 1.5 KB of RAM: the debug server's frame, queues and
-    breakpoint slots and the debug EUSART's rings are sized from the model
-    (docs/protocol.md), as on the ATmega328P; the PIC18F4620 keeps the
-    protocol's largest."""
+    breakpoint slots and the debug EUSART's receive ring are sized from the
+    model (docs/protocol.md), as on the ATmega328P; the PIC18F4620 keeps
+    the protocol's largest. Responses go out from the server's buffer: no
+    transmit ring."""
     built = pic18_build(ROOT / "examples" / "blink.elab", tmp_path / "b")
     s = sizes(built)
     assert s["mcu"] == "pic18f4520" and s["flash"] <= 32768 and s["ram"] <= 1536, s
     assert "#define EL_DBG_FRAME 30u" in (tmp_path / "b" / "el_debug_config.h").read_text()
     config = (tmp_path / "b" / "el_pic18_config.h").read_text()
-    assert "#define EL_PIC18_UART_RX (EL_DBG_FRAME + 3u)" in config
-    big = pic18_build(ROOT / "examples" / "blink.elab", tmp_path / "big", "--mcu", "pic18f4620", "--release")
-    assert "EL_DBG_FRAME" not in (tmp_path / "big" / "el_pic18_config.h").read_text()
+    assert "#define EL_PIC18_UART_RX (EL_DBG_FRAME + 3u)" in config  # a request; no transmit ring
+    assert "#define EL_PIC18_UART_TX 0u" in config
+    pic18_build(ROOT / "examples" / "blink.elab", tmp_path / "big", "--mcu", "pic18f4620")
+    assert "#define EL_PIC18_UART_RX (EL_DBG_MAX_FRAME + 3u)" in (tmp_path / "big" / "el_pic18_config.h").read_text()
 
 
 def test_a_debug_build_too_big_for_the_pic18f4520_says_by_how_much(tmp_path):

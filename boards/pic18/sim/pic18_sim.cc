@@ -530,6 +530,8 @@ int main(int argc, char **argv)
             break;
         get_cycles().set_break(until, &stopper);
         cpu->run(false);
+        if (sim_stop || sim_stop_signal) /* the run's end (or an error) halted the CPU, maybe in the slice's first cycle */
+            break;
         if (get_cycles().get() == now) {
             el_host_error("gpsim stopped the %s at cycle %llu (pc 0x%05x)", sim_mcu, (unsigned long long)now,
                           cpu->pc->get_value());
