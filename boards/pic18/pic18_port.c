@@ -42,6 +42,16 @@ volatile uint8_t el_pic18_sim_busy;
 /* el_pic18_kept after a debugger's RESET with RESET_HALT (pic18_interfaces.c). */
 #define KEPT_RESET_HALT 0x5Au
 
+/* Is `cause` the debugger's RESET, for RESET_HALT? On the part, RCON says
+ * so (after a power-on the kept byte is undefined). gpsim 0.31 does not
+ * show the RESET instruction in RCON as the part does, and its RAM starts
+ * zeroed: in a simulation build the kept byte alone says it. */
+#if defined(EL_PIC18_SIM) && EL_PIC18_SIM
+#define DEBUGGER_RESET(cause) ((void)(cause), true)
+#else
+#define DEBUGGER_RESET(cause) ((cause) == EL_PIC18_RESET_SOFTWARE)
+#endif
+
 bool el_port_init(int argc, char **argv)
 {
     uint8_t cause;
@@ -55,7 +65,7 @@ bool el_port_init(int argc, char **argv)
     el_pic18_uart_open(EL_PIC18_DEBUG_BAUD, EL_PIC18_PARITY_NONE);
     /* Halt at the first instant after a RESET with RESET_HALT only (after a
      * power-on the kept byte is undefined: the cause must be the RESET). */
-    if (el_pic18_kept == KEPT_RESET_HALT && cause == EL_PIC18_RESET_SOFTWARE) {
+    if (el_pic18_kept == KEPT_RESET_HALT && DEBUGGER_RESET(cause)) {
         el_debug_halt_at_start();
     }
 #if defined(EL_PIC18_SIM) && EL_PIC18_SIM

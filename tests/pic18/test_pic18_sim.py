@@ -164,7 +164,8 @@ def test_the_debug_server_of_a_pic18f4520_with_model_sized_buffers_answers(tmp_p
     """blink's debug build on the PIC18F4520 (1.5 KB of RAM: buffers sized
     from the model, no transmit ring) in gpsim: the debugger identifies it,
     reads and writes an item, is refused a value out of its range, halts it,
-    lets it go, and resets it (the reply comes before the restart)."""
+    lets it go, and resets it into a halt at its first instant (the reply
+    comes before the restart)."""
     import re
     import subprocess
 
@@ -194,9 +195,11 @@ def test_the_debug_server_of_a_pic18f4520_with_model_sized_buffers_answers(tmp_p
             client.run()
             assert not client.flags().halted
             client.retries = 0  # RESET's reply goes out from the server's buffer before the restart
-            client.reset()
+            client.reset(halt=True)
             assert client.hello_again(10.0).program_id == program_id
             assert client.read([(0, "uint16", 1)]) == [500]  # started again: half_period as at boot
+            flags = client.flags()
+            assert flags.halted and flags.why == "start" and flags.tick == 0  # RESET_HALT
         finally:
             client.close()
     finally:
