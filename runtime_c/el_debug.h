@@ -28,12 +28,12 @@
  *
  * The frame given to el_debug_port_write is the server's response buffer,
  * and the server writes that buffer only while it handles a request, that
- * is when el_debug_rx meets a frame's delimiter (0x00) among the bytes
- * el_debug_port_read returned. A board may therefore send straight from
+ * is when it meets a frame's delimiter (0x00); el_debug_poll asks
+ * el_debug_port_read for one byte at a time, so it answers a request
+ * before it reads the next byte. A board may therefore send straight from
  * the buffer, without copying it: its read must then return nothing while
- * a frame is still going out, and no bytes after a delimiter (the next
- * request waits in its receive buffer), so that no request is handled
- * before the last response is out.
+ * a frame is still going out (the next request waits in its receive
+ * buffer). A board that pushes bytes with el_debug_rx copies instead.
  */
 #ifndef EL_DEBUG_H
 #define EL_DEBUG_H

@@ -1,18 +1,15 @@
-"""A board simulator with one UART on a pty serving Modbus RTU, and the
-persist round trip every board with an EEPROM passes (written over Modbus,
-there again at the next run with the same --nvram file)."""
+"""A board simulator with one UART on a pty serving Modbus RTU, a raw RTU
+client of a pty (RawPty, rtu_frame), the persist round trip every board
+with an EEPROM passes (written over Modbus, there again at the next run
+with the same --nvram file) and the check of --rtu-frames."""
 
 from __future__ import annotations
 
 import os
-import select
+import struct
 import subprocess
-import termios
 import time
-import tty
 from pathlib import Path
-
-from easylab.host_tools.debug_protocol import crc16  # CRC-16/MODBUS
 
 
 class ModbusOnPty:
@@ -80,9 +77,62 @@ def check_persist_round_trip(exe: Path, uart: str, tmp_path: Path, eeprom_bytes:
         h.stop()
 
 
-def _rtu(*pdu: int) -> bytes:
-    frame = bytes(pdu)
-    return frame + crc16(frame).to_bytes(2, "little")
+def crc16(data: bytes) -> int:
+    """CRC-16/MODBUS (easylab.core.crc, the project's one Python copy)."""
+    from easylab.core.crc import crc16 as crc
+
+    return crc(data)
+
+
+def rtu_frame(unit: int, pdu: bytes) -> bytes:
+    body = bytes([unit]) + pdu
+    return body + struct.pack("<H", crc16(body))
+
+
+class RawPty:
+    """The client side of a firmware's RTU pty, raw, without pyserial."""
+
+    def __init__(self, link: Path):
+        import termios
+        import tty
+        self.fd = os.open(str(link), os.O_RDWR | os.O_NOCTTY)
+        tty.setraw(self.fd)
+        termios.tcflush(self.fd, termios.TCIOFLUSH)
+
+    def send(self, data: bytes) -> None:
+        os.write(self.fd, data)
+
+    def recv(self, timeout: float = 1.0, quiet: float = 0.05) -> bytes:
+        """Bytes until `quiet` seconds pass without any (or `timeout`)."""
+        import select
+        out = b""
+        deadline = time.monotonic() + timeout
+        while True:
+            left = deadline - time.monotonic()
+            if left <= 0:
+                return out
+            r, _, _ = select.select([self.fd], [], [], min(left, quiet) if out else left)
+            if not r:
+                if out:
+                    return out
+                continue
+            out += os.read(self.fd, 4096)
+
+    def ask(self, unit: int, pdu: bytes, timeout: float = 1.0) -> bytes | None:
+        """Send a request; the reply's PDU (CRC and unit checked), or None."""
+        self.send(rtu_frame(unit, pdu))
+        reply = self.recv(timeout)
+        if not reply:
+            return None
+        assert crc16(reply) == 0, reply.hex()
+        assert reply[0] == unit, reply.hex()
+        return reply[1:-2]
+
+    def close(self) -> None:
+        os.close(self.fd)
+
+
+READ_REG0, READ_REG2 = bytes([3, 0, 0, 0, 1]), bytes([3, 0, 2, 0, 1])  # one holding register: 0, 2
 
 
 def _replies_to_two_frames_written_together(exe: Path, uart: str, tmp_path: Path, *options: str) -> bytes:
@@ -96,30 +146,19 @@ def _replies_to_two_frames_written_together(exe: Path, uart: str, tmp_path: Path
         deadline = time.monotonic() + 20
         while not link.exists() and time.monotonic() < deadline:
             time.sleep(0.05)
-        fd = os.open(link, os.O_RDWR | os.O_NOCTTY)
-        tty.setraw(fd)
-        one, two = _rtu(17, 3, 0, 0, 0, 1), _rtu(17, 3, 0, 2, 0, 1)  # holding registers 0 and 2
-        got = b""
-        while not got and time.monotonic() < deadline:  # the first request may meet a firmware still booting
-            termios.tcflush(fd, termios.TCIFLUSH)
-            os.write(fd, one)
-            got = _read_for(fd, 0.5)
-        assert got == _rtu(17, 3, 2, 0x03, 0xE8), got  # cal_gain 1000
-        os.write(fd, one + two)
-        replies = _read_for(fd, 1.5)
-        os.close(fd)
-        return replies
+        pty = RawPty(link)
+        try:
+            reply = None
+            while reply is None and time.monotonic() < deadline:  # the first request may meet a booting firmware
+                reply = pty.ask(17, READ_REG0, timeout=0.5)
+            assert reply == bytes([3, 2, 0x03, 0xE8]), reply  # cal_gain 1000
+            pty.send(rtu_frame(17, READ_REG0) + rtu_frame(17, READ_REG2))
+            return pty.recv(timeout=1.5, quiet=1.5)
+        finally:
+            pty.close()
     finally:
         proc.terminate()
         proc.wait(timeout=10)
-
-
-def _read_for(fd: int, seconds: float) -> bytes:
-    got, end = b"", time.monotonic() + seconds
-    while (left := end - time.monotonic()) > 0:
-        if select.select([fd], [], [], left)[0]:
-            got += os.read(fd, 256)
-    return got
 
 
 def check_rtu_frames_kept_apart(exe: Path, uart: str, tmp_path: Path) -> None:
@@ -130,4 +169,4 @@ def check_rtu_frames_kept_apart(exe: Path, uart: str, tmp_path: Path) -> None:
     between them, and both are answered."""
     assert _replies_to_two_frames_written_together(exe, uart, tmp_path / "plain") == b""
     assert _replies_to_two_frames_written_together(exe, uart, tmp_path / "framed", "--rtu-frames") == \
-        _rtu(17, 3, 2, 0x03, 0xE8) + _rtu(17, 3, 2, 0x03, 0x20)  # cal_gain 1000, alarm_high 800
+        rtu_frame(17, bytes([3, 2, 0x03, 0xE8])) + rtu_frame(17, bytes([3, 2, 0x03, 0x20]))  # 1000, alarm_high 800

@@ -6,8 +6,7 @@
  * server's buffer. The server writes that buffer only when it meets a
  * request's delimiter among the bytes el_debug_port_read gave it, so the
  * read hands out nothing while a response goes out (the request waits in
- * the receive ring, which holds an encoded frame) and stops after a
- * delimiter (one request answered per read). A write can therefore find
+ * the receive ring, which holds an encoded frame). A write can therefore find
  * the transmitter busy only when the server's promise is broken; it is
  * then refused at once (the server counts it in C_TX_DROPPED). Reset: the
  * watchdog restarts the MCU from boot once the reply is out.

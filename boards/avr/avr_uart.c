@@ -9,8 +9,7 @@
  *
  * A UART whose EL_AVR_UARTn_TX is 0 has no transmit ring: a write sends
  * straight from the caller's bytes, and while they go out a read takes
- * nothing; a read also stops after a zero byte (a COBS frame's end). Only
- * the debug UART is one (el_avr_config.h): the debug server writes its
+ * nothing. Only the debug UART is one (el_avr_config.h): the debug server writes its
  * response buffer only on a request's delimiter it read (el_debug.h), so
  * the response being sent stays as it is. One pointer and count serve.
  *
@@ -189,9 +188,6 @@ INLINE uint16_t read_of(uart_t u, uint8_t *buf, uint16_t max)
     }
     while (got < max && (c = getc_of(u)) >= 0) {
         buf[got++] = (uint8_t)c;
-        if (DIRECT(u) && c == 0) {
-            break;
-        }
     }
     return got;
 }

@@ -255,6 +255,7 @@ bool sim_links_open(void)
         sim_link_t *u = &sim_links[n];
         u->name = (char)('0' + n);
         u->fd = u->listen_fd = u->keep_fd = -1;
+        u->frame_crc = EL_CRC16_INIT;
         if (strchr(sim_uarts, u->name) != NULL && !link_open(u))
             return false;
     }
@@ -326,7 +327,7 @@ size_t sim_link_ready(sim_link_t *u, uint64_t cycle, bool idle, uint64_t char_cy
     }
     /* The frame ends where its CRC checks and a whole frame follows (frames
      * that came together); a frame still coming goes on as it comes. */
-    crc = u->frame_len != 0u ? u->frame_crc : EL_CRC16_INIT;
+    crc = u->frame_crc;
     len = u->frame_len;
     for (i = 0; i + 1u < u->in_len; i++) {
         crc = el_crc16_update(crc, u->in + i, 1u);
@@ -339,7 +340,7 @@ size_t sim_link_ready(sim_link_t *u, uint64_t cycle, bool idle, uint64_t char_cy
 void sim_link_consume(sim_link_t *u, size_t n)
 {
     if (keeps_frames_apart() && n != 0u) {
-        u->frame_crc = el_crc16_update(u->frame_len != 0u ? u->frame_crc : EL_CRC16_INIT, u->in, (uint16_t)n);
+        u->frame_crc = el_crc16_update(u->frame_crc, u->in, (uint16_t)n);
         u->frame_len += n;
         /* what went ends a frame (nothing follows yet, or a whole frame
          * does): a silence follows */

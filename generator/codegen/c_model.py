@@ -99,6 +99,7 @@ class CModel:
     interface_boot: list[str] = field(default_factory=list)  # C statements: start the interfaces
     interface_poll: list[str] = field(default_factory=list)  # C statements: serve them when idle
     status: list[StatusView] = field(default_factory=list)  # the links' fault counters
+    probes: bool = False  # the debugger's probes: a debug build of a model with a debug interface
 
 
 class _Builder:
@@ -569,7 +570,8 @@ def build_view(program: Program, board, library: bool = False, probes: bool = Fa
     instants = [(i.tick, sum(1 << t for t in i.publish), sum(1 << t for t in i.release)) for i in program.instants]
     deadlines = [t.deadline for t in program.tasks]
     return CModel(program, __version__, board.name, b.items, specs, states, b.buffers, dataflows, charts, tasks,
-                  channels, boot, shutdown, reads, instants, deadlines, status=status_views(program, library))
+                  channels, boot, shutdown, reads, instants, deadlines, status=status_views(program, library),
+                  probes=probes)
 
 
 def spec_view(spec: ActorSpec) -> SpecView:

@@ -59,7 +59,7 @@ def render(program: Program, board: Target, template_dir: Path | None = None,
     program gives byte-identical files."""
     view = _view_with_interfaces(program, board, release)
     env = environment(template_dir)
-    files = {"model.c": env.get_template("model.c.j2").render(m=view, release=release)}
+    files = {"model.c": env.get_template("model.c.j2").render(m=view)}
     for produce in PRODUCERS:
         files.update(produce(program, board, env, view, release))
     return files

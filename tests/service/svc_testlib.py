@@ -14,6 +14,8 @@ import sys
 import time
 from pathlib import Path
 
+from sim_modbus import RawPty, crc16, rtu_frame  # noqa: F401 (the suites import them from here)
+
 ROOT = Path(__file__).resolve().parents[2]
 EXAMPLES = ROOT / "examples"
 DATA = Path(__file__).resolve().parent / "data"
@@ -259,63 +261,8 @@ def build_interp(model: Path, out: Path) -> Built:
 
 
 
-def crc16(data: bytes) -> int:
-    """CRC-16/MODBUS (easylab.crc, the project's one Python copy)."""
-    from easylab.core.crc import crc16 as crc
-
-    return crc(data)
-
-
-def rtu_frame(unit: int, pdu: bytes) -> bytes:
-    body = bytes([unit]) + pdu
-    return body + struct.pack("<H", crc16(body))
-
-
 def mbap(tid: int, unit: int, pdu: bytes) -> bytes:
     return struct.pack(">HHHB", tid, 0, len(pdu) + 1, unit) + pdu
-
-
-class RawPty:
-    """The client side of a firmware's RTU pty, raw, without pyserial."""
-
-    def __init__(self, link: Path):
-        import termios
-        import tty
-        self.fd = os.open(str(link), os.O_RDWR | os.O_NOCTTY)
-        tty.setraw(self.fd)
-        termios.tcflush(self.fd, termios.TCIOFLUSH)
-
-    def send(self, data: bytes) -> None:
-        os.write(self.fd, data)
-
-    def recv(self, timeout: float = 1.0, quiet: float = 0.05) -> bytes:
-        """Bytes until `quiet` seconds pass without any (or `timeout`)."""
-        import select
-        out = b""
-        deadline = time.monotonic() + timeout
-        while True:
-            left = deadline - time.monotonic()
-            if left <= 0:
-                return out
-            r, _, _ = select.select([self.fd], [], [], min(left, quiet) if out else left)
-            if not r:
-                if out:
-                    return out
-                continue
-            out += os.read(self.fd, 4096)
-
-    def ask(self, unit: int, pdu: bytes, timeout: float = 1.0) -> bytes | None:
-        """Send a request; the reply's PDU (CRC and unit checked), or None."""
-        self.send(rtu_frame(unit, pdu))
-        reply = self.recv(timeout)
-        if not reply:
-            return None
-        assert crc16(reply) == 0, reply.hex()
-        assert reply[0] == unit, reply.hex()
-        return reply[1:-2]
-
-    def close(self) -> None:
-        os.close(self.fd)
 
 
 class RawTcp:
