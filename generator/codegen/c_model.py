@@ -504,8 +504,8 @@ class _Builder:
             fields.append(f"{ch.type.c_name} ch{ch.id}[{ch.tokens_in}];")
             fields.append(f"uint16_t ch{ch.id}_n;")
             release.append(f"el_t{task.id}.ch{ch.id}_n = 0u;")
-        if not fields:
-            fields.append("uint8_t el_unused;")
+        # A task that latches and publishes nothing (its dataflows' results
+        # reach no item) has no local copy: none is declared.
         for kind, ident_ in task.runs:
             if kind == "dataflow":
                 body.append(f"el_df{ident_}_{ident(self.p.dataflows[ident_].name)}();")

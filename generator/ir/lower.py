@@ -127,6 +127,8 @@ class _Lowering:
                                          self.task_index[ch.producer.name], self.task_index[ch.consumer.name],
                                          ch.tokens_in, ch.tokens_out, location(c.decl.name_span)))
         for df in self.m.dataflows.values():
+            if df.task is None:  # run by no task: checked, not part of the program
+                continue
             self.df_index[df.name] = len(self.dataflows)
             self.dataflows.append(self._dataflow(df))
 
@@ -166,7 +168,8 @@ class _Lowering:
 
     def lower_charts(self) -> None:
         for chart in self.m.charts.values():
-            self.charts.append(self._chart(chart))
+            if chart.task is not None:
+                self.charts.append(self._chart(chart))
 
     def _chart(self, chart: ChartInfo) -> Chart:
         branches: dict[tuple, int] = {}

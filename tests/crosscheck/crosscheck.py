@@ -1,0 +1,143 @@
+"""Back-to-back testing on random models (docs/testing.md).
+
+    python tests/crosscheck/crosscheck.py -n 50 --boards host,avr,pic18 [--seed 1000] [--out DIR] [--jobs 2]
+    make crosscheck N=50 BOARDS=host,avr,pic18
+
+For each seed a model and a stimulus are generated for each part the
+chosen modes need (modelgen.py); local execution gives the reference trace
+and every other mode must give the same bytes. A mode that finds the model
+too large for its part skips it (counted); a build that fails otherwise,
+a run that fails, a sanitizer report or another trace is a finding: the
+model, its stimulus and both traces are kept in DIR/findings/, shrunk to a
+small model with ``--shrink``. The last line is the summary per mode."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from collections import Counter, defaultdict
+from concurrent.futures import ThreadPoolExecutor
+from dataclasses import dataclass
+from pathlib import Path
+
+HERE = Path(__file__).resolve().parent
+sys.path.insert(0, str(HERE))
+
+from modelgen import Options, generate  # noqa: E402
+from modes import MODES, Outcome  # noqa: E402
+
+
+@dataclass
+class Case:
+    """A model and its stimulus on disk."""
+
+    name: str
+    model: Path
+    stimulus: Path
+    duration_ms: int
+
+
+def write_case(folder: Path, name: str, text: str, stimulus: str, duration_ms: int) -> Case:
+    folder.mkdir(parents=True, exist_ok=True)
+    model = folder / f"{name}.elab"
+    model.write_text(text)
+    stim = folder / f"{name}.stimulus.csv"
+    stim.write_text(stimulus)
+    return Case(name, model, stim, duration_ms)
+
+
+def first_difference(a: bytes, b: bytes) -> str:
+    """Where two CSV traces part: the header and the first differing rows."""
+    la, lb = a.decode(errors="replace").splitlines(), b.decode(errors="replace").splitlines()
+    for i, (x, y) in enumerate(zip(la, lb)):
+        if x != y:
+            return f"line {i + 1}:\n  header    {la[0]}\n  reference {x}\n  mode      {y}"
+    return f"lengths differ: {len(la)} and {len(lb)} lines"
+
+
+def compare(case: Case, work: Path, modes: list[str]) -> dict[str, tuple[str, str]]:
+    """mode -> (verdict, detail) for one case: ``equal``, ``differs``,
+    ``skip``, ``fail``; the reference (local execution) is ``reference``
+    or ``fail``."""
+    reference = MODES["local"][1](case, work)
+    results: dict[str, tuple[str, str]] = {}
+    if reference.status != "trace":
+        results["local"] = ("fail", reference.detail)
+        return results
+    results["local"] = ("reference", "")
+    for mode in modes:
+        if mode == "local":
+            continue
+        try:
+            outcome: Outcome = MODES[mode][1](case, work)
+        except Exception as exc:  # a timeout, a crashed harness: a finding, reported
+            outcome = Outcome("fail", detail=f"{type(exc).__name__}: {exc}")
+        if outcome.status != "trace":
+            results[mode] = (outcome.status, outcome.detail)
+        elif outcome.trace == reference.trace:
+            results[mode] = ("equal", "")
+        else:
+            (work / f"{mode}.trace.csv").write_bytes(outcome.trace)
+            (work / "local.trace.csv").write_bytes(reference.trace)
+            results[mode] = ("differs", first_difference(reference.trace, outcome.trace))
+    return results
+
+
+def campaign(seeds: range, modes: list[str], out: Path, jobs: int, options: Options) -> dict:
+    """Every seed in every mode; the tally and the findings."""
+    parts = defaultdict(list)
+    for mode in modes:
+        parts[MODES[mode][0]].append(mode)
+    jobs_list = [(seed, part, part_modes) for seed in seeds for part, part_modes in parts.items()]
+
+    def one(job):
+        seed, part, part_modes = job
+        generated = generate(seed, part, options)
+        work = out / "work" / f"{generated.name}-{part}"
+        case = write_case(work, generated.name, generated.text, generated.stimulus, generated.duration_ms)
+        return seed, part, case, compare(case, work, part_modes)
+
+    tally: dict[str, Counter] = defaultdict(Counter)
+    findings = []
+    with ThreadPoolExecutor(max_workers=jobs) as pool:
+        for seed, part, case, results in pool.map(one, jobs_list):
+            for mode, (verdict, detail) in results.items():
+                tally[mode][verdict] += 1
+                if verdict in ("differs", "fail"):
+                    findings.append({"seed": seed, "part": part, "mode": mode, "verdict": verdict,
+                                     "model": str(case.model), "detail": detail})
+                    print(f"seed {seed} ({part}) {mode}: {verdict}\n{detail}\n", flush=True)
+    summary = {"seeds": [seeds.start, seeds.stop], "modes": modes,
+               "tally": {m: dict(c) for m, c in tally.items()}, "findings": findings}
+    (out / "summary.json").write_text(json.dumps(summary, indent=1))
+    return summary
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0],
+                                 formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("-n", type=int, default=20, help="models per part (default 20)")
+    ap.add_argument("--seed", type=int, default=1, help="first seed (default 1)")
+    ap.add_argument("--boards", default="host", help=f"comma-separated modes among {', '.join(MODES)} "
+                    "(local execution, the reference, always runs)")
+    ap.add_argument("--out", default="build/crosscheck", help="folder for models, traces and summary.json")
+    ap.add_argument("--jobs", type=int, default=2, help="models run at once (default 2)")
+    ap.add_argument("--floats", action="store_true", help="float32 among the numeric types")
+    args = ap.parse_args(argv)
+    modes = [m.strip() for m in args.boards.split(",") if m.strip()]
+    unknown = [m for m in modes if m not in MODES]
+    if unknown:
+        ap.error(f"unknown mode(s) {', '.join(unknown)}: choose among {', '.join(MODES)}")
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    summary = campaign(range(args.seed, args.seed + args.n), modes, out, args.jobs, Options(floats=args.floats))
+    for mode, counts in summary["tally"].items():
+        print(f"{mode:12s} " + ", ".join(f"{k} {v}" for k, v in sorted(counts.items())))
+    bad = sum(1 for f in summary["findings"])
+    print(f"{bad} finding(s); details in {out / 'summary.json'}")
+    return 1 if bad else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
