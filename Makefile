@@ -21,13 +21,16 @@ DEB_PACKAGES := gcc make pkg-config graphviz tmux socat \
 	chromium chromium-driver \
 	cyclonedds-dev cyclonedds-tools
 
-.PHONY: setup deps venv toolchains test demo bench clean help flash sim
+.PHONY: setup deps venv toolchains test demo bench clean help flash sim crosscheck
 
 help:
 	@echo "make setup   install Debian packages (when missing) and the virtual environment"
 	@echo "make test    run the test suite (does set-up first)"
 	@echo "make demo    build the PT100 smart sensor for the host board and run it"
 	@echo "make bench   run the benchmarks, results in bench/results/ and docs/benchmarks.md"
+	@echo "make crosscheck N=100 BOARDS=host,avr,pic18 [SEED=1000] [JOBS=2]"
+	@echo "             back-to-back testing: N random models per part, every mode against local execution"
+	@echo "             (modes: host avr avr328 pic18 f16 remote-host remote-avr; docs/testing.md)"
 	@echo "make flash BOARD=avr MODEL=m.elab PORT=/dev/ttyACM0 [MCU=..] [PROGRAMMER=..] [BUILD_FLAGS=--release]"
 	@echo "             build and burn with the board's programmer (\`make -n flash ...\` shows the commands;"
 	@echo "             BOARD=pic18: a PICkit on USB, PORT=usb)"
@@ -84,6 +87,15 @@ demo: setup
 
 bench: setup
 	$(PY) bench/run.py
+
+# Back-to-back testing on random models (docs/testing.md): findings and
+# traces in build/crosscheck/, the tally per mode on the last lines.
+N      ?= 20
+BOARDS ?= host,avr
+SEED   ?= 1000
+JOBS   ?= 2
+crosscheck: setup
+	$(PY) tests/crosscheck/crosscheck.py -n $(N) --boards $(BOARDS) --seed $(SEED) --jobs $(JOBS) --out build/crosscheck
 
 # ---- Flashing and simulating, for any board (docs/boards.md). The board
 # says which MCU is its default, how it is flashed and how its simulator

@@ -23,6 +23,7 @@ from pathlib import Path
 
 from easylab.board.cbuild import compile_objects, defined_symbols, elf_sections, require_tool
 from easylab.core.errors import BuildError
+from easylab.board.sdcc_rescue import crashed, rescue_source
 
 _PACKAGES = "gcc clang clang-tidy sdcc sdcc-libraries sdcc-ucsim"
 
@@ -97,6 +98,28 @@ def sdcc_includes(board, first: list[Path]) -> list[str]:
             *(f"-I{d}" for d in board.description.include_paths), f"-I{folder / 'proxy'}"]
 
 
+def _rescued(sdcc: list[str], flags: list[str], src: Path, rel: Path,
+             crash: subprocess.CompletedProcess) -> subprocess.CompletedProcess:
+    """sdcc crashed on ``src``: compile it again as sdcc_rescue rewrites it;
+    if that fails too, the failure says what sdcc did to the file."""
+    pre = subprocess.run(["timeout", "300", *sdcc, *flags, "-E", str(src)], capture_output=True, text=True)
+    report = (crash.stdout + crash.stderr).strip()
+    try:
+        text, changed = rescue_source(pre.stdout)
+    except Exception as exc:  # pycparser's ParseError and the like: nothing to rewrite
+        text, changed = "", 0
+        report += f"\n(no rewrite: {exc})"
+    if pre.returncode == 0 and changed:
+        safe = rel.with_name(f"{rel.stem}.rescued.c")
+        safe.write_text(text)
+        proc = subprocess.run(["timeout", "300", *sdcc, *flags, "-c", "-o", str(rel), str(safe)],
+                              capture_output=True, text=True)
+        if not crashed(proc.returncode, proc.stdout + proc.stderr):
+            return proc
+    return subprocess.CompletedProcess(crash.args, 1, "", f"sdcc crashed compiling {src.name} (a fault of sdcc 4.2, "
+                                       f"not of the C; docs/boards.md, \"When sdcc crashes\"): {report}\n")
+
+
 def sdcc_link(board, sources: list[Path], flags: list[str], work: Path, name: str) -> Path:
     """Compile each source with sdcc (in parallel) and link NAME.ihx; a
     warning fails, and so does a program that does not fit the 8051's 64 KB
@@ -111,6 +134,8 @@ def sdcc_link(board, sources: list[Path], flags: list[str], work: Path, name: st
         rel = obj / f"{src.stem}{'_gen' if src.parent == work else ''}.rel"
         proc = subprocess.run(["timeout", "300", *sdcc, *flags, "-c", "-o", str(rel), str(src)], capture_output=True,
                               text=True)
+        if crashed(proc.returncode, proc.stdout + proc.stderr):
+            proc = _rescued(sdcc, flags, src, rel, proc)
         return rel, proc
 
     with ThreadPoolExecutor(max_workers=4) as pool:

@@ -11,7 +11,6 @@ is a finding."""
 
 from __future__ import annotations
 
-import os
 import re
 import subprocess
 import sys
@@ -106,38 +105,33 @@ def simulated(board: str, mcu: str | None):
     return mode
 
 
-def remote_host(case, work: Path) -> Outcome:
-    """`easylab remote --fast` against a host-board proxy (lock-step)."""
+def lock_step(case, out: Path, proxy_cmd: list[str], link: Path) -> Outcome:
+    """`easylab remote --fast` against a proxy started with ``proxy_cmd``
+    (which opens ``link``), the proxy given the stimulus's device columns."""
     from easylab.pipeline import lower_file
     from easylab.remote.stimulus import device_columns
 
-    out = work / "proxy-host"
-    exe, failed = built(easylab("proxy", case.model, "-o", out))
-    if failed:
-        return failed
     program_ir, _ = lower_file(case.model)
     devices = device_columns(case.stimulus.read_text(), program_ir)
-    args = []
     if devices is not None:
         (out / "devices.csv").write_text(devices)
-        args = ["--stimulus", str(out / "devices.csv")]
-    link = out / "link"
-    proxy = subprocess.Popen([str(exe), "--link", f"pty:{link}", "--fast", *args], stdout=subprocess.DEVNULL,
-                             stderr=subprocess.PIPE, text=True, stdin=subprocess.DEVNULL)
+        proxy_cmd = proxy_cmd + ["--stimulus", str(out / "devices.csv")]
+    proxy = subprocess.Popen(proxy_cmd, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True,
+                             stdin=subprocess.DEVNULL)
     try:
         deadline = time.monotonic() + 10
         while not link.exists() and time.monotonic() < deadline and proxy.poll() is None:
             time.sleep(0.01)
         trace = out / "trace.csv"
-        proc = easylab("remote", case.model, "--target", link, *run_args(case, trace))
-        outcome = traced(proc, trace, quiet=False)
-        try:
-            _, err = proxy.communicate(timeout=30)
+        outcome = traced(easylab("remote", case.model, "--target", link, *run_args(case, trace)), trace, quiet=False)
+        if outcome.status != "trace":
+            return outcome
+        try:  # STOP ends a host-board proxy; a simulated one is ended here
+            proxy.wait(timeout=5)
         except subprocess.TimeoutExpired:
-            proxy.kill()
-            _, err = proxy.communicate()
-            return Outcome("fail", detail=f"the proxy did not end:\n{err}")
-        if proxy.returncode != 0 and outcome.status == "trace":
+            proxy.terminate()
+        _, err = proxy.communicate(timeout=30)
+        if proxy.returncode not in (0, -15):
             return Outcome("fail", detail=f"proxy: status {proxy.returncode}\n{err}")
         return outcome
     finally:
@@ -146,9 +140,29 @@ def remote_host(case, work: Path) -> Outcome:
             proxy.communicate()
 
 
-# name -> (part the model is written for, runner). The AVR and host modes
-# share the ATmega2560's model; the ATmega328P runs the same text when it
-# fits (its pins are a subset's names? no: it gets its own).
+def remote_host(case, work: Path) -> Outcome:
+    """Remote execution in lock-step with a host-board proxy."""
+    out = work / "proxy-host"
+    exe, failed = built(easylab("proxy", case.model, "-o", out))
+    if failed:
+        return failed
+    return lock_step(case, out, [str(exe), "--link", f"pty:{out / 'link'}", "--fast"], out / "link")
+
+
+def remote_avr(case, work: Path) -> Outcome:
+    """Remote execution in lock-step with an ATmega2560 proxy in simavr,
+    its link on the UART the build gives it."""
+    out = work / "proxy-avr"
+    sim, failed = built(easylab("proxy", case.model, "--board", "avr", "--mcu", "atmega2560", "--sim", "-o", out),
+                        "simulator: ")
+    if failed:
+        return failed
+    uart = re.search(r"#define EL_AVR_REMOTE_UART (\d+)u", (out / "el_avr_config.h").read_text()).group(1)
+    return lock_step(case, out, [str(sim), f"--uart{uart}", f"pty:{out / 'link'}", "--fast"], out / "link")
+
+
+# name -> (the part whose pins the model uses, runner). The host, AVR and
+# remote modes share the ATmega2560's model; each other part has its own.
 MODES = {
     "local": ("atmega2560", local),
     "host": ("atmega2560", host),
@@ -157,11 +171,5 @@ MODES = {
     "pic18": ("pic18f4620", simulated("pic18", "pic18f4620")),
     "f16": ("mb90f543", simulated("f16", None)),
     "remote-host": ("atmega2560", remote_host),
+    "remote-avr": ("atmega2560", remote_avr),
 }
-
-
-def environment_ok() -> str | None:
-    """Why the modes cannot run here, or None."""
-    if "easylab" not in sys.modules and os.system(f"{sys.executable} -c 'import easylab' 2>/dev/null"):
-        return "easylab is not installed in this Python"
-    return None
