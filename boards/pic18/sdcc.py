@@ -26,7 +26,7 @@ from pycparser import c_ast, c_generator, c_parser
 
 from easylab.core.errors import BuildError
 
-from . import buildcache, ctypes64, datapointers, inline, lower64, lower64_stmt, prune, sdcc_quirks, strength
+from . import boolconv, buildcache, ctypes64, datapointers, inline, lower64, lower64_stmt, prune, sdcc_quirks, strength
 from .ctypes64 import LowerError, Target
 from .lower64_stmt import lower_unit
 
@@ -147,6 +147,7 @@ class Build:
         for ast in units.values():
             inline.inline_single_calls(ast)
             strength.reduce_products(ast, TARGET)
+            boolconv.fix_bool_conversions(ast, TARGET)
             datapointers.data_pointers(ast)
         big_start = sdcc_quirks.place_big_objects(units, TARGET, ram_end)
         self.in_ram = sdcc_quirks.fix_initializers(units, TARGET)
@@ -178,8 +179,8 @@ class Build:
                 return obj
             _run([self.tc.sdcc, *self.flags(), "-S", src.resolve(), "-o", asm], f"compiling {src.name} with sdcc",
                  cwd=self.obj_dir)
-            asm.write_text(sdcc_quirks.ram_pointer_tags(asm.read_text(encoding="latin-1"), self.in_ram),
-                           encoding="latin-1")
+            text, _ = boolconv.fix_bool_casts_in_asm(asm.read_text(encoding="latin-1"))
+            asm.write_text(sdcc_quirks.ram_pointer_tags(text, self.in_ram), encoding="latin-1")
             _run(["gpasm", "-D__STACK_MODEL_LARGE", "-o", obj, "-c", asm], f"assembling {asm.name}", cwd=self.obj_dir)
             buildcache.store_file("sdcc", digest, obj)
             return obj
