@@ -26,7 +26,7 @@ from pycparser import c_ast, c_generator, c_parser
 
 from easylab.core.errors import BuildError
 
-from . import boolconv, buildcache, ctypes64, datapointers, inline, lower64, lower64_stmt, prune, sdcc_quirks, strength
+from . import bankcheck, boolconv, buildcache, ctypes64, datapointers, inline, lower64, lower64_stmt, linkmap, prune, sdcc_quirks, strength
 from .ctypes64 import LowerError, Target
 from .lower64_stmt import lower_unit
 
@@ -38,7 +38,22 @@ TARGET = Target(int_bits=16, long_bits=32, char_signed=False)
 # sdcc's own library build uses these; about 8 % smaller code.
 # The large stack model: the software stack is larger than a bank
 # (el_pic18_stack.c).
-OPT_FLAGS = ["--pstack-model=large", "--fomit-frame-pointer", "--obanksel=9", "--denable-peeps", "--optimize-cmp", "--optimize-df"]
+# --obanksel=1: sdcc drops a BANKSEL after an instruction naming the same
+# operand; its levels above 1 also drop one for another offset of the same
+# symbol, which sits in another bank when the object is larger than a bank
+# (sdcc_quirks.place_big_objects): a read under the bank of the last store.
+OPT_FLAGS = ("--pstack-model=large", "--fomit-frame-pointer", "--obanksel=1", "--denable-peeps", "--optimize-cmp",
+             "--optimize-df")
+# A file whose assembly fails the bank check (bankcheck.py) again: a BANKSEL
+# before every banked access.
+SAFE_BANKS = ("--pstack-model=large", "--fomit-frame-pointer", "--obanksel=0", "--denable-peeps", "--optimize-cmp",
+              "--optimize-df")
+# When sdcc crashes on a file (an internal error, a signal), the file again
+# with fewer optimisations, in turn: without the pCode optimisations, then
+# without the iCode ones as well (SDCCopt.c's asserts).
+FALLBACKS = (("--pstack-model=large", "--fomit-frame-pointer", "--obanksel=0", "--no-peep"),
+             ("--pstack-model=large", "--fomit-frame-pointer", "--obanksel=0", "--no-peep", "--nogcse",
+              "--noinvariant", "--noinduction", "--noloopreverse", "--nolabelopt", "--nolospre"))
 # Warnings are errors, but two that say nothing about the C: sdcc 4.2's
 # pic16 port warns "Initializer different levels of indirections" (18) for
 # every address of a RAM object in a static initializer of a generic
@@ -109,14 +124,17 @@ class Build:
     w64_header: Path  # el_pic18_w64.h
     notes: list[str] = field(default_factory=list)
     in_ram: set[str] = field(default_factory=set)  # the program's RAM objects (sdcc_quirks.ram_pointer_tags)
+    file_flags: dict[str, tuple[str, ...]] = field(default_factory=dict)  # a file's own flags (by stem)
+    sources: dict[Path, Path] = field(default_factory=dict)  # object -> the file it was compiled from
 
     def __post_init__(self) -> None:
         # sdcc and gpasm run inside obj_dir: every path they see is absolute
         self.obj_dir = self.obj_dir.resolve()
         self.include_dirs = [d.resolve() for d in self.include_dirs]
 
-    def flags(self) -> list[str]:
-        return ["-mpic16", f"-p{self.part}", "--std-c99", "--no-warn-non-free", *WARNING_FLAGS, *OPT_FLAGS,
+    def flags(self, opts: tuple[str, ...] = OPT_FLAGS) -> list[str]:
+        """sdcc's options with the optimisation options ``opts``."""
+        return ["-mpic16", f"-p{self.part}", "--std-c99", "--no-warn-non-free", *WARNING_FLAGS, *opts,
                 *self.defines, *(f"-I{d}" for d in self.include_dirs)]
 
     # ---- portable files
@@ -164,29 +182,74 @@ class Build:
     # ---- compiling, linking
 
     def compile(self, sources: list[Path]) -> list[Path]:
-        """sdcc -c for each file, in parallel; an object compiled before from
-        the same text with the same flags comes from the build cache (a
-        hardware file's text is its preprocessed text)."""
-        ram = " ".join(sorted(self.in_ram))
-
-        def one(src: Path) -> Path:
-            stem = src.name.removesuffix(".sdcc.c").removesuffix(".c")
-            obj, asm = self.obj_dir / f"{stem}.o", self.obj_dir / f"{stem}.asm"
-            text = src.read_bytes() if src.resolve().parent == self.obj_dir else \
-                _run([self.tc.sdcc, *self.flags(), "-E", src], f"preprocessing {src.name}").stdout.encode()
-            digest = buildcache.key(str(self.tc.root), *self.flags(), text, ram)
-            if buildcache.fetch_file("sdcc", digest, obj):
-                return obj
-            _run([self.tc.sdcc, *self.flags(), "-S", src.resolve(), "-o", asm], f"compiling {src.name} with sdcc",
-                 cwd=self.obj_dir)
-            text, _ = boolconv.fix_bool_casts_in_asm(asm.read_text(encoding="latin-1"))
-            asm.write_text(sdcc_quirks.ram_pointer_tags(text, self.in_ram), encoding="latin-1")
-            _run(["gpasm", "-D__STACK_MODEL_LARGE", "-o", obj, "-c", asm], f"assembling {asm.name}", cwd=self.obj_dir)
-            buildcache.store_file("sdcc", digest, obj)
-            return obj
+        """sdcc -c for each file, in parallel (``compile_one``)."""
         self.obj_dir.mkdir(parents=True, exist_ok=True)
         with ThreadPoolExecutor(max_workers=2) as pool:
-            return list(pool.map(one, sources))
+            return list(pool.map(self.compile_one, sources))
+
+    def compile_one(self, src: Path, fallbacks: tuple[tuple[str, ...], ...] = FALLBACKS) -> Path:
+        """One file to an object (and its assembly, kept for the bank check).
+        An object compiled before from the same text with the same flags
+        comes from the build cache (a hardware file's text is its
+        preprocessed text). When sdcc crashes on the file, it is compiled
+        again with each of ``fallbacks``' optimisations off in turn (a
+        crash is sdcc's, never the model's); what it then says is reported."""
+        stem = src.name.removesuffix(".sdcc.c").removesuffix(".c")
+        obj, asm = self.obj_dir / f"{stem}.o", self.obj_dir / f"{stem}.asm"
+        self.sources[obj] = src
+        text = src.read_bytes() if src.resolve().parent == self.obj_dir else \
+            _run([self.tc.sdcc, *self.flags(), "-E", src], f"preprocessing {src.name}").stdout.encode()
+        opts = self.file_flags.get(stem, OPT_FLAGS)
+        digest = buildcache.key(str(self.tc.root), *self.flags(opts), text, " ".join(sorted(self.in_ram)))
+        if buildcache.fetch_file("sdcc", digest, obj) and buildcache.fetch_file("sdcc-asm", digest, asm):
+            return obj
+        for k, attempt in enumerate((opts,) + fallbacks):
+            try:
+                _run([self.tc.sdcc, *self.flags(attempt), "-S", src.resolve(), "-o", asm],
+                     f"compiling {src.name} with sdcc", cwd=self.obj_dir)
+                break
+            except BuildError as err:
+                if not crashed(str(err)) or k == len(fallbacks):
+                    raise
+                self.notes.append(f"{src.name}: sdcc crashed; compiled with {' '.join(fallbacks[k])}")
+        text, _ = boolconv.fix_bool_casts_in_asm(asm.read_text(encoding="latin-1"))
+        asm.write_text(sdcc_quirks.ram_pointer_tags(text, self.in_ram), encoding="latin-1")
+        _run(["gpasm", "-D__STACK_MODEL_LARGE", "-o", obj, "-c", asm], f"assembling {asm.name}", cwd=self.obj_dir)
+        buildcache.store_file("sdcc", digest, obj)
+        buildcache.store_file("sdcc-asm", digest, asm)
+        return obj
+
+    def link_checked(self, objects: list[Path], hexfile: Path, lkr: Path) -> Path:
+        """Link, then check every banked access against BSR (bankcheck.py);
+        a file with faults is compiled again with sdcc's bank optimisation
+        off (SAFE_BANKS) and the program linked again. Faults that remain
+        fail the build. Returns the map file."""
+        lmap_path = self.link(objects, hexfile, lkr)
+        faulty = self._bank_faults(objects, lmap_path)
+        if not faulty:
+            return lmap_path
+        for obj in faulty:
+            stem = obj.stem
+            self.file_flags[stem] = SAFE_BANKS
+            self.notes.append(f"{self.sources[obj].name}: a BANKSEL sdcc left out; compiled with --obanksel=0")
+            self.compile_one(self.sources[obj])
+        lmap_path = self.link(objects, hexfile, lkr)
+        faulty = self._bank_faults(objects, lmap_path)
+        if faulty:
+            raise BuildError("sdcc's assembly reads or writes RAM under the wrong bank:\n" + "\n".join(
+                str(f) for faults in faulty.values() for f in faults[:5]))
+        return lmap_path
+
+    def _bank_faults(self, objects: list[Path], map_path: Path) -> dict[Path, list]:
+        lmap = linkmap.read_map(map_path)
+        found = {}
+        for obj in objects:
+            asm = obj.with_suffix(".asm")
+            if asm.is_file():
+                faults = bankcheck.check(asm.read_text(encoding="latin-1"), asm.resolve(), lmap)
+                if faults:
+                    found[obj] = faults
+        return found
 
     def link(self, objects: list[Path], hexfile: Path, lkr: Path) -> Path:
         """gplink with sdcc's libraries (the start-up code is the board's
@@ -216,6 +279,13 @@ def lowered(src: Path, text: str) -> c_ast.FileAST:
         raise BuildError(f"parsing {src.name} for the 64-bit lowering failed: {err}") from None
     buildcache.store_object("lowered", digest, ast)
     return ast
+
+
+def crashed(message: str) -> bool:
+    """sdcc failed of itself, not because of the C: an internal error, an
+    assertion, a signal."""
+    return any(k in message for k in ("Internal Error", "internal error", "Caught signal", "Assertion",
+                                      "Segmentation fault", "Aborted"))
 
 
 def hardware_roots(build: Build, sources: list[Path]) -> set[str]:

@@ -70,3 +70,30 @@ def test_a_bool_cast_left_in_the_assembly_is_made_right():
     assert count == 1
     assert fixed.count("BTFSS\tSTATUS, 2") == 1 and fixed.count("BTFSC\tSTATUS, 2") == 1
     assert fixed.index("BTFSS") < fixed.index("MOVLW\t0x00")
+
+
+def test_the_bank_check_finds_a_banked_access_under_another_bank(tmp_path):
+    """A read of an object larger than a bank after a store to another of
+    its banks, its BANKSEL dropped (sdcc's --obanksel=9 did): a fault; with
+    the BANKSEL, after a call (BSR unknown) without one, at a label joining
+    two banks: faults; a skip's both ways and a branch's target followed."""
+    linkmap = board_module("pic18", "linkmap")
+    bankcheck = board_module("pic18", "bankcheck")
+    lmap = linkmap.LinkMap(symbols={"_big": (0x300, "data", "m.asm"), "_v": (0x080, "data", "m.asm")})
+    asm_file = tmp_path / "m.asm"
+
+    def faults(body: str) -> list:
+        return bankcheck.check("S_m__f\tcode\n_f:\n" + body, asm_file, lmap)
+
+    store = "\tBANKSEL\t(_big + 590)\n\tMOVWF\t(_big + 590), B\n"
+    read = "\tMOVF\t(_big + 10), W, B\n"
+    found = faults(store + read)
+    assert [(f.needs, f.bsr) for f in found] == [(3, 5)] and "(_big + 10)" in str(found[0])
+    assert faults(store + "\tBANKSEL\t(_big + 10)\n" + read) == []
+    assert len(faults("\tBANKSEL\t(_big + 10)\n\tCALL\t_g\n" + read)) == 1
+    joined = "\tBANKSEL\t_v\n\tBZ\t_L1\n\tBANKSEL\t(_big + 10)\n_L1:\n" + read
+    assert len(faults(joined)) == 1
+    skip = "\tBANKSEL\t(_big + 10)\n\tBTFSC\tr0x00, 0\n\tBANKSEL\t_v\n" + read
+    assert len(faults(skip)) == 1
+    assert faults("\tBANKSEL\t(_big + 10)\n\tBTFSC\tr0x00, 0\n\tINCF\tr0x01, F\n" + read) == []
+    assert faults("\tMOVLB\t0x03\n" + read) == []
