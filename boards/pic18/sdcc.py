@@ -26,7 +26,8 @@ from pycparser import c_ast, c_generator, c_parser
 
 from easylab.core.errors import BuildError
 
-from . import bankcheck, boolconv, buildcache, ctypes64, datapointers, inline, lower64, lower64_stmt, linkmap, prune, sdcc_quirks, strength
+from . import (bankcheck, boolconv, buildcache, ctypes64, datapointers, inline, linkmap, lower64, lower64_stmt,
+               messages, prune, sdcc_quirks, shifts, strength)
 from .ctypes64 import LowerError, Target
 from .lower64_stmt import lower_unit
 
@@ -54,7 +55,7 @@ SAFE_BANKS = ("--pstack-model=large", "--fomit-frame-pointer", "--obanksel=0", "
 FALLBACKS = (("--pstack-model=large", "--fomit-frame-pointer", "--obanksel=0", "--no-peep"),
              ("--pstack-model=large", "--fomit-frame-pointer", "--obanksel=0", "--no-peep", "--nogcse",
               "--noinvariant", "--noinduction", "--noloopreverse", "--nolabelopt", "--nolospre"))
-# Warnings are errors, but two that say nothing about the C: sdcc 4.2's
+# Warnings are errors, but those that say nothing about the C: sdcc 4.2's
 # pic16 port warns "Initializer different levels of indirections" (18) for
 # every address of a RAM object in a static initializer of a generic
 # pointer (`(void *)&x` in el_items) and emits the right pointer (address
@@ -63,7 +64,12 @@ FALLBACKS = (("--pstack-model=large", "--fomit-frame-pointer", "--obanksel=0", "
 # value was known at compile time, as it is where portable code tests a
 # board's configuration macros (PC_EXACT_TICKS || ...). gcc's -Wall -Wextra
 # -Werror on the same C catches real mismatches.
-WARNING_FLAGS = ["--Werror", "--disable-warning", "18", "--disable-warning", "110", "--disable-warning", "126"]
+# "integer overflow in expression" (165) comes from sdcc's constant folding
+# of an unsigned product it has narrowed itself (`(uint16_t)(a * 1000u)`
+# with a known a: its 16-bit product wraps, as C's unsigned arithmetic
+# does), not from the C.
+WARNING_FLAGS = ["--Werror", "--disable-warning", "18", "--disable-warning", "110", "--disable-warning", "126",
+                 "--disable-warning", "165"]
 _WORD = re.compile(r"\b[A-Za-z_]\w*\b")
 
 
@@ -165,12 +171,13 @@ class Build:
         for ast in units.values():
             inline.inline_single_calls(ast)
             strength.reduce_products(ast, TARGET)
+            shifts.split_shifts(ast)
             boolconv.fix_bool_conversions(ast, TARGET)
             datapointers.data_pointers(ast)
         big_start = sdcc_quirks.place_big_objects(units, TARGET, ram_end)
         self.in_ram = sdcc_quirks.fix_initializers(units, TARGET)
         out = []
-        gen = c_generator.CGenerator()
+        gen = _LineGenerator()
         for name, ast in units.items():
             path = self.obj_dir / f"{name}.sdcc.c"
             text = f"/* {name}: lowered for sdcc (boards/pic18/lower64.py). Do not edit. */\n" + gen.visit(ast)
@@ -196,6 +203,7 @@ class Build:
         crash is sdcc's, never the model's); what it then says is reported."""
         stem = src.name.removesuffix(".sdcc.c").removesuffix(".c")
         obj, asm = self.obj_dir / f"{stem}.o", self.obj_dir / f"{stem}.asm"
+        self.obj_dir.mkdir(parents=True, exist_ok=True)
         self.sources[obj] = src
         text = src.read_bytes() if src.resolve().parent == self.obj_dir else \
             _run([self.tc.sdcc, *self.flags(), "-E", src], f"preprocessing {src.name}").stdout.encode()
@@ -209,8 +217,12 @@ class Build:
                      f"compiling {src.name} with sdcc", cwd=self.obj_dir)
                 break
             except BuildError as err:
-                if not crashed(str(err)) or k == len(fallbacks):
-                    raise
+                if not crashed(str(err)):
+                    raise BuildError(messages.in_model_terms(str(err))) from None
+                if k == len(fallbacks):
+                    raise BuildError(f"sdcc failed on {src.name} (it crashed, with each set of optimisations "
+                                     f"the board tries, the last {' '.join(attempt)}); the C it was given: "
+                                     f"{src}") from None
                 self.notes.append(f"{src.name}: sdcc crashed; compiled with {' '.join(fallbacks[k])}")
         text, _ = boolconv.fix_bool_casts_in_asm(asm.read_text(encoding="latin-1"))
         asm.write_text(sdcc_quirks.ram_pointer_tags(text, self.in_ram), encoding="latin-1")
@@ -258,6 +270,20 @@ class Build:
         _run(["gplink", "-m", "-w", "-s", lkr, "-I", lib, "-o", hexfile, *objects,
               f"libdev{self.part}.lib", "libsdcc.lib", "libc18f.lib", "libm18f.lib"], "linking with gplink")
         return hexfile.with_suffix(".map")
+
+
+class _LineGenerator(c_generator.CGenerator):
+    """C from a syntax tree with a `#line` before each statement: sdcc's
+    messages name the file and line the statement came from (model.c, a
+    runtime file), not the lowered text it compiles."""
+
+    def _generate_stmt(self, n: c_ast.Node, add_indent: bool = False) -> str:
+        text = super()._generate_stmt(n, add_indent)
+        coord = getattr(n, "coord", None)
+        if coord is None or not coord.file or not coord.line or isinstance(n, c_ast.Compound):
+            return text
+        name = str(coord.file).replace("\\", "\\\\").replace('"', '\\"')
+        return f'#line {coord.line} "{name}"\n' + text
 
 
 _LOWERING = buildcache.code_version(ctypes64, lower64, lower64_stmt)

@@ -10,6 +10,7 @@ from pycparser import c_generator, c_parser
 
 from firmware_builds import build
 from easylab.board.registry import board_module
+from easylab.core.errors import BuildError
 from pic18_testlib import DATA, MODELS, pic18_build, run
 
 boolconv = board_module("pic18", "boolconv")
@@ -97,3 +98,71 @@ def test_the_bank_check_finds_a_banked_access_under_another_bank(tmp_path):
     assert len(faults(skip)) == 1
     assert faults("\tBANKSEL\t(_big + 10)\n\tBTFSC\tr0x00, 0\n\tINCF\tr0x01, F\n" + read) == []
     assert faults("\tMOVLB\t0x03\n" + read) == []
+
+
+def test_an_error_in_an_actors_c_names_the_model_line_and_the_actor(tmp_path):
+    """sdcc compiles lowered C (obj/model_gen.sdcc.c); its `#line` markers
+    and model.c's actor comments bring a message back to the model."""
+    from pic18_testlib import write_model
+
+    model = write_model(tmp_path, "vla", """actor type Vla() {
+    in  x: uint8
+    out y: uint8
+    step {{
+        { uint8_t v[x + 1u]; v[0] = x; y = v[0]; }
+    }}
+}
+
+param x: uint8 = 1
+var y: uint8
+
+dataflow D {
+    a = Vla()
+    x -> a.x
+    a.y -> y
+}
+
+task main period 10 ms { run D }
+""")
+    built = pic18_build(model, tmp_path / "b", "--release", ok=False)
+    out = built.proc.stdout + built.proc.stderr
+    assert f"{model}:8: error" in out and f"(in actor type Vla, {model}:4;" in out, out
+    assert ".sdcc.c:" not in out.replace("compiling model_gen.sdcc.c", ""), out
+
+
+def test_a_shift_by_8_or_more_becomes_shifts_by_7_at_most():
+    shifts = board_module("pic18", "shifts")
+    ast = c_parser.CParser().parse("unsigned long f(unsigned long x) { return (x << 27) + (x << 7) + (x << 8u); }")
+    assert shifts.split_shifts(ast) == 2
+    out = c_generator.CGenerator().visit(ast)
+    assert "(((x << 7u) << 7u) << 7u) << 6u" in out and "(x << 7)" in out and "(x << 7u) << 1u" in out, out
+
+
+def test_a_file_sdcc_crashes_on_is_compiled_again_with_fewer_optimisations(tmp_path):
+    """An sdcc that crashes as 4.2 did on some model.c (SDCCopt.c's assert)
+    unless its pCode optimisations are off: the file compiles on the next
+    try, the build says so, and sdcc's internal error is not the message;
+    a crash on every try names the file, not sdcc's internals."""
+    sdcc = board_module("pic18", "sdcc")
+    real = sdcc.find_toolchain()
+    fake = tmp_path / "tc"
+    (fake / "bin").mkdir(parents=True)
+    (fake / "share").symlink_to(real.root / "share")
+    script = fake / "bin" / "sdcc"
+    script.write_text("#!/bin/sh\ncase \" $* \" in *\" -S \"*) case \" $* \" in *\" --no-peep \"*) ;; *)\n"
+                      "  echo \"Internal error: FATAL Compiler Internal Error in file 'SDCCopt.c' line number '834'"
+                      "\" >&2; exit 1;; esac;; esac\n"
+                      f"exec {real.sdcc} \"$@\"\n")
+    script.chmod(0o755)
+    source = tmp_path / "f.c"
+    source.write_text("unsigned char g;\nvoid f(void) { g++; }\n")
+    build = sdcc.Build(sdcc.Toolchain(fake), "18f4620", ["-DEL_TEST_CRASH_RETRY=1"], [], tmp_path / "obj",
+                       real.root)
+    obj = build.compile_one(source)
+    assert obj.is_file() and any("sdcc crashed; compiled with" in n and "--no-peep" in n for n in build.notes)
+    script.write_text("#!/bin/sh\ncase \" $* \" in *\" -S \"*) echo \"FATAL Compiler Internal Error\" >&2; exit 1;; esac\n"
+                      f"exec {real.sdcc} \"$@\"\n")
+    source.write_text("unsigned char g;\nvoid f(void) { g += 2; }\n")  # another text: not from the build cache
+    with pytest.raises(BuildError) as err:
+        build.compile_one(source)
+    assert "sdcc failed on f.c (it crashed" in str(err.value) and "SDCCopt" not in str(err.value)
