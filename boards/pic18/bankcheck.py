@@ -137,7 +137,7 @@ def _after(insn: _Insn, bsr: int, banks: _Banks) -> int:
             return int(insn.args[0], 0)
         except ValueError:
             return _UNKNOWN
-    if insn.op in ("CALL", "RCALL") or not insn.op.isupper() or insn.op in ("DB", "DW", "DATA"):
+    if insn.op in ("CALL", "RCALL", "DB", "DW", "DATA"):
         return _UNKNOWN
     if insn.args and insn.args[0].upper() in ("BSR", "_BSR"):
         return _UNKNOWN

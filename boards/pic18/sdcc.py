@@ -10,7 +10,12 @@ A build goes in two kinds of C files:
   inline assembly: compiler keywords behind el_pic18.h's macros), compiled
   as they are. They never see a 64-bit type.
 gplink then links them with sdcc's start-up code and libraries, and the
-map file gives the sizes and the symbols' addresses.
+map file gives the sizes and the symbols' addresses. What sdcc gets wrong
+is kept out (docs/boards.md, "What sdcc gets wrong"): passes on the C
+(boolconv.py, shifts.py), its faulty bank optimisation off, the linked
+program's bank selection checked (bankcheck.py, a file with a fault
+compiled again), and a file sdcc crashes on compiled again with fewer
+optimisations.
 """
 
 from __future__ import annotations
