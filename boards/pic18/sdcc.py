@@ -181,6 +181,7 @@ class Build:
             datapointers.data_pointers(ast)
         big_start = sdcc_quirks.place_big_objects(units, TARGET, ram_end)
         self.in_ram = sdcc_quirks.fix_initializers(units, TARGET)
+        sdcc_quirks.drop_zero_initializers(units)
         out = []
         gen = _LineGenerator()
         for name, ast in units.items():

@@ -166,3 +166,20 @@ def test_a_file_sdcc_crashes_on_is_compiled_again_with_fewer_optimisations(tmp_p
     with pytest.raises(BuildError) as err:
         build.compile_one(source)
     assert "sdcc failed on f.c (it crashed" in str(err.value) and "SDCCopt" not in str(err.value)
+
+
+def test_initializers_of_zeros_are_dropped():
+    """sdcc put every initialised RAM object of a file in one section,
+    which gplink must place in one 256-byte bank: a model with more than a
+    bank of items (72 int32 vars) did not link. Start-up clears RAM, so
+    initializers of zeros go; others and read-only tables stay."""
+    quirks = board_module("pic18", "sdcc_quirks")
+    ast = c_parser.CParser().parse("""
+        typedef long int32_t;
+        int32_t a = 0; struct { int x; unsigned char y[3]; void *p; } s = {0, {0, 0, 0}, (void *)0};
+        int b = 3; const int c = 0; static int d[2] = {0, 1}; extern int e;""")
+    assert quirks.drop_zero_initializers({"m": ast}) == 2
+    out = c_generator.CGenerator().visit(ast)
+    for kept in ("int32_t a;", "int b = 3;", "const int c = 0;", "static int d[2] = {0, 1};"):
+        assert kept in out, out
+    assert "= {0, {0, 0, 0}" not in out
