@@ -5,6 +5,8 @@ passes on the C and the assembly that do it."""
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import pytest
 from pycparser import c_generator, c_parser
 
@@ -156,11 +158,12 @@ def test_a_file_sdcc_crashes_on_is_compiled_again_with_fewer_optimisations(tmp_p
     script.chmod(0o755)
     source = tmp_path / "f.c"
     source.write_text("unsigned char g;\nvoid f(void) { g++; }\n")
-    build = sdcc.Build(sdcc.Toolchain(fake), "18f4620", ["-DEL_TEST_CRASH_RETRY=1"], [], tmp_path / "obj",
-                       real.root)
+    build = sdcc.Build(sdcc.Toolchain(fake), "18f4620", [], [], tmp_path / "obj",
+                       Path(sdcc.__file__).parent / "el_pic18_w64.h")
     obj = build.compile_one(source)
     assert obj.is_file() and any("sdcc crashed; compiled with" in n and "--no-peep" in n for n in build.notes)
-    script.write_text("#!/bin/sh\ncase \" $* \" in *\" -S \"*) echo \"FATAL Compiler Internal Error\" >&2; exit 1;; esac\n"
+    script.write_text("#!/bin/sh\ncase \" $* \" in *\" -S \"*)\n"
+                      "  echo \"FATAL Compiler Internal Error\" >&2; exit 1;; esac\n"
                       f"exec {real.sdcc} \"$@\"\n")
     source.write_text("unsigned char g;\nvoid f(void) { g += 2; }\n")  # another text: not from the build cache
     with pytest.raises(BuildError) as err:
