@@ -107,7 +107,7 @@ class Pic18Board(BoardBase):
                                 if options.schedule != "min-buffer" and any(df.buffers for df in program.dataflows)
                                 else "") + (f"; or build for --mcu {bigger[0]}" if bigger else "")) from None
         try:
-            lmap = linkmap.read_map(build.link(objects, hexfile, lkr))
+            lmap = linkmap.read_map(build.link_checked(objects, hexfile, lkr))
         except BuildError as err:
             if "No target memory available" not in str(err):
                 raise
@@ -115,7 +115,7 @@ class Pic18Board(BoardBase):
             raise BuildError(self._not_fit(program, self._measure(build, objects, big_start, out_dir), options)) \
                 from None
         report = self.size_report(lmap)
-        return Compiled(hexfile, portable + self._hardware(), report, image=hexfile)
+        return Compiled(hexfile, portable + self._hardware(), report, image=hexfile, notes=list(build.notes))
 
     def _measure(self, build: sdcc.Build, objects: list[Path], big_start: int, out_dir: Path) -> linkmap.LinkMap:
         """A program too big for its part linked into the part's memory map
@@ -215,7 +215,7 @@ class Pic18Board(BoardBase):
         files = [*sources, *(p for p in runtime_sources(True) if p.name in runtime), *ports]
         hexfile = work_dir / f"{name}.hex"
         objects, lkr, _ = self._objects(build, files, work_dir)
-        return hexfile, linkmap.read_map(build.link(objects, hexfile, lkr))
+        return hexfile, linkmap.read_map(build.link_checked(objects, hexfile, lkr))
 
     def run_port_program(self, source: Path, work_dir: Path) -> str:
         """The program on the MCU in gpsim; its report comes on the EUSART."""

@@ -27,6 +27,7 @@ class Section:
 class LinkMap:
     sections: list[Section] = field(default_factory=list)
     symbols: dict[str, tuple[int, str, str]] = field(default_factory=dict)  # name -> (address, location, file)
+    statics: dict[str, list[tuple[int, str]]] = field(default_factory=dict)  # data: name -> (address, file) each
 
     @property
     def flash(self) -> int:
@@ -81,4 +82,6 @@ def read_map(path: Path) -> LinkMap:
             name, addr, loc, storage, src = y.groups()
             if storage == "extern" or name not in m.symbols:
                 m.symbols[name] = (int(addr, 16), loc, src)
+            if storage == "static" and loc == "data" and (int(addr, 16), src) not in m.statics.get(name, []):
+                m.statics.setdefault(name, []).append((int(addr, 16), src))
     return m

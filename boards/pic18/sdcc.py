@@ -10,7 +10,12 @@ A build goes in two kinds of C files:
   inline assembly: compiler keywords behind el_pic18.h's macros), compiled
   as they are. They never see a 64-bit type.
 gplink then links them with sdcc's start-up code and libraries, and the
-map file gives the sizes and the symbols' addresses.
+map file gives the sizes and the symbols' addresses. What sdcc gets wrong
+is kept out (docs/boards.md, "What sdcc gets wrong"): passes on the C
+(boolconv.py, shifts.py), its faulty bank optimisation off, the linked
+program's bank selection checked (bankcheck.py, a file with a fault
+compiled again), and a file sdcc crashes on compiled again with fewer
+optimisations.
 """
 
 from __future__ import annotations
@@ -26,7 +31,8 @@ from pycparser import c_ast, c_generator, c_parser
 
 from easylab.core.errors import BuildError
 
-from . import buildcache, ctypes64, datapointers, inline, lower64, lower64_stmt, prune, sdcc_quirks, strength
+from . import (bankcheck, boolconv, buildcache, ctypes64, datapointers, inline, linkmap, lower64, lower64_stmt,
+               messages, prune, sdcc_quirks, shifts, strength)
 from .ctypes64 import LowerError, Target
 from .lower64_stmt import lower_unit
 
@@ -38,8 +44,23 @@ TARGET = Target(int_bits=16, long_bits=32, char_signed=False)
 # sdcc's own library build uses these; about 8 % smaller code.
 # The large stack model: the software stack is larger than a bank
 # (el_pic18_stack.c).
-OPT_FLAGS = ["--pstack-model=large", "--fomit-frame-pointer", "--obanksel=9", "--denable-peeps", "--optimize-cmp", "--optimize-df"]
-# Warnings are errors, but two that say nothing about the C: sdcc 4.2's
+# --obanksel=1: sdcc drops a BANKSEL after an instruction naming the same
+# operand; its levels above 1 also drop one for another offset of the same
+# symbol, which sits in another bank when the object is larger than a bank
+# (sdcc_quirks.place_big_objects): a read under the bank of the last store.
+OPT_FLAGS = ("--pstack-model=large", "--fomit-frame-pointer", "--obanksel=1", "--denable-peeps", "--optimize-cmp",
+             "--optimize-df")
+# A file whose assembly fails the bank check (bankcheck.py) again: a BANKSEL
+# before every banked access.
+SAFE_BANKS = ("--pstack-model=large", "--fomit-frame-pointer", "--obanksel=0", "--denable-peeps", "--optimize-cmp",
+              "--optimize-df")
+# When sdcc crashes on a file (an internal error, a signal), the file again
+# with fewer optimisations, in turn: without the pCode optimisations, then
+# without the iCode ones as well (SDCCopt.c's asserts).
+FALLBACKS = (("--pstack-model=large", "--fomit-frame-pointer", "--obanksel=0", "--no-peep"),
+             ("--pstack-model=large", "--fomit-frame-pointer", "--obanksel=0", "--no-peep", "--nogcse",
+              "--noinvariant", "--noinduction", "--noloopreverse", "--nolabelopt", "--nolospre"))
+# Warnings are errors, but those that say nothing about the C: sdcc 4.2's
 # pic16 port warns "Initializer different levels of indirections" (18) for
 # every address of a RAM object in a static initializer of a generic
 # pointer (`(void *)&x` in el_items) and emits the right pointer (address
@@ -48,7 +69,12 @@ OPT_FLAGS = ["--pstack-model=large", "--fomit-frame-pointer", "--obanksel=9", "-
 # value was known at compile time, as it is where portable code tests a
 # board's configuration macros (PC_EXACT_TICKS || ...). gcc's -Wall -Wextra
 # -Werror on the same C catches real mismatches.
-WARNING_FLAGS = ["--Werror", "--disable-warning", "18", "--disable-warning", "110", "--disable-warning", "126"]
+# "integer overflow in expression" (165) comes from sdcc's constant folding
+# of an unsigned product it has narrowed itself (`(uint16_t)(a * 1000u)`
+# with a known a: its 16-bit product wraps, as C's unsigned arithmetic
+# does), not from the C.
+WARNING_FLAGS = ["--Werror", "--disable-warning", "18", "--disable-warning", "110", "--disable-warning", "126",
+                 "--disable-warning", "165"]
 _WORD = re.compile(r"\b[A-Za-z_]\w*\b")
 
 
@@ -109,14 +135,17 @@ class Build:
     w64_header: Path  # el_pic18_w64.h
     notes: list[str] = field(default_factory=list)
     in_ram: set[str] = field(default_factory=set)  # the program's RAM objects (sdcc_quirks.ram_pointer_tags)
+    file_flags: dict[str, tuple[str, ...]] = field(default_factory=dict)  # a file's own flags (by stem)
+    sources: dict[Path, Path] = field(default_factory=dict)  # object -> the file it was compiled from
 
     def __post_init__(self) -> None:
         # sdcc and gpasm run inside obj_dir: every path they see is absolute
         self.obj_dir = self.obj_dir.resolve()
         self.include_dirs = [d.resolve() for d in self.include_dirs]
 
-    def flags(self) -> list[str]:
-        return ["-mpic16", f"-p{self.part}", "--std-c99", "--no-warn-non-free", *WARNING_FLAGS, *OPT_FLAGS,
+    def flags(self, opts: tuple[str, ...] = OPT_FLAGS) -> list[str]:
+        """sdcc's options with the optimisation options ``opts``."""
+        return ["-mpic16", f"-p{self.part}", "--std-c99", "--no-warn-non-free", *WARNING_FLAGS, *opts,
                 *self.defines, *(f"-I{d}" for d in self.include_dirs)]
 
     # ---- portable files
@@ -147,11 +176,14 @@ class Build:
         for ast in units.values():
             inline.inline_single_calls(ast)
             strength.reduce_products(ast, TARGET)
+            shifts.split_shifts(ast)
+            boolconv.fix_bool_conversions(ast, TARGET)
             datapointers.data_pointers(ast)
         big_start = sdcc_quirks.place_big_objects(units, TARGET, ram_end)
         self.in_ram = sdcc_quirks.fix_initializers(units, TARGET)
+        sdcc_quirks.drop_zero_initializers(units)
         out = []
-        gen = c_generator.CGenerator()
+        gen = _LineGenerator()
         for name, ast in units.items():
             path = self.obj_dir / f"{name}.sdcc.c"
             text = f"/* {name}: lowered for sdcc (boards/pic18/lower64.py). Do not edit. */\n" + gen.visit(ast)
@@ -163,29 +195,79 @@ class Build:
     # ---- compiling, linking
 
     def compile(self, sources: list[Path]) -> list[Path]:
-        """sdcc -c for each file, in parallel; an object compiled before from
-        the same text with the same flags comes from the build cache (a
-        hardware file's text is its preprocessed text)."""
-        ram = " ".join(sorted(self.in_ram))
-
-        def one(src: Path) -> Path:
-            stem = src.name.removesuffix(".sdcc.c").removesuffix(".c")
-            obj, asm = self.obj_dir / f"{stem}.o", self.obj_dir / f"{stem}.asm"
-            text = src.read_bytes() if src.resolve().parent == self.obj_dir else \
-                _run([self.tc.sdcc, *self.flags(), "-E", src], f"preprocessing {src.name}").stdout.encode()
-            digest = buildcache.key(str(self.tc.root), *self.flags(), text, ram)
-            if buildcache.fetch_file("sdcc", digest, obj):
-                return obj
-            _run([self.tc.sdcc, *self.flags(), "-S", src.resolve(), "-o", asm], f"compiling {src.name} with sdcc",
-                 cwd=self.obj_dir)
-            asm.write_text(sdcc_quirks.ram_pointer_tags(asm.read_text(encoding="latin-1"), self.in_ram),
-                           encoding="latin-1")
-            _run(["gpasm", "-D__STACK_MODEL_LARGE", "-o", obj, "-c", asm], f"assembling {asm.name}", cwd=self.obj_dir)
-            buildcache.store_file("sdcc", digest, obj)
-            return obj
+        """sdcc -c for each file, in parallel (``compile_one``)."""
         self.obj_dir.mkdir(parents=True, exist_ok=True)
         with ThreadPoolExecutor(max_workers=2) as pool:
-            return list(pool.map(one, sources))
+            return list(pool.map(self.compile_one, sources))
+
+    def compile_one(self, src: Path, fallbacks: tuple[tuple[str, ...], ...] = FALLBACKS) -> Path:
+        """One file to an object (and its assembly, kept for the bank check).
+        An object compiled before from the same text with the same flags
+        comes from the build cache (a hardware file's text is its
+        preprocessed text). When sdcc crashes on the file, it is compiled
+        again with each of ``fallbacks``' optimisations off in turn (a
+        crash is sdcc's, never the model's); what it then says is reported."""
+        stem = src.name.removesuffix(".sdcc.c").removesuffix(".c")
+        obj, asm = self.obj_dir / f"{stem}.o", self.obj_dir / f"{stem}.asm"
+        self.obj_dir.mkdir(parents=True, exist_ok=True)
+        self.sources[obj] = src
+        text = src.read_bytes() if src.resolve().parent == self.obj_dir else \
+            _run([self.tc.sdcc, *self.flags(), "-E", src], f"preprocessing {src.name}").stdout.encode()
+        opts = self.file_flags.get(stem, OPT_FLAGS)
+        digest = buildcache.key(str(self.tc.root), *self.flags(opts), text, " ".join(sorted(self.in_ram)))
+        if buildcache.fetch_file("sdcc", digest, obj) and buildcache.fetch_file("sdcc-asm", digest, asm):
+            return obj
+        for k, attempt in enumerate((opts,) + fallbacks):
+            try:
+                _run([self.tc.sdcc, *self.flags(attempt), "-S", src.resolve(), "-o", asm],
+                     f"compiling {src.name} with sdcc", cwd=self.obj_dir)
+                break
+            except BuildError as err:
+                if not crashed(str(err)):
+                    raise BuildError(messages.in_model_terms(str(err))) from None
+                if k == len(fallbacks):
+                    raise BuildError(f"sdcc failed on {src.name} (it crashed, with each set of optimisations "
+                                     f"the board tries, the last {' '.join(attempt)}); the C it was given: "
+                                     f"{src}") from None
+                self.notes.append(f"{src.name}: sdcc crashed; compiled with {' '.join(fallbacks[k])}")
+        text, _ = boolconv.fix_bool_casts_in_asm(asm.read_text(encoding="latin-1"))
+        asm.write_text(sdcc_quirks.ram_pointer_tags(text, self.in_ram), encoding="latin-1")
+        _run(["gpasm", "-D__STACK_MODEL_LARGE", "-o", obj, "-c", asm], f"assembling {asm.name}", cwd=self.obj_dir)
+        buildcache.store_file("sdcc", digest, obj)
+        buildcache.store_file("sdcc-asm", digest, asm)
+        return obj
+
+    def link_checked(self, objects: list[Path], hexfile: Path, lkr: Path) -> Path:
+        """Link, then check every banked access against BSR (bankcheck.py);
+        a file with faults is compiled again with sdcc's bank optimisation
+        off (SAFE_BANKS) and the program linked again. Faults that remain
+        fail the build. Returns the map file."""
+        lmap_path = self.link(objects, hexfile, lkr)
+        faulty = self._bank_faults(objects, lmap_path)
+        if not faulty:
+            return lmap_path
+        for obj in faulty:
+            stem = obj.stem
+            self.file_flags[stem] = SAFE_BANKS
+            self.notes.append(f"{self.sources[obj].name}: a BANKSEL sdcc left out; compiled with --obanksel=0")
+            self.compile_one(self.sources[obj])
+        lmap_path = self.link(objects, hexfile, lkr)
+        faulty = self._bank_faults(objects, lmap_path)
+        if faulty:
+            raise BuildError("sdcc's assembly reads or writes RAM under the wrong bank:\n" + "\n".join(
+                str(f) for faults in faulty.values() for f in faults[:5]))
+        return lmap_path
+
+    def _bank_faults(self, objects: list[Path], map_path: Path) -> dict[Path, list]:
+        lmap = linkmap.read_map(map_path)
+        found = {}
+        for obj in objects:
+            asm = obj.with_suffix(".asm")
+            if asm.is_file():
+                faults = bankcheck.check(asm.read_text(encoding="latin-1"), asm.resolve(), lmap)
+                if faults:
+                    found[obj] = faults
+        return found
 
     def link(self, objects: list[Path], hexfile: Path, lkr: Path) -> Path:
         """gplink with sdcc's libraries (the start-up code is the board's
@@ -194,6 +276,20 @@ class Build:
         _run(["gplink", "-m", "-w", "-s", lkr, "-I", lib, "-o", hexfile, *objects,
               f"libdev{self.part}.lib", "libsdcc.lib", "libc18f.lib", "libm18f.lib"], "linking with gplink")
         return hexfile.with_suffix(".map")
+
+
+class _LineGenerator(c_generator.CGenerator):
+    """C from a syntax tree with a `#line` before each statement: sdcc's
+    messages name the file and line the statement came from (model.c, a
+    runtime file), not the lowered text it compiles."""
+
+    def _generate_stmt(self, n: c_ast.Node, add_indent: bool = False) -> str:
+        text = super()._generate_stmt(n, add_indent)
+        coord = getattr(n, "coord", None)
+        if coord is None or not coord.file or not coord.line or isinstance(n, c_ast.Compound):
+            return text
+        name = str(coord.file).replace("\\", "\\\\").replace('"', '\\"')
+        return f'#line {coord.line} "{name}"\n' + text
 
 
 _LOWERING = buildcache.code_version(ctypes64, lower64, lower64_stmt)
@@ -215,6 +311,13 @@ def lowered(src: Path, text: str) -> c_ast.FileAST:
         raise BuildError(f"parsing {src.name} for the 64-bit lowering failed: {err}") from None
     buildcache.store_object("lowered", digest, ast)
     return ast
+
+
+def crashed(message: str) -> bool:
+    """sdcc failed of itself, not because of the C: an internal error, an
+    assertion, a signal."""
+    return any(k in message for k in ("Internal Error", "internal error", "Caught signal", "Assertion",
+                                      "Segmentation fault", "Aborted"))
 
 
 def hardware_roots(build: Build, sources: list[Path]) -> set[str]:

@@ -19,6 +19,12 @@ runtime and the generated tables, and each is checked by the board's tests
 - An array member converted to a pointer in a static initializer
   (`(void *)s.window`) is refused ("pointer types incompatible"), while
   `&s.window[0]` is right: initializers are rewritten so.
+- sdcc puts every initialised RAM object of a file in one `idata`
+  section, which gplink must place in one bank: a model with more than
+  256 bytes of items (each item is initialised, most to zero) did not
+  link. An initializer of zeros only is dropped: start-up clears RAM
+  (pic18_startup.c), as C's zero initialisation wants, and such an object
+  goes to a section of its own, with no initial value in program memory.
 """
 
 from __future__ import annotations
@@ -27,7 +33,7 @@ import re
 
 from pycparser import c_ast
 
-from .ctypes64 import Target, TypeEnv
+from .ctypes64 import LowerError, Target, TypeEnv, const_value
 from .prune import is_const
 
 BANK_BYTES = 256
@@ -169,6 +175,32 @@ def fix_initializers(units: dict[str, c_ast.FileAST], target: Target) -> set[str
             if decl.name and not is_const(decl):
                 in_ram.add(decl.name)
     return in_ram
+
+
+def _zeros(init: c_ast.Node) -> bool:
+    """An initializer whose every value is the constant 0."""
+    if isinstance(init, c_ast.InitList):
+        return all(_zeros(e.expr if isinstance(e, c_ast.NamedInitializer) else e) for e in init.exprs)
+    if isinstance(init, c_ast.Cast):
+        return _zeros(init.expr)
+    if isinstance(init, c_ast.Constant) and init.type not in ("string", "float", "double"):
+        try:
+            return const_value(init) == 0
+        except LowerError:
+            return False
+    return False
+
+
+def drop_zero_initializers(units: dict[str, c_ast.FileAST]) -> int:
+    """Drop the initializers of zeros of file-scope RAM objects; returns how many."""
+    count = 0
+    for ast in units.values():
+        for ext in ast.ext:
+            if isinstance(ext, c_ast.Decl) and ext.init is not None and not isinstance(ext.type, c_ast.FuncDecl) \
+                    and not is_const(ext) and "extern" not in (ext.storage or []) and _zeros(ext.init):
+                ext.init = None
+                count += 1
+    return count
 
 
 _UPPER = re.compile(r"UPPER\(\(?_([A-Za-z_]\w*)(?:\s*\+\s*\d+)?\)?\)")

@@ -48,6 +48,7 @@
 #include <gpsim/breakpoints.h>
 #include <gpsim/trigger.h>
 #include <gpsim/registers.h>
+#include <gpsim/intcon.h>
 #include <gpsim/ioports.h>
 #include <gpsim/stimuli.h>
 #include <gpsim/uart.h>
@@ -202,6 +203,57 @@ public:
 
 PwmSettle pwm_settle;
 
+/* ---- interrupt flags raised while interrupts are off ----
+ *
+ * gpsim 0.31 takes an external interrupt (INT0..INT2, PORTB's change) when
+ * its flag is raised with GIE set; a flag raised while GIE is clear (in the
+ * handler, after it looked at the flags; in a critical section) is not
+ * taken when RETFIE or the firmware sets GIE again, as the part takes it
+ * (gpsim keeps GIE set in the handler and marks it `in_interrupt`):
+ * an encoder lost the edge (two counts: its next interrupt saw both pins
+ * changed) or counted it an instant late. After an edge driven while
+ * interrupts are off, the harness looks again every few cycles until they
+ * are on and, when an enabled flag is still up, has gpsim take the
+ * interrupt. */
+const unsigned INTCON_ADDR = 0xFF2u, INTCON3_ADDR = 0xFF0u;
+const guint64 IRQ_RECHECK_CYCLES = 8u;
+
+/* In the interrupt handler (gpsim keeps GIE set there) or GIE clear. */
+bool irq_off()
+{
+    INTCON *intcon = dynamic_cast<INTCON *>(cpu->registers[INTCON_ADDR]);
+    return !(reg(INTCON_ADDR) & 0x80u) || (intcon != nullptr && intcon->in_interrupt);
+}
+
+class IrqRecheck : public TriggerObject {
+public:
+    bool armed = false;
+    void arm()
+    {
+        if (!armed) {
+            armed = true;
+            get_cycles().set_break(get_cycles().get() + IRQ_RECHECK_CYCLES, this);
+        }
+    }
+    void callback() override
+    {
+        if (irq_off()) {
+            get_cycles().set_break(get_cycles().get() + IRQ_RECHECK_CYCLES, this);
+            return;
+        }
+        armed = false;
+        unsigned intcon = reg(INTCON_ADDR), intcon3 = reg(INTCON3_ADDR);
+        /* INT0IF, RBIF (INTCON bits 1, 0) under INT0IE, RBIE (bits 4, 3);
+           INT1IF, INT2IF (INTCON3 bits 0, 1) under INT1IE, INT2IE (bits 3, 4) */
+        bool pending = (intcon & (intcon >> 3) & 0x03u) || (intcon3 & (intcon3 >> 3) & 0x03u);
+        INTCON_16 *intcon16 = dynamic_cast<INTCON_16 *>(cpu->registers[INTCON_ADDR]);
+        if (pending && intcon16 != nullptr)
+            intcon16->general_interrupt(true); /* IPEN clear: the vector at 0x08 */
+    }
+};
+
+IrqRecheck irq_recheck;
+
 /* ---- encoders: quadrature edges from the last count to the new one ---- */
 
 class EncoderEdges : public TriggerObject {
@@ -226,6 +278,8 @@ public:
             drive_level(h->a, (ab & 2u) != 0u);
         if (changed & 1u)
             drive_level(h->b, (ab & 1u) != 0u);
+        if (irq_off())
+            irq_recheck.arm();
         record_pins();
         get_cycles().set_break(get_cycles().get() + ENCODER_EDGE_CYCLES, this);
     }
