@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import re
 import sys
 from collections import Counter, defaultdict
 from concurrent.futures import ThreadPoolExecutor
@@ -54,6 +55,15 @@ def first_difference(a: bytes, b: bytes) -> str:
         if x != y:
             return f"line {i + 1}:\n  header    {la[0]}\n  reference {x}\n  mode      {y}"
     return f"lengths differ: {len(la)} and {len(lb)} lines"
+
+
+def signature(verdict: str, detail: str) -> str:
+    """What identifies a finding: 'differs', or the first error line without paths and numbers."""
+    if verdict == "differs":
+        return verdict
+    error = next((ln for ln in detail.splitlines() if re.search(r"error|runtime|Caught|did not", ln)),
+                 detail[:200])
+    return verdict + ": " + re.sub(r"\S*/|\d+", "", error).strip()
 
 
 def compare(case: Case, work: Path, modes: list[str]) -> dict[str, tuple[str, str]]:
@@ -134,7 +144,10 @@ def main(argv: list[str] | None = None) -> int:
     summary = campaign(range(args.seed, args.seed + args.n), modes, out, args.jobs, Options(floats=args.floats))
     for mode, counts in summary["tally"].items():
         print(f"{mode:12s} " + ", ".join(f"{k} {v}" for k, v in sorted(counts.items())))
-    bad = sum(1 for f in summary["findings"])
+    kinds = Counter(f"{f['mode']}: {signature(f['verdict'], f['detail'])}" for f in summary["findings"])
+    for kind, count in kinds.most_common():
+        print(f"{count:5d}  {kind[:160]}")
+    bad = len(summary["findings"])
     print(f"{bad} finding(s); details in {out / 'summary.json'}")
     return 1 if bad else 0
 

@@ -164,6 +164,18 @@ class ModelWriter:
             d = self.fresh("motor")
             self.decls.append(f'device {d}: Motor(pwm = "{pwms.pop()}", dir = "{pins.pop()}")')
             self.device_ins[f"{d}.speed"] = "int16"
+        if part.i2c and rng.random() < 0.3:
+            d = self.fresh("temp")
+            self.decls.append(f"device {d}: I2cTemperature(address = {rng.randint(0x48, 0x4F)})")
+            self.device_outs[f"{d}.temperature"] = ("int16", -880, 2047)
+        if part.i2c and rng.random() < 0.2:
+            d = self.fresh("log")
+            self.decls.append(f"device {d}: I2cEepromLog(address = {rng.randint(0x50, 0x57)}, values = 1)")
+            self.device_ins[f"{d}.record"] = "int16"
+        if part.spi_cs and rng.random() < 0.2:
+            d = self.fresh("slog")
+            self.decls.append(f'device {d}: SpiEepromLog(cs = "{rng.choice(part.spi_cs)}", values = 1)')
+            self.device_ins[f"{d}.record"] = "int16"
         pairs = list(part.encoder_pairs)
         if pairs and rng.random() < 0.4:
             a, b = rng.choice(pairs)

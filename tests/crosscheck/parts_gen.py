@@ -17,15 +17,19 @@ class Part:
     pwm: tuple[str, ...]
     encoder_pairs: tuple[tuple[str, str], ...]
     adc_max: int = 1023
+    i2c: bool = False  # std's I2C devices on bus 0
+    spi_cs: tuple[str, ...] = ()  # chip selects for std's SPI devices on bus 0
 
 
 PARTS = {p.name: p for p in (
-    # PA/PC/PL: plain ports; PB0..PB3 (pin change group 0) for encoders;
-    # ADC 0..5 on PF0..PF5; PWM on timers 1, 3, 4.
+    # PA/PC/PL: plain ports; INT2..INT3 and INT6..INT7 for encoders (simavr
+    # models pin-change interrupts on port B only, where the SPI bus is);
+    # ADC 0..5 on PF0..PF5; PWM on timers 1, 3, 4; I2C on PD0/PD1, SPI on
+    # PB0..PB3 with chip selects on PL4/PL5.
     Part("atmega2560", "avr",
          digital=("PA0", "PA1", "PA2", "PA3", "PC0", "PC1", "PC2", "PC3", "PL0", "PL1", "PL2"),
          adc=(0, 1, 2, 3, 4, 5), pwm=("PB5", "PB6", "PE3", "PH3"),
-         encoder_pairs=(("PB0", "PB1"), ("PB2", "PB3"))),
+         encoder_pairs=(("PE6", "PE7"), ("PD2", "PD3")), i2c=True, spi_cs=("PL4", "PL5")),
     # ADC 6 and 7 have no digital pin; PD0/PD1 are the UART; PB3..PB5 SPI.
     Part("atmega328p", "avr",
          digital=("PD2", "PD4", "PD7", "PB0", "PC2", "PC3"),

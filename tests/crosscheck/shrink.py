@@ -21,7 +21,7 @@ from pathlib import Path
 HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE))
 
-from crosscheck import Case, compare, write_case  # noqa: E402
+from crosscheck import compare, signature, write_case  # noqa: E402
 
 
 def units(lines: list[str]) -> list[tuple[int, int]]:
@@ -54,14 +54,6 @@ def stimulus_for(text: str, stimulus: str) -> str:
     keep = [0] + [i for i, c in enumerate(rows[0]) if i and re.search(rf"^(?:param|var|device) {c.split('.')[0]}\b",
                                                                       text, re.M)]
     return "\n".join(",".join(r[i] for i in keep) for r in rows) + "\n"
-
-
-def signature(verdict: str, detail: str) -> str:
-    """What identifies a finding: 'differs', or the first error line without paths and numbers."""
-    if verdict == "differs":
-        return verdict
-    error = next((ln for ln in detail.splitlines() if "error" in ln), detail[:200])
-    return verdict + ":" + re.sub(r"\S*/|\d+", "", error)
 
 
 def shrink(model: Path, mode: str, duration_ms: int = 120, log=lambda m: print(m, flush=True)) -> tuple[str, str]:

@@ -38,7 +38,8 @@ def test_the_models_cover_the_language(models):
     text = "\n".join(m.text for m in models.values())
     for kind in STD_SINGLE_RATE + MULTIRATE:
         assert re.search(rf"= {kind}\b", text), f"no {kind}"
-    for device in ("DigitalIn", "DigitalOut", "AnalogIn", "Pt100", "PwmOut", "Motor", "Encoder"):
+    for device in ("DigitalIn", "DigitalOut", "AnalogIn", "Pt100", "PwmOut", "Motor", "Encoder", "I2cTemperature",
+                   "I2cEepromLog", "SpiEepromLog"):
         assert f": {device}(" in text, f"no {device}"
     for t in ("int8", "uint8", "int16", "uint16", "int32", "uint32"):
         assert f"<{t}>" in text and f"actor type" in text
