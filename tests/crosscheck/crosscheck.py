@@ -63,7 +63,7 @@ def signature(verdict: str, detail: str) -> str:
         return verdict
     error = next((ln for ln in detail.splitlines() if re.search(r"error|runtime|Caught|did not", ln)),
                  detail[:200])
-    return verdict + ": " + re.sub(r"\S*/|\d+", "", error).strip()
+    return verdict + ": " + re.sub(r"\S*/|\b[0-9a-f]{12,}\b|\d+", "", error).strip()
 
 
 def compare(case: Case, work: Path, modes: list[str]) -> dict[str, tuple[str, str]]:
