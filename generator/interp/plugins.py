@@ -57,7 +57,10 @@ CFLAGS = ["-std=c99", "-O2", "-Wall", "-Wextra", "-Werror", "-pedantic", "-D_POS
 LDFLAGS = ["-Wl,--no-undefined", "-lm"]
 # Runtime files a plug-in includes (headers) or links (the arithmetic).
 RUNTIME_HEADERS = ("el_types.h", "el_model.h", "el_dispatch.h")
-RUNTIME_SOURCES = ("el_arith.c",)
+RUNTIME_SOURCES = ("el_arith.c", "el_wide.c")
+# Headers those include, in a plug-in's digest too: a changed one makes
+# the cached plug-ins stale.
+INCLUDED_HEADERS = ("el_wide.h",)
 
 
 class PluginError(Exception):
@@ -200,7 +203,7 @@ class PluginCache:
         for part in (f"easylab plug-in ABI {PLUGIN_ABI_VERSION}", source, " ".join(CFLAGS + LDFLAGS),
                      self.compiler, self.compiler_identity,
                      *((runtime_dir() / name).read_text(encoding="utf-8")
-                       for name in RUNTIME_HEADERS + RUNTIME_SOURCES)):
+                       for name in RUNTIME_HEADERS + INCLUDED_HEADERS + RUNTIME_SOURCES)):
             h.update(part.encode("utf-8"))
             h.update(b"\0")
         return h.hexdigest()[:32]
