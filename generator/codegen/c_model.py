@@ -507,8 +507,9 @@ class _Builder:
             fields.append(f"{ch.type.c_name} ch{ch.id}[{ch.tokens_in}];")
             fields.append(f"uint16_t ch{ch.id}_n;")
             release.append(f"el_t{task.id}.ch{ch.id}_n = 0u;")
-        if not fields:
+        if not fields:  # a task that reads and writes nothing: its copy is still named once
             fields.append("uint8_t el_unused;")
+            release.append(f"(void)el_t{task.id};")
         for kind, ident_ in task.runs:
             if kind == "dataflow":
                 body.append(f"el_df{ident_}_{ident(self.p.dataflows[ident_].name)}();")
