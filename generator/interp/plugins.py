@@ -92,11 +92,15 @@ def spec_view(spec: ActorSpec) -> SpecView:
     return c_spec_view(standalone)
 
 
-def _render_actor_block(view: SpecView) -> str:
+def _render_actor_block(view: SpecView, part: str) -> str:
     """The firmware's actor code for one specialisation (templates/actor.c.j2,
     which model.c.j2 includes), without the debugger's probe: a plug-in is
-    not linked with the debug server."""
-    return environment().get_template("actor.c.j2").render(s=view)
+    not linked with the debug server. ``part``: "decl" (the state type and
+    prototypes) or "code" (the functions, after actor_warnings.c.j2, as at
+    the end of model.c)."""
+    env = environment()
+    block = env.get_template("actor.c.j2").render(s=view, part=part)
+    return env.get_template("actor_warnings.c.j2").render() + block if part == "code" else block
 
 
 def _wrapper(spec: ActorSpec, view: SpecView) -> str:
@@ -145,11 +149,11 @@ void el_plugin_step(void *el_state, const void *const *el_in, void *const *el_ou
 def plugin_source(spec: ActorSpec) -> str:
     """The complete C source of one specialisation's plug-in."""
     view = spec_view(spec)
-    block = _render_actor_block(view)
     head = (f"/* EasyLab actor plug-in: {spec.type_name} (local execution, docs/local.md).\n"
             f" * Generated from the same template as firmware; do not edit. */\n"
             + "".join(f'#include "{h}"\n' for h in RUNTIME_HEADERS) + "\n")
-    return head + block + _wrapper(spec, view)
+    return (head + _render_actor_block(view, "decl") + _wrapper(spec, view) + "\n"
+            + _render_actor_block(view, "code"))
 
 
 # ====================================================================== libraries
