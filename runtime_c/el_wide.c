@@ -367,7 +367,7 @@ uint32_t el_w64_sat_u32(const el_w64_t *w, uint32_t lo, uint32_t hi)
     return w->lo;
 }
 
-#if EL_HAS_INT64
+#if EL_WIDE_INT64
 /* ---- el_wide.h's int64_t form: the same results with C's 64-bit type. A
  * product is checked on the operands' magnitudes in 32-bit halves (no
  * 64-bit division, which 8-bit parts pay for in flash and time). */

@@ -61,7 +61,16 @@ uint32_t el_w64_sat_u32(const el_w64_t *w, uint32_t lo, uint32_t hi);
 int8_t el_w64_cmp(const el_w64_t *a, const el_w64_t *b);
 int8_t el_w64_sign(const el_w64_t *w);
 
-#if EL_HAS_INT64
+/* EL_WIDE_SOFTWARE: a board whose compiler has int64_t only through a
+ * lowering of its own (the PIC18's) takes the software form, which the
+ * F16's 8051 proxy runs through the same compiler family. */
+#if EL_HAS_INT64 && !(defined(EL_WIDE_SOFTWARE) && EL_WIDE_SOFTWARE)
+#define EL_WIDE_INT64 1
+#else
+#define EL_WIDE_INT64 0
+#endif
+
+#if EL_WIDE_INT64
 
 typedef int64_t el_wide_t;
 
