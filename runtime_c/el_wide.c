@@ -418,19 +418,19 @@ int64_t el_w_mul(int64_t w, int64_t v)
 }
 
 /* Toward zero; beyond the range its end (C leaves the conversion
- * undefined, and compilers give different ends); NaN: 0. As el_wide.c. */
+ * undefined, and compilers give different ends); NaN: 0. As el_w64_set_f32. */
 int64_t el_w_from_f32(float v)
 {
-    if (v != v) {
-        return 0;
-    }
     if (v >= 9223372036854775808.0f) {
         return INT64_MAX;
     }
     if (v <= -9223372036854775808.0f) {
         return INT64_MIN;
     }
-    return (int64_t)v;
+    if (v < 0.0f || v >= 0.0f) {
+        return (int64_t)v;
+    }
+    return 0; /* NaN, which no comparison holds for (`v != v` a compiler may fold) */
 }
 
 /* v != 0; INT64_MIN / -1 is INT64_MAX */
