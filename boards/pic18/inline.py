@@ -25,8 +25,8 @@ import copy
 from pycparser import c_ast
 
 
-# Generated C gives actor code last, after this pragma (templates/
-# actor_warnings.c.j2: sdcc's warning 94 off to the end of the file).
+# Generated C gives actor code last, after this pragma (runtime_c/
+# el_actor_code.h: sdcc's warning 94 off to the end of the file).
 ACTOR_CODE_PRAGMA = "disable_warning 94"
 
 
