@@ -298,8 +298,12 @@ void el_w64_op_i32(el_w64_t *w, uint8_t op, int32_t v)
         w64_mul32(w, v < 0 ? 0UL - (uint32_t)v : (uint32_t)v, v < 0);
         return;
     }
-    el_w64_set_i32(&x, v);
-    W64_APPLY(w, op, &x)
+    el_w64_set_i32(&x, v); /* not W64_APPLY: a board that prunes functions keeps no 64-bit division */
+    if (op == EL_W64_ADD) {
+        w64_add(w, &x);
+    } else {
+        w64_sub(w, &x);
+    }
 }
 
 void el_w64_op_u32(el_w64_t *w, uint8_t op, uint32_t v)
@@ -313,8 +317,12 @@ void el_w64_op_u32(el_w64_t *w, uint8_t op, uint32_t v)
         w64_mul32(w, v, false);
         return;
     }
-    el_w64_set_u32(&x, v);
-    W64_APPLY(w, op, &x)
+    el_w64_set_u32(&x, v); /* not W64_APPLY: a board that prunes functions keeps no 64-bit division */
+    if (op == EL_W64_ADD) {
+        w64_add(w, &x);
+    } else {
+        w64_sub(w, &x);
+    }
 }
 
 int8_t el_w64_cmp(const el_w64_t *a, const el_w64_t *b)
