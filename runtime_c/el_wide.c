@@ -1,11 +1,19 @@
 /* EasyLab runtime: 64-bit two's complement arithmetic in two 32-bit words,
  * for compilers without a 64-bit integer type (el_wide.h). Every operation
- * gives what int64_t gives: sums, differences and products wrap at 64 bits,
- * quotients truncate toward zero. Nothing here needs more than uint32_t,
- * and no product is formed in (possibly 16-bit) int. */
+ * gives what el_wide.h's int64_t form gives: sums, differences, products
+ * and quotients saturate at the 64-bit range, quotients truncate toward
+ * zero. Nothing here needs more than uint32_t, and no product is formed
+ * in (possibly 16-bit) int. */
 #include "el_wide.h"
 
 #define W64_SIGN 0x80000000UL
+
+/* The end of the range on a side: INT64_MIN or INT64_MAX. */
+static void w64_saturate(el_w64_t *w, bool negative)
+{
+    w->lo = negative ? 0UL : 0xFFFFFFFFUL;
+    w->hi = negative ? W64_SIGN : 0x7FFFFFFFUL;
+}
 
 static void w64_negate(el_w64_t *w)
 {
@@ -13,38 +21,99 @@ static void w64_negate(el_w64_t *w)
     w->hi = ~w->hi + (w->lo == 0UL ? 1UL : 0UL);
 }
 
+/* A sum overflows when both operands have one sign and the sum the other. */
 static void w64_add(el_w64_t *w, const el_w64_t *x)
 {
     uint32_t lo = w->lo + x->lo;
+    uint32_t sign = w->hi & W64_SIGN;
+    bool same = sign == (x->hi & W64_SIGN); /* before w changes: x may be w */
     w->hi = w->hi + x->hi + (lo < w->lo ? 1UL : 0UL);
     w->lo = lo;
+    if (same && sign != (w->hi & W64_SIGN)) {
+        w64_saturate(w, sign != 0UL);
+    }
 }
 
+/* A difference overflows when the operands' signs differ and the result's
+ * is not the minuend's. */
 static void w64_sub(el_w64_t *w, const el_w64_t *x)
 {
     uint32_t borrow = w->lo < x->lo ? 1UL : 0UL;
+    uint32_t sign = w->hi & W64_SIGN;
+    bool differ = sign != (x->hi & W64_SIGN); /* before w changes: x may be w */
     w->lo = w->lo - x->lo;
     w->hi = w->hi - x->hi - borrow;
+    if (differ && sign != (w->hi & W64_SIGN)) {
+        w64_saturate(w, sign != 0UL);
+    }
 }
 
-/* The low 64 bits of the product: the cross products of a low and a high
- * word reach the high word only; the low words' product comes from their
- * 16-bit halves (a1:a0 times b1:b0), each partial product fitting a
- * uint32_t. Few locals: the proxy's 8051 keeps them on a stack of some
- * 200 bytes. */
+/* w * b for a multiplier that fits 32 bits, given as its magnitude and
+ * sign (every product of std's actors: by a gain, by a model value),
+ * saturated. On w's magnitude a = ah:al, a * b = ah * b * 2^32 + al * b:
+ * ah * b must fit 32 bits, and the high word of the sum must not carry
+ * nor reach the sign bit (but for -2^63 itself). al * b comes from 16-bit
+ * halves (a1:a0 times b1:b0), each partial product fitting a uint32_t.
+ * Few locals: the proxy's 8051 keeps them on a stack of some 200 bytes. */
+static void w64_mul32(el_w64_t *w, uint32_t b, bool negative)
+{
+    uint32_t cross, hi, lo, mid;
+
+    if ((w->hi & W64_SIGN) != 0UL) {
+        w64_negate(w);
+        negative = !negative;
+    }
+    if (w->hi != 0UL && b > 0xFFFFFFFFUL / w->hi) {
+        w64_saturate(w, negative);
+        return;
+    }
+    cross = w->hi * b;
+    lo = (w->lo & 0xFFFFUL) * (b & 0xFFFFUL);               /* a0 b0 */
+    mid = (w->lo >> 16) * (b & 0xFFFFUL);                   /* a1 b0 */
+    hi = (w->lo >> 16) * (b >> 16) + (mid >> 16);           /* a1 b1 */
+    mid = (mid & 0xFFFFUL) + (lo >> 16);
+    w->lo = (w->lo & 0xFFFFUL) * (b >> 16);                 /* a0 b1, held in place */
+    mid += w->lo & 0xFFFFUL;
+    hi += (w->lo >> 16) + (mid >> 16);                      /* al * b < 2^64: no carry */
+    w->lo = (lo & 0xFFFFUL) | (mid << 16);
+    w->hi = cross + hi;
+    if (w->hi < cross || ((w->hi & W64_SIGN) != 0UL && !(negative && w->hi == W64_SIGN && w->lo == 0UL))) {
+        w64_saturate(w, negative);
+        return;
+    }
+    if (negative) {
+        w64_negate(w);
+    }
+}
+
+/* w * x, saturated: one of the magnitudes must be below 2^32 (else the
+ * product is at least 2^64), and multiplies the other. */
 static void w64_mul(el_w64_t *w, const el_w64_t *x)
 {
-    uint32_t hi = w->hi * x->lo + w->lo * x->hi;
-    uint32_t lo = (w->lo & 0xFFFFUL) * (x->lo & 0xFFFFUL);  /* a0 b0 */
-    uint32_t mid = (w->lo >> 16) * (x->lo & 0xFFFFUL);      /* a1 b0 */
+    el_w64_t b;
+    bool negative;
 
-    hi += (w->lo >> 16) * (x->lo >> 16) + (mid >> 16);     /* a1 b1 */
-    mid = (mid & 0xFFFFUL) + (lo >> 16);
-    lo &= 0xFFFFUL;
-    w->hi = (w->lo & 0xFFFFUL) * (x->lo >> 16);             /* a0 b1, held in place */
-    mid += w->hi & 0xFFFFUL;
-    w->lo = lo | (mid << 16);
-    w->hi = hi + (w->hi >> 16) + (mid >> 16);
+    b.lo = x->lo;
+    b.hi = x->hi;
+    negative = (b.hi & W64_SIGN) != 0UL;
+    if (negative) {
+        w64_negate(&b);
+    }
+    if (b.hi != 0UL) { /* |x| >= 2^32: x times w's magnitude */
+        negative = (w->hi & W64_SIGN) != 0UL;
+        b.lo = w->lo;
+        b.hi = w->hi;
+        w->lo = x->lo;
+        w->hi = x->hi;
+        if (negative) {
+            w64_negate(&b);
+        }
+        if (b.hi != 0UL) {
+            w64_saturate(w, ((w->hi & W64_SIGN) != 0UL) != negative);
+            return;
+        }
+    }
+    w64_mul32(w, b.lo, negative);
 }
 
 /* Unsigned 64-bit division (n = n / d, d != 0), restoring division bit by
@@ -121,6 +190,8 @@ static void w64_div32(el_w64_t *w, uint32_t d, bool d_negative)
     w->lo = lo;
     if (negative) {
         w64_negate(w);
+    } else if ((hi & W64_SIGN) != 0UL) { /* -2^63 / -1 */
+        w64_saturate(w, false);
     }
 }
 
@@ -147,6 +218,8 @@ static void w64_div(el_w64_t *w, const el_w64_t *x)
     w64_divu(w, &d);
     if (negative) {
         w64_negate(w);
+    } else if ((w->hi & W64_SIGN) != 0UL) { /* -2^63 / -1 */
+        w64_saturate(w, false);
     }
 }
 
@@ -221,8 +294,16 @@ void el_w64_op_i32(el_w64_t *w, uint8_t op, int32_t v)
         w64_div32(w, v < 0 ? 0UL - (uint32_t)v : (uint32_t)v, v < 0);
         return;
     }
-    el_w64_set_i32(&x, v);
-    W64_APPLY(w, op, &x)
+    if (op == EL_W64_MUL) {
+        w64_mul32(w, v < 0 ? 0UL - (uint32_t)v : (uint32_t)v, v < 0);
+        return;
+    }
+    el_w64_set_i32(&x, v); /* not W64_APPLY: a board that prunes functions keeps no 64-bit division */
+    if (op == EL_W64_ADD) {
+        w64_add(w, &x);
+    } else {
+        w64_sub(w, &x);
+    }
 }
 
 void el_w64_op_u32(el_w64_t *w, uint8_t op, uint32_t v)
@@ -232,8 +313,16 @@ void el_w64_op_u32(el_w64_t *w, uint8_t op, uint32_t v)
         w64_div32(w, v, false);
         return;
     }
-    el_w64_set_u32(&x, v);
-    W64_APPLY(w, op, &x)
+    if (op == EL_W64_MUL) {
+        w64_mul32(w, v, false);
+        return;
+    }
+    el_w64_set_u32(&x, v); /* not W64_APPLY: a board that prunes functions keeps no 64-bit division */
+    if (op == EL_W64_ADD) {
+        w64_add(w, &x);
+    } else {
+        w64_sub(w, &x);
+    }
 }
 
 int8_t el_w64_cmp(const el_w64_t *a, const el_w64_t *b)
@@ -285,3 +374,79 @@ uint32_t el_w64_sat_u32(const el_w64_t *w, uint32_t lo, uint32_t hi)
     }
     return w->lo;
 }
+
+#if EL_WIDE_INT64
+/* ---- el_wide.h's int64_t form: the same results with C's 64-bit type. A
+ * product is checked on the operands' magnitudes in 32-bit halves (no
+ * 64-bit division, which 8-bit parts pay for in flash and time). */
+
+int64_t el_w_add(int64_t w, int64_t v)
+{
+    if (v > 0 && w > INT64_MAX - v) {
+        return INT64_MAX;
+    }
+    if (v < 0 && w < INT64_MIN - v) {
+        return INT64_MIN;
+    }
+    return w + v;
+}
+
+int64_t el_w_sub(int64_t w, int64_t v)
+{
+    if (v < 0 && w > INT64_MAX + v) {
+        return INT64_MAX;
+    }
+    if (v > 0 && w < INT64_MIN + v) {
+        return INT64_MIN;
+    }
+    return w - v;
+}
+
+/* a * b = (a >> 32) * b * 2^32 + (a & 0xFFFFFFFF) * b for magnitudes with
+ * b < 2^32 (else both are at least 2^32: the product overflows) */
+int64_t el_w_mul(int64_t w, int64_t v)
+{
+    bool negative = (w < 0) != (v < 0);
+    uint64_t a = w < 0 ? 0u - (uint64_t)w : (uint64_t)w;
+    uint64_t b = v < 0 ? 0u - (uint64_t)v : (uint64_t)v;
+    uint64_t limit = (uint64_t)INT64_MAX + (negative ? 1u : 0u);
+    uint64_t high;
+    uint64_t low;
+    if (b > 0xFFFFFFFFu) {
+        high = a;
+        a = b;
+        b = high;
+    }
+    high = (a >> 32) * (b & 0xFFFFFFFFu);
+    low = (a & 0xFFFFFFFFu) * (b & 0xFFFFFFFFu);
+    if (b > 0xFFFFFFFFu || high > 0xFFFFFFFFu || (high << 32) > UINT64_MAX - low || (high << 32) + low > limit) {
+        return negative ? INT64_MIN : INT64_MAX;
+    }
+    return w * v;
+}
+
+/* Toward zero; beyond the range its end (C leaves the conversion
+ * undefined, and compilers give different ends); NaN: 0. As el_w64_set_f32. */
+int64_t el_w_from_f32(float v)
+{
+    if (v >= 9223372036854775808.0f) {
+        return INT64_MAX;
+    }
+    if (v <= -9223372036854775808.0f) {
+        return INT64_MIN;
+    }
+    if (v < 0.0f || v >= 0.0f) {
+        return (int64_t)v;
+    }
+    return 0; /* NaN, which no comparison holds for (`v != v` a compiler may fold) */
+}
+
+/* v != 0; INT64_MIN / -1 is INT64_MAX */
+int64_t el_w_div(int64_t w, int64_t v)
+{
+    if (v == -1) {
+        return w == INT64_MIN ? INT64_MAX : -w;
+    }
+    return w / v;
+}
+#endif

@@ -66,7 +66,10 @@ class Pic18Board(BoardBase):
     def _build(self, out_dir: Path, release: bool, extra: tuple[str, ...] = ()) -> sdcc.Build:
         folder = self.description.folder
         # EL_TICK_32: absolute ticks in 32 bits (runtime_c/el_types.h), no 64-bit sums per instant.
-        return sdcc.Build(sdcc.find_toolchain(), self.part.device, [*mode_flags(release), "-DEL_TICK_32=1", *extra],
+        # EL_WIDE_SOFTWARE: actors' wide arithmetic in el_wide.c's two words (runtime_c/el_wide.h):
+        # sdcc gave wrong saturating products and sums through the 64-bit lowering.
+        return sdcc.Build(sdcc.find_toolchain(), self.part.device,
+                          [*mode_flags(release), "-DEL_TICK_32=1", "-DEL_WIDE_SOFTWARE=1", *extra],
                           [out_dir, runtime_dir(), *self.description.include_paths], out_dir / "obj",
                           folder / "el_pic18_w64.h")
 

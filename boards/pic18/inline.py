@@ -13,7 +13,9 @@ fixed number of arguments, is named nowhere but in one call that is a
 statement of its own, and does not call itself. The call becomes a block:
 the arguments into temporaries, then the parameters from them (so that an
 argument naming something a parameter shadows still means the caller's),
-then the body, each `return;` a jump to the block's end.
+then the body, each `return;` a jump to the block's end. Actor code
+written into a function above the pragma that precedes it (sdcc's warning
+94 off for actor code) moves the pragma up before that function.
 """
 
 from __future__ import annotations
@@ -23,12 +25,24 @@ import copy
 from pycparser import c_ast
 
 
+# Generated C gives actor code last, after this pragma (runtime_c/
+# el_actor_code.h: sdcc's warning 94 off to the end of the file).
+ACTOR_CODE_PRAGMA = "disable_warning 94"
+
+
 class _Sites(c_ast.NodeVisitor):
-    """Every name use; calls that are statements of their own."""
+    """Every name use; calls that are statements of their own, with the
+    function they are in."""
 
     def __init__(self):
         self.named: dict[str, int] = {}
-        self.statement_calls: dict[str, list[tuple[c_ast.Node, int]]] = {}  # name -> (block, index)
+        # name -> (block, index, the calling function's name)
+        self.statement_calls: dict[str, list[tuple[c_ast.Node, int, str]]] = {}
+        self._function = ""
+
+    def visit_FuncDef(self, node: c_ast.FuncDef) -> None:
+        self._function = node.decl.name
+        self.generic_visit(node)
 
     def visit_ID(self, node: c_ast.ID) -> None:
         self.named[node.name] = self.named.get(node.name, 0) + 1
@@ -36,8 +50,23 @@ class _Sites(c_ast.NodeVisitor):
     def visit_Compound(self, node: c_ast.Compound) -> None:
         for k, item in enumerate(node.block_items or []):
             if isinstance(item, c_ast.FuncCall) and isinstance(item.name, c_ast.ID):
-                self.statement_calls.setdefault(item.name.name, []).append((node, k))
+                self.statement_calls.setdefault(item.name.name, []).append((node, k, self._function))
         self.generic_visit(node)
+
+
+def _actor_code_first(ast: c_ast.FileAST, actor_code: set[str]) -> None:
+    """The actor code pragma before the first function that holds actor
+    code: written in place, an actor's step runs in its dataflow's function
+    (and that in its task's), above the pragma."""
+    pragma = next((e for e in ast.ext if isinstance(e, c_ast.Pragma) and e.string.strip() == ACTOR_CODE_PRAGMA),
+                  None)
+    if pragma is None:
+        return
+    first = next((k for k, e in enumerate(ast.ext) if isinstance(e, c_ast.FuncDef) and e.decl.name in actor_code),
+                 None)
+    if first is not None and first < ast.ext.index(pragma):
+        ast.ext.remove(pragma)
+        ast.ext.insert(first, pragma)
 
 
 class _Returns(c_ast.NodeVisitor):
@@ -93,6 +122,9 @@ def inline_single_calls(ast: c_ast.FileAST) -> list[str]:
     done = []
     serial = 0
     changed = True
+    pragma = next((k for k, e in enumerate(ast.ext) if isinstance(e, c_ast.Pragma)
+                   and e.string.strip() == ACTOR_CODE_PRAGMA), len(ast.ext))
+    actor_code = {e.decl.name for e in ast.ext[pragma:] if isinstance(e, c_ast.FuncDef)}
     while changed:
         changed = False
         sites = _Sites()
@@ -105,7 +137,7 @@ def inline_single_calls(ast: c_ast.FileAST) -> list[str]:
             params = _params(fd)
             if len(calls) != 1 or sites.named.get(name, 0) != 1 or params is None or not _is_void(fd):
                 continue
-            block, index = calls[0]
+            block, index, caller = calls[0]
             call = block.block_items[index]
             args = call.args.exprs if call.args else []
             returns = _Returns()
@@ -132,8 +164,11 @@ def inline_single_calls(ast: c_ast.FileAST) -> list[str]:
             for proto in [e for e in ast.ext if isinstance(e, c_ast.Decl) and e.name == name]:
                 ast.ext.remove(proto)
             done.append(name)
+            if name in actor_code:
+                actor_code.add(caller)
             changed = True
             break  # the sites moved: look again
+    _actor_code_first(ast, actor_code)
     return done
 
 

@@ -364,7 +364,10 @@ class _Builder:
                     args.append(tmp if port.array else f"{tmp}[0]")
             else:
                 targets = [i for i in outs if i["buf"].src_port == port.name]
-                if linear and len(targets) == 1:
+                # a buffer holds its destination's type (docs/ir.md): the
+                # actor writes in place only into one of its port's type, else
+                # into a local array that is converted into each edge
+                if linear and len(targets) == 1 and targets[0]["buf"].type == port.type:
                     info = targets[0]
                     pos = offset(info, node, info["buf"].prod, len(info["buf"].initial))
                     args.append(f"&{info['name']}[{pos}]")

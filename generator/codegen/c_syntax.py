@@ -89,7 +89,7 @@ def type_param_macros(name: str, t: T.ValueType, bindings: dict[str, T.ValueType
         else:
             conv = f"EL_W_SET_{_operand(u)}(w, v)"
         macros.append((f"{name}_W_{other}(w, v)", conv))
-    return [(name, c), (f"{name}_MIN", lo), (f"{name}_MAX", hi), *macros]
+    return [(name, c), (f"{name}_MIN", lo), (f"{name}_MAX", hi), (f"{name}_BITS", str(t.bits)), *macros]
 
 
 # ====================================================================== expressions

@@ -55,6 +55,10 @@ class ChannelInfo:
     initial_tokens: tuple
     producers: list["EdgeInfo"] = field(default_factory=list)
     consumers: list["EdgeInfo"] = field(default_factory=list)
+    # "produced"/"consumed": the roles some edge names it in, kept or not: a
+    # channel whose only producing edge was rejected (a type mismatch) has
+    # that error, not also "no producer"
+    named_as: set = field(default_factory=set)
     link: "LinkInfo | None" = None  # the link it crosses between nodes (`over`)
 
     @property

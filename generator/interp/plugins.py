@@ -57,7 +57,10 @@ CFLAGS = ["-std=c99", "-O2", "-Wall", "-Wextra", "-Werror", "-pedantic", "-D_POS
 LDFLAGS = ["-Wl,--no-undefined", "-lm"]
 # Runtime files a plug-in includes (headers) or links (the arithmetic).
 RUNTIME_HEADERS = ("el_types.h", "el_model.h", "el_dispatch.h")
-RUNTIME_SOURCES = ("el_arith.c",)
+RUNTIME_SOURCES = ("el_arith.c", "el_wide.c")
+# Headers those include, in a plug-in's digest too: a changed one makes
+# the cached plug-ins stale.
+INCLUDED_HEADERS = ("el_wide.h",)
 
 
 class PluginError(Exception):
@@ -89,11 +92,15 @@ def spec_view(spec: ActorSpec) -> SpecView:
     return c_spec_view(standalone)
 
 
-def _render_actor_block(view: SpecView) -> str:
+def _render_actor_block(view: SpecView, part: str) -> str:
     """The firmware's actor code for one specialisation (templates/actor.c.j2,
     which model.c.j2 includes), without the debugger's probe: a plug-in is
-    not linked with the debug server."""
-    return environment().get_template("actor.c.j2").render(s=view)
+    not linked with the debug server. ``part``: "decl" (the state type and
+    prototypes) or "code" (the functions, after actor_warnings.c.j2, as at
+    the end of model.c)."""
+    env = environment()
+    block = env.get_template("actor.c.j2").render(s=view, part=part)
+    return env.get_template("actor_warnings.c.j2").render() + block if part == "code" else block
 
 
 def _wrapper(spec: ActorSpec, view: SpecView) -> str:
@@ -142,11 +149,11 @@ void el_plugin_step(void *el_state, const void *const *el_in, void *const *el_ou
 def plugin_source(spec: ActorSpec) -> str:
     """The complete C source of one specialisation's plug-in."""
     view = spec_view(spec)
-    block = _render_actor_block(view)
     head = (f"/* EasyLab actor plug-in: {spec.type_name} (local execution, docs/local.md).\n"
             f" * Generated from the same template as firmware; do not edit. */\n"
             + "".join(f'#include "{h}"\n' for h in RUNTIME_HEADERS) + "\n")
-    return head + block + _wrapper(spec, view)
+    return (head + _render_actor_block(view, "decl") + _wrapper(spec, view) + "\n"
+            + _render_actor_block(view, "code"))
 
 
 # ====================================================================== libraries
@@ -200,7 +207,7 @@ class PluginCache:
         for part in (f"easylab plug-in ABI {PLUGIN_ABI_VERSION}", source, " ".join(CFLAGS + LDFLAGS),
                      self.compiler, self.compiler_identity,
                      *((runtime_dir() / name).read_text(encoding="utf-8")
-                       for name in RUNTIME_HEADERS + RUNTIME_SOURCES)):
+                       for name in RUNTIME_HEADERS + INCLUDED_HEADERS + RUNTIME_SOURCES)):
             h.update(part.encode("utf-8"))
             h.update(b"\0")
         return h.hexdigest()[:32]

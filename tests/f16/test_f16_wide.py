@@ -1,8 +1,9 @@
 """runtime_c/el_wide.c, the 64-bit arithmetic in two 32-bit words that a
 compiler without a 64-bit type (the f16 board's) runs instead of int64_t:
-every operation against Python's integers, wrapping at 64 bits and dividing
-toward zero as int64_t does (C99 6.5.5). Compiled here for the host: the
-proxy's traces (tests/boards) run it on the 8051."""
+every operation against Python's integers, saturating at the 64-bit range
+and dividing toward zero (C99 6.5.5), as el_wide.h's int64_t form does
+(checked here too, compiled from the header). Compiled here for the host:
+the proxy's traces (tests/boards) run it on the 8051."""
 
 from __future__ import annotations
 
@@ -64,25 +65,88 @@ def int64(v: int) -> int:
     return v - M64 if v >> 63 else v
 
 
+def sat64(v: int) -> int:
+    return max(-(1 << 63), min((1 << 63) - 1, v))
+
+
 def expected(a: int, op: int, b: int) -> int:
     if op == ADD:
-        return int64(a + b)
+        return sat64(a + b)
     if op == SUB:
-        return int64(a - b)
+        return sat64(a - b)
     if op == MUL:
-        return int64(a * b)
+        return sat64(a * b)
     if b == 0:
         return 0  # el_wide.h: x / 0 is 0
     q = abs(a) // abs(b)
-    return int64(q if (a < 0) == (b < 0) else -q)
+    return sat64(q if (a < 0) == (b < 0) else -q)
+
+
+# el_wide.h's int64_t form (el_wide.c's el_w_*): each operation through its macro.
+NATIVE = r"""
+#include "el_types.h"
+#define OP(name, macro) int64_t name(int64_t w, int64_t v) { macro(w, v); return w; }
+OP(w_add, EL_W_ADD_W) OP(w_sub, EL_W_SUB_W) OP(w_mul, EL_W_MUL_W) OP(w_div, EL_W_DIV_W)
+OP(i_add, EL_W_ADD_I) OP(i_sub, EL_W_SUB_I) OP(i_mul, EL_W_MUL_I) OP(i_div, EL_W_DIV_I)
+int64_t u_mul(int64_t w, uint32_t v) { EL_W_MUL_U(w, v); return w; }
+int64_t u_add(int64_t w, uint32_t v) { EL_W_ADD_U(w, v); return w; }
+"""
+EXTREMES = [-(1 << 63), -(1 << 63) + 1, -(1 << 62), -(1 << 32), -(1 << 31), -1, 0, 1, (1 << 31) - 1, 1 << 31,
+            (1 << 32) - 1, 1 << 32, 3037000499, 3037000500, -3037000500, (1 << 62), (1 << 63) - 1]
+
+
+@pytest.fixture(scope="module")
+def native(tmp_path_factory):
+    folder = tmp_path_factory.mktemp("native-wide")
+    (folder / "native.c").write_text(NATIVE)
+    so = folder / "libnative.so"
+    subprocess.run(["gcc", "-std=c99", "-O2", "-Wall", "-Wextra", "-Werror", "-fsanitize=undefined",
+                    "-fno-sanitize-recover=all", "-shared", "-fPIC", f"-I{ROOT / 'runtime_c'}", "-o", str(so),
+                    str(folder / "native.c"), str(ROOT / "runtime_c" / "el_wide.c")], check=True, capture_output=True)
+    lib = ctypes.CDLL(str(so))
+    for name in ("w_add", "w_sub", "w_mul", "w_div", "i_add", "i_sub", "i_mul", "i_div", "u_mul", "u_add"):
+        fn = getattr(lib, name)
+        fn.argtypes = [ctypes.c_int64, ctypes.c_uint32 if name.startswith("u_") else ctypes.c_int64]
+        fn.restype = ctypes.c_int64
+    return lib
+
+
+@pytest.mark.parametrize("a", EXTREMES)
+def test_both_forms_saturate_at_the_extremes(lib, native, a):
+    """Every pair of extreme values, every operation: the software words and
+    the int64_t form (under -fsanitize=undefined: no overflow) agree with
+    the saturated exact result (UINT32_MAX * UINT32_MAX is not 1, nor 0)."""
+    names = {ADD: "add", SUB: "sub", MUL: "mul", DIV: "div"}
+    for b in EXTREMES:
+        for op, name in names.items():
+            want = expected(a, op, b)
+            w, x = wide(a), wide(b)
+            lib.el_w64_op(ctypes.byref(w), op, ctypes.byref(x))
+            assert value(w) == want, (a, name, b)
+            if b != 0 or op != DIV:
+                assert getattr(native, f"w_{name}")(a, b) == want, (a, name, b)
+            if -(1 << 31) <= b < (1 << 31):
+                w = wide(a)
+                lib.el_w64_op_i32(ctypes.byref(w), op, b)
+                assert value(w) == want, (a, name, b)
+                if b != 0 or op != DIV:
+                    assert getattr(native, f"i_{name}")(a, b) == want, (a, name, b)
+            if 0 <= b < (1 << 32):
+                w = wide(a)
+                lib.el_w64_op_u32(ctypes.byref(w), op, b)
+                assert value(w) == want, (a, name, b)
+                if op in (ADD, MUL):
+                    assert getattr(native, f"u_{name}")(a, b) == want, (a, name, b)
 
 
 @settings(max_examples=3000, deadline=None)
 @given(I64, st.sampled_from([ADD, SUB, MUL, DIV]), I64)
-def test_operations_on_two_wide_values(lib, a, op, b):
+def test_operations_on_two_wide_values(lib, native, a, op, b):
     w, x = wide(a), wide(b)
     lib.el_w64_op(ctypes.byref(w), op, ctypes.byref(x))
     assert value(w) == expected(a, op, b)
+    if b != 0 or op != DIV:
+        assert getattr(native, "w_" + ("add", "sub", "mul", "div")[op])(a, b) == expected(a, op, b)
 
 
 @settings(max_examples=3000, deadline=None)

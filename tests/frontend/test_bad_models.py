@@ -677,6 +677,38 @@ CASES = [
         }
         """),
          E(2, 9, "channel 'c' has no consumer", hint='read it in a dataflow: c -> x.in')),
+    # the only producing (consuming) edge's type mismatch is the only error:
+    # the channel is not also reported as without a producer (consumer)
+    case('channel-producer-type-mismatch', dedent("""\
+        import std
+        channel c: int16
+        dataflow P {
+            k = Const<int32>(value = 1)
+            k.y -> c
+        }
+        dataflow C {
+            g = Gain<int16>()
+            c -> g.x
+        }
+        task tp period 1 ms { run P }
+        task tc period 1 ms { run C }
+        """),
+         E(5, 5, "type mismatch: 'k.y' is 'int32' but 'c' is 'int16'", hint='convert with Cast<int32, int16>()')),
+    case('channel-consumer-type-mismatch', dedent("""\
+        import std
+        channel c: int32
+        dataflow P {
+            k = Const<int32>(value = 1)
+            k.y -> c
+        }
+        dataflow C {
+            g = Gain<int16>()
+            c -> g.x
+        }
+        task tp period 1 ms { run P }
+        task tc period 1 ms { run C }
+        """),
+         E(9, 5, "type mismatch: 'c' is 'int32' but 'g.x' is 'int16'", hint='convert with Cast<int32, int16>()')),
     case('device-driver-and-parts', dedent("""\
         import std
         device type X() {

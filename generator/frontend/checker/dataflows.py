@@ -95,12 +95,20 @@ class DataflowRules:
                 instance.dataflow = info
                 info.instances[inst.name] = instance
         connected: dict[tuple[str, str], Span] = {}
+        named: set[tuple[str, str]] = set()  # inputs some edge ends at, rejected or not
         sinks: dict[str, Span] = {}
         for edge in decl.edges:
             src = self.endpoint(edge.src, info, "source")
             dst = self.endpoint(edge.dst, info, "destination")
             if src is None or dst is None:
                 continue
+            # an edge rejected below has its error: its channel or input is
+            # not also reported as unconnected
+            for end, role in ((dst, "produced"), (src, "consumed")):
+                if end.kind == "channel":
+                    end.target.named_as.add(role)
+            if dst.kind == "actor":
+                named.add((dst.target.name, dst.port))
             if src.kind == "actor" and src.target.actor_type and port_of(src.target.actor_type, src.port).direction != "out":
                 self.error(edge.src.span, f"'{edge.src.text}' is an input port; an edge starts at an output")
                 continue
@@ -143,7 +151,7 @@ class DataflowRules:
                 src.target.consumers.append(e)
         for name, instance in info.instances.items():
             for port in instance.actor_type.ports:
-                if port.direction == "in" and (name, port.name) not in connected:
+                if port.direction == "in" and (name, port.name) not in named:
                     self.error(instance.decl.name_span, f"input '{name}.{port.name}' is not connected",
                                f"add an edge such as: something -> {name}.{port.name}")
 

@@ -108,10 +108,10 @@ class TaskRules:
 
     def check_channels_connected(self) -> None:
         for ch in self.channels.values():
-            if not ch.producers:
+            if not ch.producers and "produced" not in ch.named_as:
                 self.error(ch.decl.name_span, f"channel '{ch.name}' has no producer",
                            f"write to it from a dataflow: x.y -> {ch.name}")
-            if not ch.consumers:
+            if not ch.consumers and "consumed" not in ch.named_as:
                 self.error(ch.decl.name_span, f"channel '{ch.name}' has no consumer",
                            f"read it in a dataflow: {ch.name} -> x.in")
             for group, role in ((ch.producers, "produced"), (ch.consumers, "consumed")):

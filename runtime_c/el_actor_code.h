@@ -1,0 +1,27 @@
+/* EasyLab runtime: included once, where a generated file (model.c, an actor
+ * plug-in) begins its actor code, which it gives last (docs/language.md,
+ * "Actor code and compiler warnings").
+ *
+ * A compile-time argument or a type parameter may decide one of an actor's
+ * comparisons (`x < off_below` with 0 for a uint8, `a < 0` for an unsigned
+ * T), which compilers warn about and boards' -Werror makes an error. Exactly
+ * those warnings are off from here to the end of the file: gcc's
+ * -Wtype-limits, clang's tautological constant comparisons, sdcc's 94
+ * ("comparison is always true/false due to limited range of data type"),
+ * which sdcc 4.2 cannot switch on again (#pragma save/restore leave
+ * warnings alone): hence last. Every other warning stays an error.
+ */
+#ifndef EL_ACTOR_CODE_H
+#define EL_ACTOR_CODE_H
+
+#if defined(__clang__)
+#pragma clang diagnostic ignored "-Wtautological-constant-compare"
+#pragma clang diagnostic ignored "-Wtautological-constant-out-of-range-compare"
+#pragma clang diagnostic ignored "-Wtype-limits"
+#elif defined(__GNUC__)
+#pragma GCC diagnostic ignored "-Wtype-limits"
+#elif defined(__SDCC)
+#pragma disable_warning 94
+#endif
+
+#endif /* EL_ACTOR_CODE_H */
