@@ -6,7 +6,10 @@
  * comparisons (`x < off_below` with 0 for a uint8, `a < 0` for an unsigned
  * T), which compilers warn about and boards' -Werror makes an error. Exactly
  * those warnings are off from here to the end of the file: gcc's
- * -Wtype-limits, clang's tautological constant comparisons, sdcc's 94
+ * -Wtype-limits, clang's tautological constant comparisons, gcc's and
+ * clang's -Wsign-compare (which judge `~(uint32_t)x <= k` by whether k is a
+ * constant: "comparison of promoted bitwise complement of an unsigned value
+ * with constant"), sdcc's 94
  * ("comparison is always true/false due to limited range of data type"),
  * which sdcc 4.2 cannot switch on again (#pragma save/restore leave
  * warnings alone): hence last. Every other warning stays an error.
@@ -18,8 +21,10 @@
 #pragma clang diagnostic ignored "-Wtautological-constant-compare"
 #pragma clang diagnostic ignored "-Wtautological-constant-out-of-range-compare"
 #pragma clang diagnostic ignored "-Wtype-limits"
+#pragma clang diagnostic ignored "-Wsign-compare"
 #elif defined(__GNUC__)
 #pragma GCC diagnostic ignored "-Wtype-limits"
+#pragma GCC diagnostic ignored "-Wsign-compare"
 #elif defined(__SDCC)
 #pragma disable_warning 94
 #endif

@@ -148,7 +148,7 @@ def sdcc_link(board, sources: list[Path], flags: list[str], work: Path, name: st
                            *(str(rel) for rel, _ in results)], capture_output=True, text=True)
     if proc.returncode != 0 or not ihx.exists():
         text = (proc.stdout + proc.stderr).strip()
-        if "Insufficient space" in text or "exceeds" in text or "overlap" in text.lower():
+        if "Insufficient" in text or "exceeds" in text or "overlap" in text.lower():
             raise BuildError(f"the program does not fit the 16-bit proxy's 8051 (64 KB of code, 64 KB of data):\n{text}")
         raise BuildError(f"linking the 16-bit proxy with sdcc failed:\n{text}")
     return ihx

@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import hashlib
 import json
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 from ..core import types as T
 from ..ir.program import Device, Instant, Item, Program, Task, to_json
@@ -229,9 +229,9 @@ def proxy_program(program: Program, model: DeviceModel | None = None) -> Program
     for task_k, task in enumerate(model.tasks):
         for i in task.writes:
             items[new_id[i]].writer_task = task_k
-    devices = [Device(d.id, d.path, d.driver, d.type_name, d.args, [new_id[i] for i in d.items], d.claims,
-                      d.location, [model.proxy_task_of(t) for t in d.read_by],
-                      model.proxy_task_of(d.written_by) if d.written_by is not None else None)
+    # Everything else of a device (its parameters, handler files, state) is the application's.
+    devices = [replace(d, items=[new_id[i] for i in d.items], read_by=[model.proxy_task_of(t) for t in d.read_by],
+                       written_by=model.proxy_task_of(d.written_by) if d.written_by is not None else None)
                for d in model.devices]
     tasks = []
     for k, t in enumerate(model.tasks):
