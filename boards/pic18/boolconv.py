@@ -26,7 +26,7 @@ import re
 
 from pycparser import c_ast
 
-from .ctypes64 import CType, Target, TypeEnv
+from .ctypes64 import CType, Target, TypeEnv, each_function, pure
 from .lower64 import ExprLowerer
 
 _TRUTH_OPS = {"==", "!=", "<", "<=", ">", ">=", "&&", "||"}
@@ -34,15 +34,6 @@ _TRUTH_OPS = {"==", "!=", "<", "<=", ">", ">=", "&&", "||"}
 
 def _is_bool(t: CType) -> bool:
     return t.kind == "int" and t.bits == 1
-
-
-def _pure(e: c_ast.Node) -> bool:
-    """Evaluating it twice is the same as once (no calls, no assignments)."""
-    if isinstance(e, (c_ast.FuncCall, c_ast.Assignment)):
-        return False
-    if isinstance(e, c_ast.UnaryOp) and e.op in ("++", "--", "p++", "p--"):
-        return False
-    return all(_pure(child) for _, child in e.children())
 
 
 class _Fixer:
@@ -96,7 +87,7 @@ class _Fixer:
         if isinstance(node, c_ast.Assignment) and _is_bool(self.x.type_of(node.lvalue)):
             if node.op == "=":
                 node.rvalue = self.truth(node.rvalue)
-            elif _pure(node.lvalue):
+            elif pure(node.lvalue):
                 combined = c_ast.BinaryOp(node.op[:-1], node.lvalue, node.rvalue)
                 node = c_ast.Assignment("=", node.lvalue, self.truth(combined))
         elif isinstance(node, c_ast.Return) and node.expr is not None and self.returns is not None \
@@ -117,24 +108,12 @@ class _Fixer:
 def fix_bool_conversions(ast: c_ast.FileAST, target: Target) -> int:
     """Rewrite the unit's conversions to _Bool in place; returns how many."""
     f = _Fixer(target)
-    for ext in ast.ext:
-        if isinstance(ext, c_ast.Typedef):
-            f.env.typedef(ext)
-        elif isinstance(ext, c_ast.Decl):
-            t = f.env.of_decl(ext.type)
-            if ext.name:
-                f.env.declare(ext.name, t)
-        elif isinstance(ext, c_ast.FuncDef):
-            t = f.env.of_decl(ext.decl.type)
-            f.env.declare(ext.decl.name, t)
-            f.returns = t.to
-            f.env.push()
-            for p in (ext.decl.type.args.params if ext.decl.type.args else []):
-                if isinstance(p, c_ast.Decl) and p.name:
-                    f.env.declare(p.name, f.env.of_decl(p.type))
-            f.visit(ext.body)
-            f.env.pop()
-            f.returns = None
+
+    def visit(fn: c_ast.FuncDef, t: CType) -> None:
+        f.returns = t.to
+        f.visit(fn.body)
+        f.returns = None
+    each_function(ast, f.env, visit)
     return f.count
 
 

@@ -258,3 +258,34 @@ class TypeEnv:
 
     def typedef(self, decl: c_ast.Typedef) -> None:
         self.typedefs[decl.name] = self.of_decl(decl.type)
+
+
+def each_function(ast: c_ast.FileAST, env: TypeEnv, visit) -> None:
+    """Walk a unit's top level with ``env``: typedefs and declarations go
+    into it, and each function definition is handed to ``visit(def, its
+    type)`` with its parameters declared in a scope of their own."""
+    for ext in ast.ext:
+        if isinstance(ext, c_ast.Typedef):
+            env.typedef(ext)
+        elif isinstance(ext, c_ast.Decl):
+            t = env.of_decl(ext.type)
+            if ext.name:
+                env.declare(ext.name, t)
+        elif isinstance(ext, c_ast.FuncDef):
+            t = env.of_decl(ext.decl.type)
+            env.declare(ext.decl.name, t)
+            env.push()
+            for p in (ext.decl.type.args.params if ext.decl.type.args else []):
+                if isinstance(p, c_ast.Decl) and p.name:
+                    env.declare(p.name, env.of_decl(p.type))
+            visit(ext, t)
+            env.pop()
+
+
+def pure(e: c_ast.Node) -> bool:
+    """Evaluating it twice is the same as once (no calls, no assignments)."""
+    if isinstance(e, (c_ast.FuncCall, c_ast.Assignment)):
+        return False
+    if isinstance(e, c_ast.UnaryOp) and e.op in ("++", "--", "p++", "p--"):
+        return False
+    return all(pure(child) for _, child in e.children())

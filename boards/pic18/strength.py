@@ -15,7 +15,7 @@ from __future__ import annotations
 
 from pycparser import c_ast
 
-from .ctypes64 import Target, TypeEnv, const_value
+from .ctypes64 import Target, TypeEnv, const_value, each_function, pure
 from .lower64 import ExprLowerer
 
 
@@ -35,15 +35,6 @@ def _plan(c: int) -> tuple[str, int, int] | None:
 
 def _shifted(e: c_ast.Node, k: int) -> c_ast.Node:
     return e if k == 0 else c_ast.BinaryOp("<<", e, c_ast.Constant("int", f"{k}u"))
-
-
-def _pure(e: c_ast.Node) -> bool:
-    """Evaluating it twice is the same as once (no calls, no assignments)."""
-    if isinstance(e, (c_ast.FuncCall, c_ast.Assignment)):
-        return False
-    if isinstance(e, c_ast.UnaryOp) and e.op in ("++", "--", "p++", "p--"):
-        return False
-    return all(_pure(child) for _, child in e.children())
 
 
 class _Reducer:
@@ -90,7 +81,7 @@ class _Reducer:
                 continue
             t = self.x.type_of(node)
             plan = _plan(c)
-            if plan is None or t.kind != "int" or t.signed or t.bits not in (16, 32) or not _pure(operand):
+            if plan is None or t.kind != "int" or t.signed or t.bits not in (16, 32) or not pure(operand):
                 continue
             kind, a, b = plan
             operand = c_ast.Cast(c_ast.Typename(None, [], None, c_ast.TypeDecl(
@@ -106,20 +97,5 @@ class _Reducer:
 def reduce_products(ast: c_ast.FileAST, target: Target) -> int:
     """Rewrite the unit's eligible products in place; returns how many."""
     r = _Reducer(target)
-    for ext in ast.ext:
-        if isinstance(ext, c_ast.Typedef):
-            r.env.typedef(ext)
-        elif isinstance(ext, c_ast.Decl):
-            t = r.env.of_decl(ext.type)
-            if ext.name:
-                r.env.declare(ext.name, t)
-        elif isinstance(ext, c_ast.FuncDef):
-            t = r.env.of_decl(ext.decl.type)
-            r.env.declare(ext.decl.name, t)
-            r.env.push()
-            for p in (ext.decl.type.args.params if ext.decl.type.args else []):
-                if isinstance(p, c_ast.Decl) and p.name:
-                    r.env.declare(p.name, r.env.of_decl(p.type))
-            r.reduce(ext.body)
-            r.env.pop()
+    each_function(ast, r.env, lambda fn, _type: r.reduce(fn.body))
     return r.count

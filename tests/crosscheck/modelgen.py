@@ -126,6 +126,18 @@ class ModelWriter:
         self.decls.append(f"var {name}: {t}{init}" + (" service ro" if self.rng.random() < 0.2 else ""))
         return name
 
+    def device(self, prefix: str, declaration: str, datum: str, t: str, bounds: tuple[int, int] | None = None,
+               safe: str = "") -> None:
+        """A device ``declaration`` (``Type(args)``) and its one datum: an
+        ``out`` datum within ``bounds`` (what the stimulus may give), else
+        an ``in`` datum."""
+        d = self.fresh(prefix)
+        self.decls.append(f"device {d}: {declaration}{safe}")
+        if bounds is not None:
+            self.device_outs[f"{d}.{datum}"] = (t, *bounds)
+        else:
+            self.device_ins[f"{d}.{datum}"] = t
+
     def devices(self) -> None:
         rng, part = self.rng, self.part
         if not self.opt.devices:
@@ -134,54 +146,35 @@ class ModelWriter:
         rng.shuffle(pins)
         for _ in range(rng.randint(0, 2)):
             if pins:
-                d = self.fresh("din")
-                self.decls.append(f'device {d}: DigitalIn(pin = "{pins.pop()}")')
-                self.device_outs[f"{d}.level"] = ("bool", 0, 1)
+                self.device("din", f'DigitalIn(pin = "{pins.pop()}")', "level", "bool", (0, 1))
         for _ in range(rng.randint(0, 2)):
             if pins:
-                d = self.fresh("dout")
                 safe = f" safe level = {rng.choice(['true', 'false'])}" if rng.random() < 0.3 else ""
-                self.decls.append(f'device {d}: DigitalOut(pin = "{pins.pop()}"){safe}')
-                self.device_ins[f"{d}.level"] = "bool"
+                self.device("dout", f'DigitalOut(pin = "{pins.pop()}")', "level", "bool", safe=safe)
         channels = list(part.adc)
         rng.shuffle(channels)
         for _ in range(rng.randint(0, 2)):
             if channels:
-                d = self.fresh("adc")
                 if rng.random() < 0.3:
-                    self.decls.append(f"device {d}: Pt100(channel = {channels.pop()})")
-                    self.device_outs[f"{d}.raw"] = ("uint16", 0, part.adc_max)
+                    self.device("adc", f"Pt100(channel = {channels.pop()})", "raw", "uint16", (0, part.adc_max))
                 else:
-                    self.decls.append(f"device {d}: AnalogIn(channel = {channels.pop()})")
-                    self.device_outs[f"{d}.value"] = ("uint16", 0, part.adc_max)
+                    self.device("adc", f"AnalogIn(channel = {channels.pop()})", "value", "uint16", (0, part.adc_max))
         pwms = list(part.pwm)
         rng.shuffle(pwms)
         if pwms and rng.random() < 0.5:
-            d = self.fresh("pwm")
-            self.decls.append(f'device {d}: PwmOut(pin = "{pwms.pop()}")')
-            self.device_ins[f"{d}.duty"] = "int16"
+            self.device("pwm", f'PwmOut(pin = "{pwms.pop()}")', "duty", "int16")
         if pwms and pins and rng.random() < 0.4:
-            d = self.fresh("motor")
-            self.decls.append(f'device {d}: Motor(pwm = "{pwms.pop()}", dir = "{pins.pop()}")')
-            self.device_ins[f"{d}.speed"] = "int16"
+            self.device("motor", f'Motor(pwm = "{pwms.pop()}", dir = "{pins.pop()}")', "speed", "int16")
         if part.i2c and rng.random() < 0.3:
-            d = self.fresh("temp")
-            self.decls.append(f"device {d}: I2cTemperature(address = {rng.randint(0x48, 0x4F)})")
-            self.device_outs[f"{d}.temperature"] = ("int16", -880, 2047)
+            self.device("temp", f"I2cTemperature(address = {rng.randint(0x48, 0x4F)})", "temperature", "int16",
+                        (-880, 2047))
         if part.i2c and rng.random() < 0.2:
-            d = self.fresh("log")
-            self.decls.append(f"device {d}: I2cEepromLog(address = {rng.randint(0x50, 0x57)}, values = 1)")
-            self.device_ins[f"{d}.record"] = "int16"
+            self.device("log", f"I2cEepromLog(address = {rng.randint(0x50, 0x57)}, values = 1)", "record", "int16")
         if part.spi_cs and rng.random() < 0.2:
-            d = self.fresh("slog")
-            self.decls.append(f'device {d}: SpiEepromLog(cs = "{rng.choice(part.spi_cs)}", values = 1)')
-            self.device_ins[f"{d}.record"] = "int16"
-        pairs = list(part.encoder_pairs)
-        if pairs and rng.random() < 0.4:
-            a, b = rng.choice(pairs)
-            d = self.fresh("enc")
-            self.decls.append(f'device {d}: Encoder(pin_a = "{a}", pin_b = "{b}")')
-            self.device_outs[f"{d}.count"] = ("int32", -100000, 100000)
+            self.device("slog", f'SpiEepromLog(cs = "{rng.choice(part.spi_cs)}", values = 1)', "record", "int16")
+        if part.encoder_pairs and rng.random() < 0.4:
+            a, b = rng.choice(part.encoder_pairs)
+            self.device("enc", f'Encoder(pin_a = "{a}", pin_b = "{b}")', "count", "int32", (-100000, 100000))
 
     # ------------------------------------------------------------ dataflows
 
