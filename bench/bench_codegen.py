@@ -139,6 +139,7 @@ def measure(name: str, case: dict, tmp: Path, tiny: bool = False) -> dict:
     exe = work / "bench"
     subprocess.run(["gcc", *CFLAGS, f"-I{runtime_dir()}", f"-I{ROOT / 'boards' / 'host'}", f"-I{work}",
                     "-o", str(exe), str(work / "harness.c"), str(runtime_dir() / "el_arith.c"),
+                    str(runtime_dir() / "el_wide.c"),
                     str(HANDWRITTEN / case["handwritten"]), "-lm"], check=True)
     n = 5 if tiny else case["activations"]
     same = subprocess.run([str(exe), str(n), "c"], capture_output=True, text=True)

@@ -13,7 +13,8 @@ import re
 from pathlib import Path
 
 _MESSAGE = re.compile(r"^(?P<file>\S*model\.c):(?P<line>\d+):(?P<rest>.*)$")
-_ACTOR = re.compile(r"^/\* (?P<name>\w+), (?P<file>.+\.elab):(?P<line>\d+) \*/$")
+# an actor specialisation's heading: `/* Name<T, ..>(arg = v, ..), FILE.elab:LINE */`
+_ACTOR = re.compile(r"^/\* (?P<name>\w+)(?:<[^>]*>)?(?:\(.*\))?, (?P<file>.+\.elab):(?P<line>\d+) \*/$")
 
 
 def in_model_terms(message: str) -> str:
