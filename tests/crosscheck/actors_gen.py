@@ -12,7 +12,7 @@ from __future__ import annotations
 import random
 from dataclasses import dataclass, field
 
-from ctypes_gen import INT_NAMES, INTS, ExprWriter, boundary, model_literal
+from ctypes_gen import INT_NAMES, ExprWriter, boundary, model_literal, widens
 
 COMPARE_OPS = ["<", "<=", ">", ">=", "==", "!="]
 
@@ -60,8 +60,6 @@ class Catalog:
     def arg(self, t: str, *, lo=None, hi=None, allow_param: bool = True) -> str:
         """A compile-time argument of type ``t``: a boundary constant, or a
         param of a type that widens to ``t`` (latched at each release)."""
-        from ctypes_gen import widens
-
         rng = self.rng
         usable = [n for n, pt in self.params.items() if widens(pt, t)] if allow_param else []
         if usable and rng.random() < 0.2 and lo is None:
@@ -198,4 +196,3 @@ STD_SINGLE_RATE = ["Const", "Ramp", "SquareWave", "Add", "Sub", "Mul", "Div", "G
                    "MovingAverage", "Pt100Linearize"]
 INTEGER_ONLY = {"PID", "MovingAverage"}
 MULTIRATE = ["Downsample", "Upsample", "WindowStats"]
-__all__ = ["Catalog", "ActorUse", "Port", "UserType", "STD_SINGLE_RATE", "INTEGER_ONLY", "MULTIRATE", "INTS"]

@@ -83,6 +83,9 @@ class ModelWriter:
         self.bodies: list[str] = []
         self.tasks: list[Task] = []
         self.channels: list[str] = []
+        self.pending_channels: list[tuple[str, str, int, str]] = []  # produced, not yet consumed
+        self.consumed: list[tuple[str, str]] = []  # channels declared: name, type
+        self.head_lines: list[str] = []
         numeric = INT_NAMES + (["float32"] if options.floats else [])
         self.catalog = Catalog(self.rng, numeric, self.params)
         self.count = 0
@@ -347,7 +350,6 @@ class ModelWriter:
             self.pending_channels.append((name, src.type, src.tokens, task))
             lines.append(f"    {src.ref} -> {name}")
 
-    pending_channels: list
 
     def consume_channel(self, task: str, signals: list[Signal]) -> Signal | None:
         """The consuming end of a channel another task produces, when the
@@ -379,7 +381,6 @@ class ModelWriter:
             return None
         return None
 
-    consumed: list
 
     def task_by_name(self, name: str) -> Task:
         return next(t for t in self.tasks if t.name == name)
@@ -388,8 +389,6 @@ class ModelWriter:
 
     def write(self) -> str:
         rng = self.rng
-        self.pending_channels = []
-        self.consumed = []
         self.items()
         self.devices()
         for i in range(rng.randint(1, 3)):
