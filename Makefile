@@ -21,7 +21,7 @@ DEB_PACKAGES := gcc make pkg-config graphviz tmux socat \
 	chromium chromium-driver \
 	cyclonedds-dev cyclonedds-tools
 
-.PHONY: setup deps venv toolchains test demo bench clean help flash sim crosscheck
+.PHONY: crosscheck-tally setup deps venv toolchains test demo bench clean help flash sim crosscheck
 
 help:
 	@echo "make setup   install Debian packages (when missing) and the virtual environment"
@@ -89,13 +89,20 @@ bench: setup
 	$(PY) bench/run.py
 
 # Back-to-back testing on random models (docs/testing.md): findings and
-# traces in build/crosscheck/, the tally per mode on the last lines.
+# traces in build/crosscheck/, the tally per mode on the last lines. Every
+# result goes to the campaign's ledger too (LEDGER=, the project's own by
+# default), and a seed it already holds is not compared again;
+# `make crosscheck-tally` prints the ledger's figures.
 N      ?= 20
 BOARDS ?= host,avr
 SEED   ?= 1000
 JOBS   ?= 2
+LEDGER ?= tests/crosscheck/ledger.jsonl
 crosscheck: setup
-	$(PY) tests/crosscheck/crosscheck.py -n $(N) --boards $(BOARDS) --seed $(SEED) --jobs $(JOBS) --out build/crosscheck
+	$(PY) tests/crosscheck/crosscheck.py -n $(N) --boards $(BOARDS) --seed $(SEED) --jobs $(JOBS) --out build/crosscheck --ledger $(LEDGER)
+
+crosscheck-tally: setup
+	$(PY) tests/crosscheck/crosscheck.py --tally $(LEDGER)
 
 # ---- Flashing and simulating, for any board (docs/boards.md). The board
 # says which MCU is its default, how it is flashed and how its simulator

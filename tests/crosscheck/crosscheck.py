@@ -9,13 +9,21 @@ and every other mode must give the same bytes. A mode that finds the model
 too large for its part skips it (counted); a build that fails otherwise,
 a run that fails, a sanitizer report or another trace is a finding: the
 model, its stimulus and both traces are kept in DIR/findings/, shrunk to a
-small model with ``--shrink``. The last line is the summary per mode."""
+small model with ``shrink.py``. The last line is the summary per mode.
+
+With ``--ledger FILE`` every result is also appended to FILE (one JSON
+line: seed, part, mode, verdict, the commit and the generator's digest),
+and a result already there for the same seed, mode and generator is not
+run again unless it was a finding: a campaign of thousands of models
+accumulates over several runs (``--tally FILE`` prints its figures)."""
 
 from __future__ import annotations
 
 import argparse
+import hashlib
 import json
 import re
+import subprocess
 import sys
 from collections import Counter, defaultdict
 from concurrent.futures import ThreadPoolExecutor
@@ -24,6 +32,7 @@ from pathlib import Path
 
 HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE))
+GENERATOR_FILES = ("modelgen.py", "actors_gen.py", "charts_gen.py", "ctypes_gen.py", "parts_gen.py")
 
 from modelgen import Options, generate  # noqa: E402
 from modes import MODES, Outcome  # noqa: E402
@@ -94,12 +103,70 @@ def compare(case: Case, work: Path, modes: list[str]) -> dict[str, tuple[str, st
     return results
 
 
-def campaign(seeds: range, modes: list[str], out: Path, jobs: int, options: Options) -> dict:
+def generator_digest() -> str:
+    """What the models of a seed depend on: the generator's sources."""
+    h = hashlib.sha256()
+    for name in GENERATOR_FILES:
+        h.update((HERE / name).read_bytes())
+    return h.hexdigest()[:12]
+
+
+def current_commit() -> str:
+    """The project's commit (``-dirty`` when the tree has changes), or ``unknown``."""
+    def git(*args):
+        return subprocess.run(["git", *args], cwd=HERE, capture_output=True, text=True).stdout.strip()
+    commit = git("rev-parse", "--short=12", "HEAD") or "unknown"
+    return commit + ("-dirty" if git("status", "--porcelain", "--untracked-files=no") else "")
+
+
+class Ledger:
+    """Results kept across runs (one JSON object a line); ``done`` tells
+    whether a seed's result in a mode was already obtained, with this
+    generator, and was not a finding."""
+
+    def __init__(self, path: Path | None):
+        self.path, self.generator, self.commit = path, generator_digest(), current_commit()
+        self.entries = read_ledger(path) if path and path.is_file() else []
+        self._done = {(e["seed"], e["mode"]) for e in self.entries
+                      if e["generator"] == self.generator and e["verdict"] in ("equal", "skip", "reference")}
+
+    def done(self, seed: int, mode: str) -> bool:
+        return (seed, mode) in self._done
+
+    def add(self, seed: int, part: str, mode: str, verdict: str) -> None:
+        if self.path is None:
+            return
+        entry = {"seed": seed, "part": part, "mode": mode, "verdict": verdict, "commit": self.commit,
+                 "generator": self.generator}
+        with self.path.open("a") as f:
+            f.write(json.dumps(entry) + "\n")
+
+
+def read_ledger(path: Path) -> list[dict]:
+    return [json.loads(line) for line in path.read_text().splitlines() if line.strip()]
+
+
+def ledger_tally(entries: list[dict]) -> dict[str, Counter]:
+    """mode -> verdict counts, the latest result of each seed counting once
+    (a finding run again after its fix counts as what it gives now)."""
+    latest: dict[tuple, str] = {}
+    for e in entries:
+        latest[(e["generator"], e["seed"], e["part"], e["mode"])] = e["verdict"]
+    tally: dict[str, Counter] = defaultdict(Counter)
+    for (_, _, _, mode), verdict in latest.items():
+        tally[mode][verdict] += 1
+    return tally
+
+
+def campaign(seeds: range, modes: list[str], out: Path, jobs: int, options: Options,
+             ledger: Ledger | None = None) -> dict:
     """Every seed in every mode; the tally and the findings."""
+    ledger = ledger or Ledger(None)
     parts = defaultdict(list)
     for mode in modes:
         parts[MODES[mode][0]].append(mode)
-    jobs_list = [(seed, part, part_modes) for seed in seeds for part, part_modes in parts.items()]
+    jobs_list = [(seed, part, todo) for seed in seeds for part, part_modes in parts.items()
+                 if (todo := [m for m in part_modes if not ledger.done(seed, m)])]
 
     def one(job):
         seed, part, part_modes = job
@@ -114,6 +181,8 @@ def campaign(seeds: range, modes: list[str], out: Path, jobs: int, options: Opti
         for seed, part, case, results in pool.map(one, jobs_list):
             for mode, (verdict, detail) in results.items():
                 tally[mode][verdict] += 1
+                if mode != "local" or verdict != "reference":
+                    ledger.add(seed, part, mode, verdict)
                 if verdict in ("differs", "fail"):
                     findings.append({"seed": seed, "part": part, "mode": mode, "verdict": verdict,
                                      "model": str(case.model), "detail": detail})
@@ -134,14 +203,24 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--out", default="build/crosscheck", help="folder for models, traces and summary.json")
     ap.add_argument("--jobs", type=int, default=2, help="models run at once (default 2)")
     ap.add_argument("--floats", action="store_true", help="float32 among the numeric types")
+    ap.add_argument("--ledger", type=Path, help="append every result to this file; results already in it "
+                    "(same seed, mode and generator, not a finding) are not run again")
+    ap.add_argument("--tally", type=Path, metavar="LEDGER", help="print a ledger's figures per mode and exit")
     args = ap.parse_args(argv)
+    if args.tally:
+        if not args.tally.is_file():
+            ap.error(f"{args.tally}: no such ledger")
+        for mode, counts in sorted(ledger_tally(read_ledger(args.tally)).items()):
+            print(f"{mode:12s} " + ", ".join(f"{k} {v}" for k, v in sorted(counts.items())))
+        return 0
     modes = [m.strip() for m in args.boards.split(",") if m.strip()]
     unknown = [m for m in modes if m not in MODES]
     if unknown:
         ap.error(f"unknown mode(s) {', '.join(unknown)}: choose among {', '.join(MODES)}")
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
-    summary = campaign(range(args.seed, args.seed + args.n), modes, out, args.jobs, Options(floats=args.floats))
+    summary = campaign(range(args.seed, args.seed + args.n), modes, out, args.jobs, Options(floats=args.floats),
+                       Ledger(args.ledger))
     for mode, counts in summary["tally"].items():
         print(f"{mode:12s} " + ", ".join(f"{k} {v}" for k, v in sorted(counts.items())))
     kinds = Counter(f"{f['mode']}: {signature(f['verdict'], f['detail'])}" for f in summary["findings"])
