@@ -23,6 +23,7 @@ from remote_testlib import (EASYLAB, EXAMPLES, ROOT, SimulatedProxy, assert_host
 
 VARIANTS = ROOT / "boards" / "pic18" / "conformance"
 BLINK = EXAMPLES / "blink.elab"
+ENCODER_RATE = ROOT / "tests" / "pic18" / "models" / "encoder_rate.elab"
 
 
 def pic18_proxy(build_cache, model: Path, mcu: str = "pic18f4520", baud: int = 115200):
@@ -41,16 +42,22 @@ def pic18_proxy_process(built, link: Path, *args: str) -> SimulatedProxy:
 
 
 def stimulus_of(model: Path) -> Path | None:
-    found = EXAMPLES / f"{model.stem}.stimulus.csv"
-    return found if found.exists() else None
+    for folder in (EXAMPLES, ROOT / "tests" / "pic18" / "data"):
+        found = folder / f"{model.stem}.stimulus.csv"
+        if found.exists():
+            return found
+    return None
 
 
 # The models whose devices fit the part: the examples, and the board's
 # variant of pneumatic_cylinder (the example's pins are the AVR's); one on
-# the PIC18F4620; blink at 1 Mbaud (100 instruction cycles a byte).
+# the PIC18F4620; blink at 1 Mbaud (100 instruction cycles a byte); an
+# encoder given 2,113 edges at up to 4 kHz, whose proxy must count each at
+# its instant as the firmware does (tests/pic18/test_pic18_sim.py).
 LOCK_STEP = [(BLINK, "pic18f4520", 1_000_000), (EXAMPLES / "cd_to_dat.elab", "pic18f4520", 115200),
              (EXAMPLES / "pt100_sensor.elab", "pic18f4520", 115200),
-             (VARIANTS / "pneumatic_cylinder.elab", "pic18f4620", 115200)]
+             (VARIANTS / "pneumatic_cylinder.elab", "pic18f4620", 115200),
+             (ENCODER_RATE, "pic18f4520", 115200)]
 
 
 @pytest.mark.parametrize("model,mcu,baud", LOCK_STEP, ids=[f"{m.stem}-{mcu}-{b}" for m, mcu, b in LOCK_STEP])
