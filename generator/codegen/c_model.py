@@ -37,6 +37,32 @@ TABLE_SCHEDULE_RUNS = 24
 # ====================================================================== views
 
 
+def ring_get(ring: str, size: int, dst: str, n: int) -> str:
+    """C taking ``n`` tokens from a circular buffer into ``dst``. One token
+    is an assignment, not a loop, and a one-token ring's index never moves:
+    8-bit compilers (sdcc) spend much of a dataflow's code and of their own
+    time on loops of one."""
+    if n != 1:
+        return f"EL_RING_GET({ring}, {ring}_rd, {size}u, {dst}, {n}u);"
+    if size == 1:
+        return f"({dst})[0] = {ring}[{ring}_rd];"
+    return f"({dst})[0] = {ring}[{ring}_rd]; {ring}_rd = (uint16_t)({ring}_rd + 1u == {size}u ? 0u : {ring}_rd + 1u);"
+
+
+def ring_put(ring: str, size: int, src: str, n: int) -> str:
+    """C putting ``n`` tokens of ``src`` into a circular buffer (as ``ring_get``)."""
+    if n != 1:
+        return f"EL_RING_PUT({ring}, {ring}_wr, {size}u, {src}, {n}u);"
+    if size == 1:
+        return f"{ring}[{ring}_wr] = ({src})[0];"
+    return f"{ring}[{ring}_wr] = ({src})[0]; {ring}_wr = (uint16_t)({ring}_wr + 1u == {size}u ? 0u : {ring}_wr + 1u);"
+
+
+def copy_tokens(dst: str, src: str, n: int) -> str:
+    """C copying ``n`` tokens (one: an assignment)."""
+    return f"({dst})[0] = ({src})[0];" if n == 1 else f"EL_COPY({dst}, {src}, {n}u);"
+
+
 @dataclass
 class ItemView:
     item: Item
@@ -360,7 +386,7 @@ class _Builder:
                 else:
                     tmp = f"el_in_{port.name}"
                     decls.append(f"{port.type.c_name} {tmp}[{port.rate}];")
-                    pre.append(f"EL_RING_GET({info['name']}, {info['name']}_rd, {info['size']}u, {tmp}, {port.rate}u);")
+                    pre.append(ring_get(info["name"], info["size"], tmp, port.rate))
                     args.append(tmp if port.array else f"{tmp}[0]")
             else:
                 targets = [i for i in outs if i["buf"].src_port == port.name]
@@ -378,9 +404,9 @@ class _Builder:
                 for info in targets:
                     if linear:
                         pos = offset(info, node, info["buf"].prod, len(info["buf"].initial))
-                        post.append(f"EL_COPY({info['name']} + {pos}, {tmp}, {port.rate}u);")
+                        post.append(copy_tokens(f"{info['name']} + {pos}", tmp, port.rate))
                     else:
-                        post.append(f"EL_RING_PUT({info['name']}, {info['name']}_wr, {info['size']}u, {tmp}, {port.rate}u);")
+                        post.append(ring_put(info["name"], info["size"], tmp, port.rate))
         for name, expr in inst.runtime_args.items():
             args.append(ExprWriter(item_ref).write(expr))
         call = f"el_spec{spec.id}_{spec.c_name}_step({', '.join(args)});"
@@ -406,28 +432,27 @@ class _Builder:
             cursor = None
         per_fire = 1 if ext.kind == "channel" else self.p.items[ext.target].count
         src = local if (ext.kind == "channel" or per_fire > 1) else f"(&{local})"
+        at = f"{cursor}" if cursor else "0u"
+        data = f"{src} + {at}"
         if ext.direction == "in":
             for info in outs:
                 b = info["buf"]
-                at = f"{cursor}" if cursor else "0u"
                 if linear:
                     pos = offset(info, ext.node, b.prod, len(b.initial))
-                    lines.append(f"{ind}EL_COPY({info['name']} + {pos}, {src} + {at}, {per_fire}u); /* {ext.node} */")
+                    code = copy_tokens(f"{info['name']} + {pos}", data, per_fire)
                 else:
-                    lines.append(f"{ind}EL_RING_PUT({info['name']}, {info['name']}_wr, {info['size']}u, "
-                                 f"{src} + {at}, {per_fire}u); /* {ext.node} */")
+                    code = ring_put(info["name"], info["size"], data, per_fire)
+                lines.append(f"{ind}{code} /* {ext.node} */")
             if cursor:
                 lines.append(f"{ind}{cursor}++;")
         else:
             info = ins[0]
-            b = info["buf"]
-            at = f"{cursor}" if cursor else "0u"
             if linear:
-                pos = offset(info, ext.node, b.cons)
-                lines.append(f"{ind}EL_COPY({src} + {at}, {info['name']} + {pos}, {per_fire}u); /* {ext.node} */")
+                pos = offset(info, ext.node, info["buf"].cons)
+                code = copy_tokens(data, f"{info['name']} + {pos}", per_fire)
             else:
-                lines.append(f"{ind}EL_RING_GET({info['name']}, {info['name']}_rd, {info['size']}u, {src} + {at}, "
-                             f"{per_fire}u); /* {ext.node} */")
+                code = ring_get(info["name"], info["size"], data, per_fire)
+            lines.append(f"{ind}{code} /* {ext.node} */")
             if cursor:
                 lines.append(f"{ind}{cursor}++;")
 
