@@ -41,19 +41,20 @@ OVERRIDE = "EASYLAB_PIC18_SDCC"  # another folder holding such a build
 STAMP = ".easylab-complete"
 SDCC_TIMEOUT = 300  # seconds: sdcc can hang on huge arrays
 TARGET = Target(int_bits=16, long_bits=32, char_signed=False)
-# sdcc's own library build uses these; about 8 % smaller code.
+# sdcc's own library build uses these; about 8 % smaller code, but not
+# its --optimize-cmp: that pCode rewrite turns a comparison sdcc has
+# decided false (`a < b` once an inlined b is 0, on an unsigned a) into a
+# test of a against zero, `a != 0`: `p >= 0` was false for every p > 0.
 # The large stack model: the software stack is larger than a bank
 # (el_pic18_stack.c).
 # --obanksel=1: sdcc drops a BANKSEL after an instruction naming the same
 # operand; its levels above 1 also drop one for another offset of the same
 # symbol, which sits in another bank when the object is larger than a bank
 # (sdcc_quirks.place_big_objects): a read under the bank of the last store.
-OPT_FLAGS = ("--pstack-model=large", "--fomit-frame-pointer", "--obanksel=1", "--denable-peeps", "--optimize-cmp",
-             "--optimize-df")
+OPT_FLAGS = ("--pstack-model=large", "--fomit-frame-pointer", "--obanksel=1", "--denable-peeps", "--optimize-df")
 # A file whose assembly fails the bank check (bankcheck.py) again: a BANKSEL
 # before every banked access.
-SAFE_BANKS = ("--pstack-model=large", "--fomit-frame-pointer", "--obanksel=0", "--denable-peeps", "--optimize-cmp",
-              "--optimize-df")
+SAFE_BANKS = ("--pstack-model=large", "--fomit-frame-pointer", "--obanksel=0", "--denable-peeps", "--optimize-df")
 # When sdcc crashes on a file (an internal error, a signal), the file again
 # with fewer optimisations, in turn: without the pCode optimisations, then
 # without the iCode ones as well (SDCCopt.c's asserts).
