@@ -26,7 +26,9 @@ SAVE = "_el_pic18_save_regs"  # W registers from r0x00 up
 ENTER = "_el_pic18_enter"  # the frame pointer's push and setting, then SAVE (W may be 0)
 LEAVE = "_el_pic18_leave_"  # + k: pop k registers and return
 LEAVE_FRAME = "_el_pic18_leave_frame_"  # + k: pop k registers and the frame pointer, return
+LOAD_ARGS = "_el_pic18_load_args"  # W bytes of arguments into r0x00 up
 MIN_REGISTERS = 2  # without a frame, fewer cost as much as the call
+MAX_GAPS = 2  # registers saved that the function does not use
 MODULE = "el_pic18_saves"
 
 _SAVE_LINE = re.compile(r"\tMOVFF\tr0x([0-9a-f]{2}), POSTDEC1\s*$")
@@ -35,7 +37,8 @@ _FRAME = ("\tMOVFF\tFSR2H, POSTDEC1", "\tMOVFF\tFSR2L, POSTDEC1", "\tMOVFF\tFSR1
           "\tMOVFF\tFSR1L, FSR2L")
 _UNFRAME = ("\tMOVFF\tPREINC1, FSR2L", "\tMOVFF\tPREINC1, FSR2H")
 _SECTION = re.compile(r"^S_\w+\s+code\b")  # sdcc gives each function its own code section
-_USED = re.compile(r"\t(?:CALL|GOTO)\t(_el_pic18_(?:save_regs|enter|leave_frame_\d+|leave_\d+))\b")
+_USED = re.compile(r"\t(?:CALL|GOTO)\t(_el_pic18_(?:save_regs|enter|load_args|leave_frame_\d+|leave_\d+))\b")
+_FIRST_ARG = 3  # FSR2 + 3: above the frame pointer sdcc pushed
 
 
 def _code(line: str) -> str:
@@ -50,26 +53,35 @@ def _next_code(lines: list[str], at: int) -> int:
     return at
 
 
-def _run(lines: list[str], at: int, pattern: re.Pattern, descending: bool) -> int:
-    """How many registers the lines from ``at`` save (or restore) in sdcc's
-    order: r0x00 upwards (restores: downwards to r0x00); 0 for none."""
+def _run(lines: list[str], at: int, pattern: re.Pattern) -> list[int]:
+    """The registers the lines from ``at`` save (or restore), in order."""
     regs = []
     while at + len(regs) < len(lines):
         m = pattern.match(lines[at + len(regs)])
         if not m:
             break
         regs.append(int(m.group(1), 16))
-    k = len(regs)
-    want = list(range(k - 1, -1, -1)) if descending else list(range(k))
-    return k if k and regs == want else 0
+    return regs
 
 
-def _exit(lines: list[str], at: int, k: int, frame: bool) -> tuple[int, list[str]] | None:
-    """The exit whose restores begin at line ``at``: where it ends and what
-    replaces it; None when it is not the prologue's mirror."""
-    if k and _run(lines, at, _RESTORE_LINE, descending=True) != k:
+def _saved(regs: list[int]) -> int:
+    """How many registers from r0x00 up the shared routines save for a
+    function whose own saves are ``regs`` (0: not shared). sdcc saves the
+    registers a function uses in ascending order, sometimes with one left
+    out: saving such an unused register too changes nothing but a byte of
+    the stack, so a few gaps are filled."""
+    if not regs or regs != sorted(set(regs)) or regs[-1] + 1 - len(regs) > MAX_GAPS:
+        return 0
+    return regs[-1] + 1
+
+
+def _exit(lines: list[str], at: int, regs: list[int], k: int, frame: bool) -> tuple[int, list[str]] | None:
+    """The exit whose restores begin at line ``at`` (of ``regs``, the
+    prologue's saves; k registers shared): where it ends and what replaces
+    it; None when it is not the prologue's mirror."""
+    if regs and _run(lines, at, _RESTORE_LINE) != regs[::-1]:
         return None
-    n = at + k
+    n = at + len(regs)
     if frame:
         a = _next_code(lines, n)
         b = _next_code(lines, a + 1)
@@ -85,6 +97,16 @@ def _exit(lines: list[str], at: int, k: int, frame: bool) -> tuple[int, list[str
     return n, [f"\tCALL\t{LEAVE}{k}"]
 
 
+def _arguments(lines: list[str], at: int) -> int:
+    """How many argument bytes the lines from ``at`` load into r0x00 up,
+    the first from FSR2 + 3 (`MOVLW 0x03`, `MOVFF PLUSW2, r0x00`, ...)."""
+    n = 0
+    while at + 2 * n + 1 < len(lines) and lines[at + 2 * n].rstrip() == f"\tMOVLW\t0x{_FIRST_ARG + n:02x}" \
+            and lines[at + 2 * n + 1].rstrip() == f"\tMOVFF\tPLUSW2, r0x{n:02x}":
+        n += 1
+    return n
+
+
 def _function(lines: list[str]) -> list[str]:
     """One function's lines (its section, then its label), its saves
     shared."""
@@ -93,23 +115,28 @@ def _function(lines: list[str]) -> list[str]:
     at = _next_code(lines, 2)
     frame = tuple(_code(lines[n]) if n < len(lines) else "" for n in range(at, at + 4)) == _FRAME
     saves_at = _next_code(lines, at + 4) if frame else at
-    k = _run(lines, saves_at, _SAVE_LINE, descending=False)
-    if not frame and k < MIN_REGISTERS:
+    regs = _run(lines, saves_at, _SAVE_LINE)
+    k = _saved(regs)
+    if regs and k == 0 or not frame and k < MIN_REGISTERS:
         return lines
     first = _UNFRAME[0] if k == 0 else None
     exits = []
-    for n in range(saves_at + k, len(lines)):
+    for n in range(saves_at + len(regs), len(lines)):
         starts = _code(lines[n]) == first if first else \
             (_RESTORE_LINE.match(lines[n]) and not _RESTORE_LINE.match(lines[n - 1]))
         if starts:
-            done = _exit(lines, n, k, frame)
+            done = _exit(lines, n, regs, k, frame)
             if done is None:
                 return lines  # not the saves' mirror: left as sdcc wrote it
             exits.append((n, *done))
     if not exits:
         return lines
     out = lines[:at] + [f"\tMOVLW\t0x{k:02x}", f"\tCALL\t{ENTER if frame else SAVE}"]
-    n = saves_at + k
+    n = saves_at + len(regs)
+    args = _arguments(lines, n) if frame else 0
+    if args >= 2:
+        out += [f"\tMOVLW\t0x{args:02x}", f"\tCALL\t{LOAD_ARGS}"]
+        n += 2 * args
     for begin, end, replacement in exits:
         out += lines[n:begin] + replacement
         n = end
@@ -153,13 +180,14 @@ def routines(device: str, plain: int, frame: int) -> str:
     chain_plain = [line for k in range(plain, 0, -1) for line in (f"{LEAVE}{k}:", f"\tMOVFF\tPREINC1, {regs[k - 1]}")]
     chain_frame = [line for k in range(frame, 0, -1)
                    for line in (f"{LEAVE_FRAME}{k}:", f"\tMOVFF\tPREINC1, {regs[k - 1]}")]
-    names = [SAVE, ENTER, *(f"{LEAVE}{k}" for k in range(1, plain + 1)),
+    names = [SAVE, ENTER, LOAD_ARGS, *(f"{LEAVE}{k}" for k in range(1, plain + 1)),
              *(f"{LEAVE_FRAME}{k}" for k in range(0, frame + 1))]
     return "\n".join([
         "; sdcc's register saves and restores, shared (boards/pic18/saves.py). Do not edit.",
         f"\tlist\tp={device}", "\tradix\tdec",
         "WREG\tequ\t0xfe8", "POSTINC0\tequ\t0xfee", "POSTDEC1\tequ\t0xfe5", "PREINC1\tequ\t0xfe4",
         "FSR1L\tequ\t0xfe1", "FSR1H\tequ\t0xfe2", "FSR2L\tequ\t0xfd9", "FSR2H\tequ\t0xfda",
+        "PLUSW2\tequ\t0xfdb", "PRODL\tequ\t0xff3",
         *(f"\tglobal\t{name}" for name in names),
         # sdcc's registers: the overlay every file of the build shares
         ".registers\tudata_ovr\t0x0000", *(f"{r}\tres\t1" for r in regs),
@@ -169,6 +197,11 @@ def routines(device: str, plain: int, frame: int) -> str:
         # W (at least 1) registers from r0x00 upwards, as sdcc's own saves push them
         f"{SAVE}:", "\tLFSR\t0x00, r0x00", f"{SAVE}_next:", "\tMOVFF\tPOSTINC0, POSTDEC1",
         "\tDECFSZ\tWREG, F", f"\tBRA\t{SAVE}_next", "\tRETURN",
+        # W (at least 1) bytes of arguments from FSR2 + 3 up into r0x00 up; W is
+        # left as sdcc's own loads leave it, the last offset
+        f"{LOAD_ARGS}:", "\tMOVWF\tPRODL", "\tLFSR\t0x00, r0x00", f"\tMOVLW\t0x{_FIRST_ARG - 1:02x}",
+        f"{LOAD_ARGS}_next:", "\tADDLW\t0x01", "\tMOVFF\tPLUSW2, POSTINC0", "\tDECFSZ\tPRODL, F",
+        f"\tBRA\t{LOAD_ARGS}_next", "\tRETURN",
         # entry k of a chain: k registers from r0x(k-1) down to r0x00
         *chain_plain, *(["\tRETURN"] if plain >= 1 else []),
         *chain_frame, *([f"{LEAVE_FRAME}0:", *_UNFRAME, "\tRETURN"] if frame >= 0 else []),

@@ -56,8 +56,10 @@ def test_an_exit_that_does_not_return_at_once_keeps_its_frame_pops():
 def test_what_is_not_the_saves_mirror_and_interrupt_handlers_stay_as_sdcc_wrote_them():
     odd = function("f", True, 3).replace("\tMOVFF\tPREINC1, r0x01\n", "")
     isr = function("isr", False, 3).replace("\tRETURN\t", "\tRETFIE\t")
-    gap = function("g", False, 3).replace("\tMOVFF\tr0x01, POSTDEC1\n", "")
-    for text in (odd, isr, gap):
+    gaps = function("g", False, 5)
+    for r in (1, 2, 3):
+        gaps = gaps.replace(f"\tMOVFF\tr0x{r:02x}, POSTDEC1\n", "").replace(f"\tMOVFF\tPREINC1, r0x{r:02x}\n", "")
+    for text in (odd, isr, gaps):
         assert saves.share_saves(HEAD + text) == HEAD + text
 
 
@@ -69,3 +71,10 @@ def test_the_routines_module_has_each_entry_the_files_call():
     assert "_el_pic18_leave_frame_1" not in asm
     # entry k pops r0x(k-1) first and falls through to r0x00
     assert "_el_pic18_leave_2:\n\tMOVFF\tPREINC1, r0x01\n_el_pic18_leave_1:\n\tMOVFF\tPREINC1, r0x00\n\tRETURN" in asm
+
+
+def test_a_register_the_function_leaves_out_is_saved_too():
+    text = function("g", False, 4)
+    text = text.replace("\tMOVFF\tr0x02, POSTDEC1\n", "").replace("\tMOVFF\tPREINC1, r0x02\n", "")
+    out = saves.share_saves(HEAD + text)
+    assert "\tMOVLW\t0x04\n\tCALL\t_el_pic18_save_regs\n" in out and "\tGOTO\t_el_pic18_leave_4\n" in out
