@@ -392,7 +392,7 @@ static bool at_instant(void)
 static void apply_all(entry_t *q, uint8_t n)
 {
     while (n-- != 0u) {
-        apply(q); /* q itself, not q++: sdcc then keeps a RAM pointer (datapointers.py) */
+        apply(q); /* q as it is, not q++: on the PIC18 it then stays a two-byte RAM pointer (datapointers.py) */
         q++;
     }
 }

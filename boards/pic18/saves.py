@@ -1,21 +1,34 @@
-"""sdcc's register saves and restores, shared by every function.
+"""sdcc's register saves, frame set-up and argument loads, shared by
+every function.
 
 sdcc's pic16 port saves each of its registers r0x00, r0x01, ... that a
 function uses when the function begins (`MOVFF r0xNN, POSTDEC1`, 4 bytes)
 and restores them before it returns (`MOVFF PREINC1, r0xNN`): 8 bytes per
-register per function, about a sixth of a debug build's program memory.
-This pass rewrites, in each function of sdcc's assembly, the saves of
-r0x00 .. r0x(k-1) as `MOVLW k` and a call of one routine that pushes
-them in the same order, and each restore of them as a call of the entry
-of a chain of restores that pops k of them; the software stack holds the
-same bytes in the same places as before. The saving routine uses W and
-FSR0, which hold nothing when a function begins (sdcc passes arguments on
-the software stack); the restores touch neither W nor PRODL, PRODH and
-FSR0L, which carry the returned value, nor STATUS. Interrupt handlers
-(RETFIE) keep their own saves.
+register per function. A function with parameters also pushes and sets
+the frame pointer FSR2 (16 bytes), pops it at its exit (8) and loads each
+byte of its arguments from FSR2 + 3 up into r0x00 up (6 bytes each).
+Together over a quarter of a debug build's program memory. This pass
+rewrites each function of sdcc's assembly:
 
-The routines are an assembly module of the build (``routines``), the
-chain as long as the longest restore the build's files call.
+- the saves of r0x00 .. r0x(k-1) (after the frame pointer's set-up, if
+  any) as `MOVLW k` and a call of a routine that does the same
+  (_el_pic18_save_regs, or _el_pic18_enter with the frame pointer first);
+- the argument loads as `MOVLW n` and a call of _el_pic18_load_args;
+- each exit (the restores, the frame pointer's pops, RETURN) as a GOTO to
+  entry k of a chain of restores that ends in RETURN (or a CALL of it when
+  something else follows the restores).
+
+The software stack holds the same bytes in the same places as before (a
+function may save one or two registers it does not use, which changes
+nothing). The entry routines use W, FSR0 and PRODL, which hold nothing
+when a function begins (sdcc passes arguments on the software stack);
+_el_pic18_load_args leaves W as sdcc's own loads did. The restores touch
+neither W, PRODL, PRODH nor FSR0L, which carry the returned value, nor
+STATUS. Interrupt handlers (RETFIE) keep their own code, and anything not
+in the forms above is left as sdcc wrote it.
+
+The routines are an assembly module of each link (``routines``), the
+chains as long as the longest restores the build's files call.
 """
 
 from __future__ import annotations
