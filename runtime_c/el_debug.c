@@ -218,17 +218,37 @@ static void put_bytes(const uint8_t *p, uint8_t n)
 
 /* ---- values ------------------------------------------------------------------ */
 
-static const uint16_t one16 = 1u;
-/* The wire is little-endian; memory is the target's order. */
-#define NATIVE_LE (*(const uint8_t *)&one16 == 1u)
-
 static uint8_t type_size(uint8_t type)
 {
     return type <= EL_DBG_T_U8 ? 1u : type <= EL_DBG_T_U16 ? 2u : 4u;
 }
 
+static void copy_bytes(uint8_t *dst, const uint8_t *src, uint8_t n)
+{
+    while (n-- != 0u) {
+        *dst++ = *src++;
+    }
+}
+
+/* The wire is little-endian; memory is the target's order: the board's
+ * EL_LITTLE_ENDIAN or the compiler's, else tested at run time. Known
+ * little-endian, a value moves as a plain copy. */
+#if defined(EL_LITTLE_ENDIAN)
+#define NATIVE_LE_KNOWN EL_LITTLE_ENDIAN
+#elif defined(__BYTE_ORDER__) && defined(__ORDER_LITTLE_ENDIAN__)
+#define NATIVE_LE_KNOWN (__BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__)
+#else
+#define NATIVE_LE_KNOWN 0
+#endif
+
 /* Copy one value between memory and the wire (the same move both ways:
  * reversing the bytes is its own inverse). */
+#if NATIVE_LE_KNOWN
+#define move_value(dst, src, size) copy_bytes((dst), (src), (size))
+#else
+static const uint16_t one16 = 1u;
+#define NATIVE_LE (*(const uint8_t *)&one16 == 1u)
+
 static void move_value(uint8_t *dst, const uint8_t *src, uint8_t size)
 {
     uint8_t i;
@@ -236,24 +256,37 @@ static void move_value(uint8_t *dst, const uint8_t *src, uint8_t size)
         dst[i] = src[NATIVE_LE ? i : (uint8_t)(size - 1u - i)];
     }
 }
+#endif
 
 #if HAS_RANGES
+/* A value of `size` bytes from the wire, zero-extended: its bytes in a
+ * 4-byte wire value, moved into memory's order (no shifts by 8, which
+ * cost much code on 8-bit parts). */
 static uint32_t le32(const uint8_t *in, uint8_t size)
 {
-    uint32_t v = 0u;
-    while (size != 0u) {
-        v = (v << 8) | in[--size];
-    }
+    uint8_t wire[4] = {0u, 0u, 0u, 0u};
+    uint32_t v;
+    copy_bytes(wire, in, size);
+    move_value((uint8_t *)&v, wire, 4u);
     return v;
 }
 #endif
 
-/* Copy an entry of the debug tables (EL_ROM) into RAM. */
-static void rom_copy(void *dst, const void *rom, uint8_t n)
+/* Copy entry `index` of a debug table (EL_ROM) of `size`-byte entries
+ * into RAM. The entry's offset is summed bit by bit of the size: no
+ * multiplication routine on parts without a multiplier for it. */
+static void rom_copy(void *dst, const void *table, uint16_t index, uint8_t size)
 {
+    const uint8_t *rom = (const uint8_t *)table;
     uint8_t i;
-    for (i = 0u; i < n; i++) {
-        ((uint8_t *)dst)[i] = EL_ROM_READ_U8((const uint8_t *)rom + i);
+    for (i = size; i != 0u; i >>= 1) {
+        if ((i & 1u) != 0u) {
+            rom += index;
+        }
+        index <<= 1;
+    }
+    for (i = 0u; i < size; i++) {
+        ((uint8_t *)dst)[i] = EL_ROM_READ_U8(rom + i);
     }
 }
 
@@ -264,7 +297,7 @@ static bool load_item(uint16_t id, el_dbg_item_t *it)
     if (id >= el_dbg_item_count) {
         return false;
     }
-    rom_copy(it, &el_dbg_items[id], (uint8_t)sizeof *it);
+    rom_copy(it, el_dbg_items, id, (uint8_t)sizeof *it);
     return true;
 }
 
@@ -274,7 +307,7 @@ static bool load_item(uint16_t id, el_dbg_item_t *it)
  * the sign bit set, a negative one negated (-0 keys as +0; a NaN orders
  * beyond the infinities, so it is out of any finite range as a float
  * comparison has it). */
-#if HAS_RANGES
+#if EL_DBG_RANGES_FLOAT || EL_DBG_RANGES_SIGNED
 static uint32_t order_key(uint8_t type, uint32_t u)
 {
 #if EL_DBG_RANGES_FLOAT
@@ -296,6 +329,8 @@ static uint32_t order_key(uint8_t type, uint32_t u)
     return u; /* only unsigned ranges (and floats, above) in this model */
 #endif
 }
+#else
+#define order_key(type, u) (u) /* only unsigned ranges in this model, if any */
 #endif
 
 /* The item's range into *r; false when writes are not checked. */
@@ -305,7 +340,7 @@ static bool load_range(const el_dbg_item_t *it, el_dbg_range_t *r)
     if ((it->flags & EL_DBG_F_RANGE) == 0u || it->range == EL_DBG_NONE16) {
         return false;
     }
-    rom_copy(r, &el_dbg_ranges[it->range], (uint8_t)sizeof *r);
+    rom_copy(r, el_dbg_ranges, it->range, (uint8_t)sizeof *r);
     return true;
 #else
     (void)it;
@@ -339,12 +374,13 @@ static uint8_t check_value(const el_dbg_item_t *it, const uint8_t *in)
 /* Move an entry's element between memory and the entry. */
 static void apply(entry_t *e)
 {
-    uint8_t size = e->size & ENTRY_SIZE;
+    uint8_t *dst = e->value;
+    const uint8_t *src = e->addr;
     if ((e->size & ENTRY_WRITE) != 0u) {
-        move_value(e->addr, e->value, size);
-    } else {
-        move_value(e->value, e->addr, size);
+        dst = e->addr;
+        src = e->value;
     }
+    move_value(dst, src, (uint8_t)(e->size & ENTRY_SIZE));
 }
 
 static bool at_instant(void)
@@ -356,7 +392,8 @@ static bool at_instant(void)
 static void apply_all(entry_t *q, uint8_t n)
 {
     while (n-- != 0u) {
-        apply(q++);
+        apply(q); /* q as it is, not q++: on the PIC18 it then stays a two-byte RAM pointer (datapointers.py) */
+        q++;
     }
 }
 
@@ -374,9 +411,10 @@ static void apply_queues(void)
 
 static void clear_bps(void)
 {
+    breakpoint_t *bp = bps;
     uint8_t i;
-    for (i = 0u; i < EL_DBG_BP_SLOTS; i++) {
-        bps[i].kind = EL_DBG_P_NONE;
+    for (i = 0u; i < EL_DBG_BP_SLOTS; i++, bp++) {
+        bp->kind = EL_DBG_P_NONE;
     }
     bp_count = 0u;
 }
@@ -418,12 +456,15 @@ static void halt_here(uint8_t why, uint8_t kind, uint16_t a, uint16_t b, uint8_t
     el_port_resync();
 }
 
-/* The slot of the breakpoint at (kind, a, b), or EL_DBG_NONE8. */
+/* The slot of the breakpoint at (kind, a, b), or EL_DBG_NONE8; for
+ * EL_DBG_P_NONE, the first free slot. The slots are walked by pointer:
+ * an index would multiply by the slot's size at every access. */
 static uint8_t find_bp(uint8_t kind, uint16_t a, uint16_t b)
 {
+    const breakpoint_t *bp = bps;
     uint8_t i;
-    for (i = 0u; i < EL_DBG_BP_SLOTS; i++) {
-        if (bps[i].kind == kind && bps[i].a == a && bps[i].b == b) {
+    for (i = 0u; i < EL_DBG_BP_SLOTS; i++, bp++) {
+        if (bp->kind == kind && (kind == EL_DBG_P_NONE || (bp->a == a && bp->b == b))) {
             return i;
         }
     }
@@ -438,8 +479,9 @@ void el_debug_probe(uint8_t kind, uint16_t a, uint16_t b)
     }
     i = find_bp(kind, a, b);
     if (i != EL_DBG_NONE8) {
-        if (bps[i].hits != UINT16_MAX) {
-            bps[i].hits++;
+        breakpoint_t *bp = &bps[i];
+        if (bp->hits != UINT16_MAX) {
+            bp->hits++;
         }
         why = EL_DBG_WHY_BREAKPOINT;
     } else if (step_unit == kind) {
@@ -506,7 +548,7 @@ static bool valid_point(uint8_t kind, uint16_t a, uint16_t b)
         a_limit = el_dbg_chart_count;
         if (a < a_limit && kind != EL_DBG_P_CHART) {
             el_dbg_chart_t c;
-            rom_copy(&c, &el_dbg_charts[a], (uint8_t)sizeof c);
+            rom_copy(&c, el_dbg_charts, a, (uint8_t)sizeof c);
             b_limit = kind == EL_DBG_P_STEP ? c.step_count : c.transition_count;
         }
         break;
@@ -549,8 +591,7 @@ static bool enqueue(entry_t *q, uint8_t *len, uint8_t max, const entry_t *e)
     if (*len >= max) {
         return false;
     }
-    q += (*len)++;
-    *q = *e;
+    copy_bytes((uint8_t *)(q + (*len)++), (const uint8_t *)e, (uint8_t)sizeof *e);
     return true;
 }
 
@@ -612,7 +653,7 @@ static uint8_t do_access(bool write, const uint8_t *p, uint8_t n)
                 st = check_value(&it, p + 4);
             }
             if (st == EL_DBG_OK) {
-                e.addr += elem * e.size;
+                e.addr += elem << (e.size >> 1); /* sizes 1, 2, 4: no multiplication */
                 for (k = 0u; k < e.size; k++) {
                     e.value[k] = p[4u + k]; /* the wire's order: apply moves it to memory */
                 }
@@ -641,15 +682,17 @@ static uint8_t do_bp_set(const uint8_t *p)
     }
     i = find_bp(kind, a, b); /* already set: the same slot */
     if (i == EL_DBG_NONE8) {
-        for (i = 0u; i < EL_DBG_BP_SLOTS && bps[i].kind != EL_DBG_P_NONE; i++) {
-        }
-        if (i == EL_DBG_BP_SLOTS) {
+        i = find_bp(EL_DBG_P_NONE, 0u, 0u);
+        if (i == EL_DBG_NONE8) {
             return EL_DBG_E_BP_FULL;
         }
-        bps[i].kind = kind;
-        bps[i].a = a;
-        bps[i].b = b;
-        bps[i].hits = 0u;
+        {
+            breakpoint_t *bp = &bps[i];
+            bp->kind = kind;
+            bp->a = a;
+            bp->b = b;
+            bp->hits = 0u;
+        }
         bp_count++;
         update_armed();
     }
@@ -671,6 +714,22 @@ static uint8_t do_bp_clear(uint8_t slot)
     return EL_DBG_OK;
 }
 
+static void put_bps(void)
+{
+    const breakpoint_t *bp = bps;
+    uint8_t i;
+    put8(bp_count);
+    for (i = 0u; i < EL_DBG_BP_SLOTS; i++, bp++) {
+        if (bp->kind != EL_DBG_P_NONE) {
+            put8(i);
+            put8(bp->kind);
+            put16(bp->a);
+            put16(bp->b);
+            put16(bp->hits);
+        }
+    }
+}
+
 static void put_stack(void)
 {
     put32((uint32_t)el_now_tick());
@@ -683,7 +742,7 @@ static void put_stack(void)
         uint8_t c;
         for (c = 0u; c < el_dbg_chart_count; c++) {
             el_dbg_chart_t chart;
-            rom_copy(&chart, &el_dbg_charts[c], (uint8_t)sizeof chart);
+            rom_copy(&chart, el_dbg_charts, c, (uint8_t)sizeof chart);
             put8(chart.slot_count);
             put_bytes(chart.slots, chart.slot_count);
         }
@@ -900,16 +959,7 @@ static uint8_t dispatch(uint8_t cmd, const uint8_t *p, uint8_t n)
     case REQ_BP_CLEAR:
         return do_bp_clear(p[0]);
     case REQ_BP_LIST:
-        put8(bp_count);
-        for (i = 0u; i < EL_DBG_BP_SLOTS; i++) {
-            if (bps[i].kind != EL_DBG_P_NONE) {
-                put8(i);
-                put8(bps[i].kind);
-                put16(bps[i].a);
-                put16(bps[i].b);
-                put16(bps[i].hits);
-            }
-        }
+        put_bps();
         break;
     default:
 #if defined(EL_DEBUG_BOARD_COMMANDS) && EL_DEBUG_BOARD_COMMANDS

@@ -173,7 +173,7 @@ class Pic18Board(BoardBase):
                 msg = (f"error: gplink could not place the program's sections in the {mcu.name}'s memory, though "
                        f"in all they fit (each RAM section must fit within a 256-byte bank)")
         if not options.release and any(i.kind == "debug" for i in program.interfaces):
-            msg += "; the debug server takes about 14 KB of program memory: a --release build has none"
+            msg += "; the debug server takes about 9 KB of program memory: a --release build has none"
         if measured.ram > mcu.ram and options.schedule != "min-buffer" and any(df.buffers for df in program.dataflows):
             msg += "; dataflow buffers shrink with --schedule min-buffer"
         bigger = [m for m in self.all_mcus.values() if m.flash > mcu.flash]

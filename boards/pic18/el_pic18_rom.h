@@ -15,4 +15,8 @@
 #define EL_ROM_READ_U32(p) (*(p))
 #define EL_ROM_READ_PTR(p) (*(p))
 
+/* The PIC18 keeps the least significant byte first, as the debug wire
+ * does: el_debug.c moves values as plain copies. */
+#define EL_LITTLE_ENDIAN 1
+
 #endif /* EL_PIC18_ROM_H */

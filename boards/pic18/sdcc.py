@@ -32,7 +32,7 @@ from pycparser import c_ast, c_generator, c_parser
 from easylab.core.errors import BuildError
 
 from . import (bankcheck, boolconv, buildcache, ctypes64, datapointers, inline, linkmap, lower64, lower64_stmt,
-               messages, prune, sdcc_quirks, shifts, strength)
+               messages, prune, saves, sdcc_quirks, shifts, strength)
 from .ctypes64 import LowerError, Target
 from .lower64_stmt import lower_unit
 
@@ -77,6 +77,8 @@ FALLBACKS = (("--pstack-model=large", "--fomit-frame-pointer", "--obanksel=0", "
 WARNING_FLAGS = ["--Werror", "--disable-warning", "18", "--disable-warning", "110", "--disable-warning", "126",
                  "--disable-warning", "165"]
 _WORD = re.compile(r"\b[A-Za-z_]\w*\b")
+# The assembly passes' code: a cached object is of this code.
+_ASM_PASSES_VERSION = buildcache.code_version(boolconv, sdcc_quirks, saves)
 
 
 @dataclass
@@ -215,7 +217,8 @@ class Build:
         text = src.read_bytes() if src.resolve().parent == self.obj_dir else \
             _run([self.tc.sdcc, *self.flags(), "-E", src], f"preprocessing {src.name}").stdout.encode()
         opts = self.file_flags.get(stem, OPT_FLAGS)
-        digest = buildcache.key(str(self.tc.root), *self.flags(opts), text, " ".join(sorted(self.in_ram)))
+        digest = buildcache.key(str(self.tc.root), *self.flags(opts), text, " ".join(sorted(self.in_ram)),
+                                _ASM_PASSES_VERSION)
         if buildcache.fetch_file("sdcc", digest, obj) and buildcache.fetch_file("sdcc-asm", digest, asm):
             return obj
         for k, attempt in enumerate((opts,) + fallbacks):
@@ -232,7 +235,7 @@ class Build:
                                      f"{src}") from None
                 self.notes.append(f"{src.name}: sdcc crashed; compiled with {' '.join(fallbacks[k])}")
         text, _ = boolconv.fix_bool_casts_in_asm(asm.read_text(encoding="latin-1"))
-        asm.write_text(sdcc_quirks.ram_pointer_tags(text, self.in_ram), encoding="latin-1")
+        asm.write_text(saves.share_saves(sdcc_quirks.ram_pointer_tags(text, self.in_ram)), encoding="latin-1")
         _run(["gpasm", "-D__STACK_MODEL_LARGE", "-o", obj, "-c", asm], f"assembling {asm.name}", cwd=self.obj_dir)
         buildcache.store_file("sdcc", digest, obj)
         buildcache.store_file("sdcc-asm", digest, asm)
@@ -274,9 +277,22 @@ class Build:
         """gplink with sdcc's libraries (the start-up code is the board's
         own, pic18_startup.c); writes NAME.hex, NAME.cod, NAME.map."""
         lib = self.tc.lib
-        _run(["gplink", "-m", "-w", "-s", lkr, "-I", lib, "-o", hexfile, *objects,
+        _run(["gplink", "-m", "-w", "-s", lkr, "-I", lib, "-o", hexfile, *objects, *self._saves_object(objects),
               f"libdev{self.part}.lib", "libsdcc.lib", "libc18f.lib", "libm18f.lib"], "linking with gplink")
         return hexfile.with_suffix(".map")
+
+    def _saves_object(self, objects: list[Path]) -> list[Path]:
+        """The shared register saves and restores the objects call
+        (saves.py), assembled; none when they call none."""
+        plain, frame = saves.longest_restores([o.with_suffix(".asm").read_text(encoding="latin-1")
+                                               for o in objects if o.with_suffix(".asm").is_file()])
+        if plain < 0 and frame < 0:
+            return []
+        asm = self.obj_dir / f"{saves.MODULE}.asm"
+        asm.write_text(saves.routines(self.part, plain, frame), encoding="latin-1")
+        obj = asm.with_suffix(".o")
+        _run(["gpasm", "-o", obj, "-c", asm], f"assembling {asm.name}", cwd=self.obj_dir)
+        return [obj]
 
 
 class _LineGenerator(c_generator.CGenerator):

@@ -27,9 +27,9 @@ STACK = 256  # bytes kept for the stack (the build's own check)
 
 BLINK_RELEASE_GOAL = (1536, 64)  # flash, RAM
 BLINK_DEBUG_GOAL = (4096, 300)
-BLINK_DEBUG_BOUND = (4754, 300)  # achieved: the flash goal is not met (this keeps it from growing), the RAM goal is
+BLINK_DEBUG_BOUND = (4718, 300)  # achieved: the flash goal is not met (this keeps it from growing), the RAM goal is
 SERVER_GOAL = (2560, 160)
-SERVER_BOUND = (2848, 160)  # achieved: the flash goal is not met, the RAM goal is
+SERVER_BOUND = (2808, 160)  # achieved: the flash goal is not met, the RAM goal is
 
 
 def test_blink_release_meets_its_goal(tmp_path):
