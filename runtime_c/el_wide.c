@@ -289,32 +289,34 @@ void el_w64_op(el_w64_t *w, uint8_t op, const el_w64_t *x)
 
 /* One 32-bit operand, given as a magnitude and a sign for the
  * multiplication and division and as ``x`` for the sum and difference
- * (not W64_APPLY: a board that prunes functions keeps no 64-bit division). */
-static void w64_op32(el_w64_t *w, uint8_t op, uint32_t magnitude, bool negative, const el_w64_t *x)
-{
-    if (op == EL_W64_DIV) {
-        w64_div32(w, magnitude, negative);
-    } else if (op == EL_W64_MUL) {
-        w64_mul32(w, magnitude, negative);
-    } else if (op == EL_W64_ADD) {
-        w64_add(w, x);
-    } else {
-        w64_sub(w, x);
-    }
-}
+ * (not W64_APPLY: a board that prunes functions keeps no 64-bit division).
+ * A macro, not a function: a call level more overflows the F16 proxy's
+ * 8051 stack (some 220 bytes) in a model as large as pneumatic_cylinder. */
+#define W64_OP32(w, op, magnitude, negative, x) \
+    do { \
+        if ((op) == EL_W64_DIV) { \
+            w64_div32((w), (magnitude), (negative)); \
+        } else if ((op) == EL_W64_MUL) { \
+            w64_mul32((w), (magnitude), (negative)); \
+        } else if ((op) == EL_W64_ADD) { \
+            w64_add((w), (x)); \
+        } else { \
+            w64_sub((w), (x)); \
+        } \
+    } while (0)
 
 void el_w64_op_i32(el_w64_t *w, uint8_t op, int32_t v)
 {
     el_w64_t x;
     el_w64_set_i32(&x, v);
-    w64_op32(w, op, v < 0 ? 0UL - (uint32_t)v : (uint32_t)v, v < 0, &x);
+    W64_OP32(w, op, v < 0 ? 0UL - (uint32_t)v : (uint32_t)v, v < 0, &x);
 }
 
 void el_w64_op_u32(el_w64_t *w, uint8_t op, uint32_t v)
 {
     el_w64_t x;
     el_w64_set_u32(&x, v);
-    w64_op32(w, op, v, false, &x);
+    W64_OP32(w, op, v, false, &x);
 }
 
 int8_t el_w64_cmp(const el_w64_t *a, const el_w64_t *b)
