@@ -8,6 +8,7 @@ from dataclasses import dataclass
 
 from easylab.ir.program import Program
 
+from ..codegen.c_syntax import c_comment
 from .simtables import item_symbol
 
 
@@ -55,8 +56,8 @@ def devices_header(program: Program, views: list[DeviceView], board: str, driver
         if v.irq_fn:
             lines.append(f"void {v.irq_fn}(void);")
         if defined_here:
-            lines.append(f"static const {v.c_type} el_dev{v.id} = {v.init}; /* {v.path} ({v.location}) */")
+            lines.append(f"static const {v.c_type} el_dev{v.id} = {v.init}; /* {v.path} ({c_comment(v.location)}) */")
         else:
-            lines.append(f"extern const {v.c_type} el_dev{v.id}; /* {v.path} ({v.location}) */")
+            lines.append(f"extern const {v.c_type} el_dev{v.id}; /* {v.path} ({c_comment(v.location)}) */")
     lines += ["", f"#endif /* {guard} */", ""]
     return "\n".join(lines)

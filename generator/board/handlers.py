@@ -23,7 +23,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Callable
 
-from ..codegen.c_syntax import c_literal
+from ..codegen.c_syntax import c_comment, c_literal
 from ..codegen.impl_files import DEVICE_BLOCKS, split_impl
 from ..core import types as T
 from ..core.errors import BuildError
@@ -141,9 +141,9 @@ def device_block(program: Program, device: Device, code: HandlerCode, binding: B
     handlers get their chip select as ``EL_CS``."""
     state_type = f"el_mdev{device.id}_state_t"
     storage = "" if firmware else "static "
-    lines = [f"/* device {device.path}: {device.type_name}("
-             + ", ".join(f"{k} = {_show(t, v)}" for k, (t, v) in device.params.items())
-             + f"), {device.location}; handlers {Path(code.file).name} */"]
+    lines = ["/* " + c_comment(f"device {device.path}: {device.type_name}("
+                               + ", ".join(f"{k} = {_show(t, v)}" for k, (t, v) in device.params.items())
+                               + f"), {device.location}; handlers {Path(code.file).name}") + " */"]
     items = [program.items[i] for i in device.items]
     if firmware:
         for item in items:
