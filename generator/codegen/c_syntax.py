@@ -38,14 +38,14 @@ def c_string(text: str) -> str:
     return '"' + "".join(out) + '"'
 
 
-def c_comment(text: str) -> str:
+def c_comment(text) -> str:
     """``text`` made safe inside a C block comment: printable ASCII as is,
     except that no '*/' (which would end the comment), '/*' (-Wcomment) or
     '??' (a trigraph) can form; every other character as a \\u escape.
     Every model string written into a C comment (titles, file names of
-    locations) goes through here."""
+    locations) goes through here; a value that is no string is shown by str()."""
     out = []
-    for ch in text:
+    for ch in str(text):
         if ch == "\\":
             out.append("\\\\")
         elif " " <= ch <= "~":

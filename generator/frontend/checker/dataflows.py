@@ -65,7 +65,7 @@ class DataflowRules:
             problem = missing_file(impl_path)
             if problem:
                 self.error(decl.impl_span, f"implementation file '{short_name(decl.impl)}' {problem} "
-                                           f"(looked at {short_name(str(impl_path))})")
+                                           f"(looked at {short_name(str(impl_path), 200)})")
         elif "step" not in kinds:
             self.error(decl.name_span, f"actor type '{decl.name}' has no 'step' block and no 'impl' file",
                        "add step {{ ... }} with the C code of one firing")

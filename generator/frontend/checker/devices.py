@@ -57,7 +57,7 @@ class DeviceRules:
             problem = missing_file(path)
             if problem:
                 self.error(impl.span, f"handler file '{short_name(impl.file)}' {problem} "
-                                      f"(looked at {short_name(str(path))})")
+                                      f"(looked at {short_name(str(path), 200)})")
         for st in decl.states:
             self.resolve_type(st.type)
         if decl.states and not decl.impls:
