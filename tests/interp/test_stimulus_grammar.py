@@ -113,26 +113,28 @@ CELLS = st.sampled_from(["", "0", "1", "-1", "+1", "500", "2000", "2001", "1.5",
                          "-inf", "0x10", "0x1p3", "1e3", "1e", ".5", "5.", "true", "false", "\u0663", "\uff11",
                          "4294967295", "4294967296", "-129", "127", "9" * 30, " 7 ", "\t1", "\x0b1", "1_0",
                          "abc", "1,2", "\r", "00012", "-0", "1e-400", "3.5e38", "3.402823466e38"])
-TIMES = st.sampled_from(["0", "1", "1000", "5", "-1", "", "x", "18446744073709551615", "18446744073709551616",
-                         "\u0661", " 3 "])
+TIMES = st.sampled_from(["0"] * 8 + ["1", "1000", "5", "-1", "", "x", "18446744073709551615",
+                                     "18446744073709551616", "\u0661", " 3 "])
 NAMES = st.sampled_from(COLUMNS + ["sensor.raw[0]", "sensor.raw[1]", "nope", "", "gain ", "time_us", "out[0]",
                                    "sensor.raw[00]", "sensor.raw[\u0660]"])
 
 
 @st.composite
 def stimulus_files(draw) -> bytes:
-    names = draw(st.lists(NAMES, min_size=1, max_size=4, unique=True))
+    names = draw(st.lists(st.sampled_from(COLUMNS), min_size=1, max_size=2, unique=True))
+    if not draw(st.integers(0, 7)):  # now and then a name of the wider set, often a wrong one
+        names[draw(st.integers(0, len(names) - 1))] = draw(NAMES)
     header = ",".join(["time_us"] + names) if draw(st.integers(0, 9)) else ",".join(names)
     rows = []
-    for _ in range(draw(st.integers(0, 4))):
-        cells = [draw(TIMES)] + [draw(CELLS) for _ in range(len(names) + draw(st.sampled_from([0, 0, 0, 1, -1])))]
+    for _ in range(draw(st.integers(0, 3))):
+        cells = [draw(TIMES)] + [draw(CELLS) for _ in range(len(names) + draw(st.sampled_from([0] * 12 + [1, -1])))]
         rows.append(",".join(cells))
     ending = draw(st.sampled_from(["\n", "\r\n"]))
     text = ending.join([header] + rows) + draw(st.sampled_from(["", ending]))
     return text.encode("utf-8")
 
 
-@settings(max_examples=120, deadline=None, derandomize=True, database=None,
+@settings(max_examples=250, deadline=None, derandomize=True, database=None,
           suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.too_slow])
 @given(stimulus_files())
 def test_both_readers_give_the_same_verdict_on_any_stimulus(readers, data):
