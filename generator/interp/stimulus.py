@@ -12,8 +12,10 @@ items by name, so a stimulus follows a live replacement of the model.
 
 from __future__ import annotations
 
+import io
 import math
 import re
+from array import array
 from bisect import bisect_right
 from dataclasses import dataclass, field
 
@@ -61,7 +63,7 @@ class Column:
     type: T.ValueType  # the item's, which the values were read as
     first: int
     count: int  # elements set: 1, or the item's count for a whole-item column
-    times: list[int] = field(default_factory=list)
+    times: array = field(default_factory=lambda: array("Q"))  # 8 bytes a row, not a Python int
     values: list = field(default_factory=list)
     written: int = 0
     applied: int = 0  # for a device datum: the rows up to which a read has applied
@@ -198,10 +200,10 @@ class _Reader:
         columns: list[Column] | None = None
         last_time = None
         values = 0
-        lines = data.split(b"\n")
-        if lines and lines[-1] == b"":
-            lines.pop()
-        for self.line, raw in enumerate(lines, start=1):
+        # One line at a time: a list of every line would hold the file twice over.
+        for self.line, raw in enumerate(io.BytesIO(data), start=1):
+            if raw.endswith(b"\n"):
+                raw = raw[:-1]
             if raw.endswith(b"\r"):
                 raw = raw[:-1]
             if len(raw) > LINE_MAX:
@@ -216,6 +218,7 @@ class _Reader:
             cells = [c.strip(" \t") for c in text.split(",")]
             if columns is None:
                 columns = self._header(cells)
+                parsed: list[dict] = [{} for _ in columns]
                 continue
             if len(cells) != len(columns) + 1:
                 raise self.error(f"{len(cells)} cells, expected {len(columns) + 1} as in the header")
@@ -226,9 +229,10 @@ class _Reader:
                 raise self.error(f"time {cells[0]} is before the previous row's time {last_time} "
                                  "(times must not decrease)")
             last_time = time_us
-            for col, cell in zip(columns, cells[1:]):
+            for col, cell, seen in zip(columns, cells[1:], parsed):
                 if cell:
-                    value = self._value(cell, col)
+                    # Stimuli repeat their values: each distinct cell of a column is read once.
+                    value = seen[cell] if cell in seen else seen.setdefault(cell, self._value(cell, col))
                     if values == MAX_VALUES:
                         raise self.error(f"more than {MAX_VALUES} values: stimulus too big")
                     values += 1
