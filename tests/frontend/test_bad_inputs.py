@@ -53,7 +53,8 @@ REAL = st.builds(lambda sign, mantissa, exponent: f"{sign}{mantissa}e{exponent}"
                  st.sampled_from(["", "-"]), st.sampled_from(["1", "9.99", "3.4028236", "0.5", "17"]),
                  st.integers(-400, 400))
 PLACES = ["param f: float32 = {x}", "param f: float32 = 0.0 range {x}..{x}", "const c: float32 = {x}",
-          "param f: float32 = 0.0 range -1.0..{x}", "const c: float32 = {x} * {x}", "const c: float32 = {x} / 3.0"]
+          "param f: float32 = 0.0 range -1.0..{x}", "const c: float32 = {x} * {x}", "const c: float32 = {x} / 3.0",
+          "param t: time = {x} s", "task main period {x} ms {{ }}", "param i: int32 = 0 range 0..{x}"]
 
 
 @SETTINGS
