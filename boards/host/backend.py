@@ -54,7 +54,9 @@ class HostBoard(BoardBase):
         compiler = options.cc or chain.cc
         require_tool(compiler, self.name, chain.debian_package if compiler == chain.cc else None)
         dds_sources, dds_cflags, dds_libs = dds.build_files(program, out_dir, self.description.folder)
-        ranges = out_dir / "host_ranges.c"
+        # A file of the host program, not of the model's portable C: beside it, not among it.
+        ranges = out_dir / "host_program" / "host_ranges.c"
+        ranges.parent.mkdir(exist_ok=True)
         ranges.write_text(ranges_source(program), encoding="utf-8")
         sources = [p for p in generated if p.suffix == ".c"] + runtime_sources(options.release) \
             + self.description.source_paths + dds_sources + [ranges]
