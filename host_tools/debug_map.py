@@ -14,6 +14,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from .debug_protocol import K, PROBE_NAMES
+from .map_schema import DEBUG_MAP_SCHEMA, MapFileError, read_map
 
 MAP_FORMAT = "easylab-debug-map"
 
@@ -68,18 +69,13 @@ class DebugMap:
 
     @classmethod
     def load(cls, path: str | Path) -> "DebugMap":
+        """The debug map in the file at ``path``, valid against
+        map_schema.DEBUG_MAP_SCHEMA; otherwise :class:`MapError` in one line."""
         try:
-            data = json.loads(Path(path).read_text(encoding="utf-8"))
-        except FileNotFoundError:
-            raise MapError(f"{path}: no such file") from None
-        except (OSError, UnicodeDecodeError) as err:
-            raise MapError(f"{path}: {getattr(err, 'strerror', None) or err}") from None
-        except json.JSONDecodeError as err:
-            raise MapError(f"{path}: not JSON ({err.msg}, line {err.lineno})") from None
-        try:
-            return cls(data, str(path))
-        except (KeyError, TypeError, ValueError) as err:
-            raise MapError(f"{path}: broken debug map ({err})") from None
+            data = read_map(path, DEBUG_MAP_SCHEMA, "debug map")
+        except MapFileError as err:
+            raise MapError(str(err)) from None
+        return cls(data, str(path))
 
     # -------------------------------------------------------------- items
 

@@ -15,6 +15,8 @@ import struct
 from dataclasses import dataclass
 from pathlib import Path
 
+from .map_schema import SERVICE_MAP_SCHEMA, MapFileError, read_map
+
 MAP_FORMAT = 1
 READ_TABLES = ("coil", "discrete", "holding", "input")
 _INT_LIMITS = {"int8": (-128, 127), "uint8": (0, 255), "int16": (-32768, 32767), "uint16": (0, 65535),
@@ -156,28 +158,17 @@ class ServiceMap:
 
 
 def load_map(path: str | Path) -> ServiceMap:
+    """The service map in the file at ``path``, valid against
+    map_schema.SERVICE_MAP_SCHEMA; otherwise :class:`MapError` in one line."""
     try:
-        data = json.loads(Path(path).read_text(encoding="utf-8"))
-    except FileNotFoundError:
-        raise MapError(f"{path}: no such map file (easylab build writes service_map.json beside the firmware)") \
-            from None
-    except (OSError, UnicodeDecodeError) as err:
-        raise MapError(f"{path}: cannot read: {getattr(err, 'strerror', None) or err}") from None
-    except json.JSONDecodeError as err:
-        raise MapError(f"{path}: not a service map (JSON error at line {err.lineno})") from None
-    if not isinstance(data, dict) or data.get("format") != MAP_FORMAT or "items" not in data:
-        raise MapError(f"{path}: not a service map of format {MAP_FORMAT}")
-    try:
-        items = [ServiceItem(int(i["id"]), i["name"], i.get("kind", "param"), i["table"], int(i["address"]),
-                             int(i["registers"]), i["type"], i.get("unit"),
-                             tuple(i["range"]) if i.get("range") is not None else None, i["access"],
-                             bool(i.get("persist", False)))
-                 for i in data["items"]]
-    except (KeyError, TypeError, ValueError) as err:
-        raise MapError(f"{path}: broken service map ({err})") from None
-    for it in items:
-        if it.table not in READ_TABLES or it.type not in (*_INT_LIMITS, "bool", "float32"):
-            raise MapError(f"{path}: broken service map (item '{it.name}')")
+        data = read_map(path, SERVICE_MAP_SCHEMA, f"service map of format {MAP_FORMAT}",
+                        "no such map file (easylab build writes service_map.json beside the firmware)")
+    except MapFileError as err:
+        raise MapError(str(err)) from None
+    items = [ServiceItem(i["id"], i["name"], i.get("kind", "param"), i["table"], i["address"], i["registers"],
+                         i["type"], i.get("unit"), tuple(i["range"]) if i.get("range") is not None else None,
+                         i["access"], i.get("persist", False))
+             for i in data["items"]]
     return ServiceMap(str(path), data.get("model", "?"), data.get("title"), data.get("program_id", "?"),
                       data.get("interfaces", {}), items)
 

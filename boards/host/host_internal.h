@@ -18,9 +18,29 @@
  * Longer lines are reported as errors, never truncated. */
 #define EL_HOST_LINE_MAX 65536u
 
-/* Most events (non-empty value cells) of a stimulus file: 64 Mi events of
- * 16 bytes, 1 GiB; a bigger file is reported, not loaded. */
-#define EL_HOST_STIMULUS_MAX_EVENTS (64ul * 1024ul * 1024ul)
+/* Most events (non-empty value cells) of a stimulus file: 4 Mi events of
+ * 16 bytes, 64 MiB; a bigger file is reported, not loaded. The same bound
+ * as easylab run's reader (generator/interp/stimulus.py, MAX_VALUES). */
+#define EL_HOST_STIMULUS_MAX_EVENTS (4ul * 1024ul * 1024ul)
+
+/* The declared ranges of the items that have one (host_ranges.c, written by
+ * the host board's backend): a stimulus value outside is refused, as the
+ * debug and service interfaces refuse such a write. Weak: a program built
+ * without that table (a hand-written stand-in) checks no range. */
+typedef struct {
+    uint16_t item; /* index into el_items */
+    double lo, hi; /* in run-time units (time: ms) */
+} el_host_range_t;
+extern const el_host_range_t el_host_ranges[]
+#if defined(__GNUC__)
+    __attribute__((weak))
+#endif
+    ;
+extern const uint16_t el_host_range_count
+#if defined(__GNUC__)
+    __attribute__((weak))
+#endif
+    ;
 
 /* Most descriptors (listening sockets, connections, ptys) served at once. */
 #define EL_HOST_MAX_WATCHED 32u

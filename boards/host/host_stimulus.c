@@ -39,6 +39,7 @@
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
+#include <ctype.h>
 #include <string.h>
 
 typedef union {
@@ -321,8 +322,9 @@ static bool parse_value(const char *s, uint8_t type, const char *column, value_t
         char *end;
         double d;
         errno = 0;
-        d = strtod(s, &end);
-        if (end == s || *end != '\0') {
+        /* strtod skips leading white space (\v, \f, \r): the grammar has none. */
+        d = isspace((unsigned char)*s) ? 0.0 : strtod(s, &end);
+        if (isspace((unsigned char)*s) || end == s || *end != '\0') {
             stim_error("bad number '%s' for column '%s' (float32)", s, column);
             return false;
         }
@@ -356,6 +358,48 @@ static bool parse_value(const char *s, uint8_t type, const char *column, value_t
     case EL_T_U16: v->u16 = (uint16_t)n; break;
     case EL_T_I32: v->i32 = (int32_t)n; break;
     default: v->u32 = (uint32_t)n; break; /* EL_T_U32, EL_T_TIME */
+    }
+    return true;
+}
+
+/* A value as a double, to compare with a declared range. */
+static double as_double(const value_t *v, uint8_t type)
+{
+    switch (type) {
+    case EL_T_BOOL: return v->b ? 1.0 : 0.0;
+    case EL_T_I8: return v->i8;
+    case EL_T_U8: return v->u8;
+    case EL_T_I16: return v->i16;
+    case EL_T_U16: return v->u16;
+    case EL_T_I32: return v->i32;
+    case EL_T_F32: return (double)v->f32;
+    default: return v->u32; /* EL_T_U32, EL_T_TIME */
+    }
+}
+
+/* Whether `v` of column `col` lies within its item's declared range (as
+ * the debug interface checks a write); false after reporting. */
+static bool within_range(const char *cell, const column_t *col, const char *column, const value_t *v)
+{
+    uint16_t k;
+    const el_item_t *it = &el_items[col->item];
+    if (&el_host_range_count == NULL || el_host_ranges == NULL)
+        return true;
+    for (k = 0; k < el_host_range_count; k++) {
+        const el_host_range_t *r = &el_host_ranges[k];
+        double d;
+        if (r->item != col->item)
+            continue;
+        d = as_double(v, it->type);
+        if (d >= r->lo && d <= r->hi) /* NaN is outside */
+            return true;
+        if (it->type == EL_T_F32)
+            stim_error("value %s out of range for column '%s' (the declared range of %s: %.9g .. %.9g)", cell,
+                       column, it->name, r->lo, r->hi);
+        else
+            stim_error("value %s out of range for column '%s' (the declared range of %s: %.0f .. %.0f)", cell,
+                       column, it->name, r->lo, r->hi);
+        return false;
     }
     return true;
 }
@@ -495,7 +539,8 @@ static bool load(FILE *f)
                 if (cells[i][0] == '\0')
                     continue;
                 memset(&v, 0, sizeof v);
-                if (!parse_value(cells[i], el_items[columns[i].item].type, names[i], &v))
+                if (!parse_value(cells[i], el_items[columns[i].item].type, names[i], &v) ||
+                    !within_range(cells[i], &columns[i], names[i], &v))
                     goto done;
                 if (!add_event(t, i, &v))
                     goto done;

@@ -12,16 +12,12 @@ The address tables use the types of a harness's ``sim_model.h``::
 
 from __future__ import annotations
 
-from ..codegen.c_syntax import C_KIND_ENUM, C_TYPE_ENUM, ident
+from ..codegen.c_syntax import C_KIND_ENUM, C_TYPE_ENUM, c_string, ident
 from ..core.errors import BuildError
 from ..ir.program import Program
 
 TYPE_BYTES = {"bool": 1, "int8": 1, "uint8": 1, "int16": 2, "uint16": 2, "int32": 4, "uint32": 4, "float32": 4,
               "time": 4}
-
-
-def c_string(text: str) -> str:
-    return '"' + text.replace("\\", "\\\\").replace('"', '\\"') + '"'
 
 
 def item_symbol(program: Program, item_id: int) -> str:
@@ -63,7 +59,19 @@ def trace_tables(program: Program) -> list[str]:
     lines += [f"    {{ {c_string(c.name)}, {len(c.steps)}u, m_c{c.id}_steps, m_c{c.id} }}," for c in program.charts] \
         or ["    { \"\", 0u, (const char *const *)0, (const uint8_t *)0 },"]
     lines += ["};", f"const uint8_t el_chart_count = {len(program.charts)}u;", ""]
-    return lines
+    return lines + range_table(program)
+
+
+def range_table(program: Program) -> list[str]:
+    """The declared range of every item that has one, which the host
+    board's stimulus reader holds its values to (boards/host/host_internal.h,
+    el_host_ranges): the host program and every simulator harness that
+    reads a stimulus compile it in."""
+    rows = [f"    {{ {it.id}u, {float(it.range[0])!r}, {float(it.range[1])!r} }}, /* {it.name} */"
+            for it in program.items if it.range is not None]
+    return [f"const uint16_t el_host_range_count = {len(rows)}u;",
+            f"const el_host_range_t el_host_ranges[{max(len(rows), 1)}] = {{"] \
+        + (rows or ["    { 0u, 0.0, 0.0 },"]) + ["};", ""]
 
 
 def ram_tables(program: Program, symbols: dict[str, tuple[int, int]], tick_symbol: str, where: str) -> list[str]:

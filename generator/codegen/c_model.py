@@ -22,7 +22,7 @@ from .. import __version__
 from ..core import expr as I
 from ..core import types as T
 from ..ir.program import ActorSpec, Buffer, Chart, Dataflow, Fire, Item, Loop, Program, Task
-from .c_syntax import C_KIND_ENUM, C_TYPE_ENUM, ExprWriter, c_literal, ident, type_param_macros
+from .c_syntax import C_KIND_ENUM, C_TYPE_ENUM, ExprWriter, c_comment, c_literal, ident, type_param_macros
 from .impl_files import split_impl
 from .status_view import StatusView, status_views
 from .token_moves import copy_tokens, ring_get, ring_put
@@ -210,7 +210,7 @@ class _Builder:
                 info["size"] = max(b.size, 1)
             init = ", ".join(c_literal(b.type, v) for v in b.initial)
             self.buffers.append(f"static {b.type.c_name} {name}[{info['size']}]"
-                                + (f" = {{{init}}};" if init else ";") + f" /* {b.src} -> {b.dst} ({b.location}) */")
+                                + (f" = {{{init}}};" if init else ";") + f" /* {b.src} -> {b.dst} ({c_comment(b.location)}) */")
             if not linear:
                 self.buffers.append(f"static uint16_t {name}_rd, {name}_wr = {len(b.initial) % info['size']}u;")
             bufs[b.id] = info
@@ -454,14 +454,14 @@ class _Builder:
                 conds = [f"({p}_slot[{o.slot}u] == {o.id}u)" for o in others] + [w.write(t.guard)]
                 names = ", ".join(chart.steps[x].name for x in t.sources)
                 dests = ", ".join(chart.steps[x].name for x in t.targets)
-                body.append(f"if ({' && '.join(conds)}) {{ return {t.id}u; }} /* ({names}) -> ({dests}), {t.location} */")
+                body.append(f"if ({' && '.join(conds)}) {{ return {t.id}u; }} /* ({names}) -> ({dests}), {c_comment(t.location)} */")
             step_fns.append({"step": s, "body": body})
 
         def actions(acts):
             out = []
             for a in acts:
                 item = self.items[a.target]
-                out.append(f"el_t{task}.{item.local} = {w.write(a.value)}; /* {a.location} */")
+                out.append(f"el_t{task}.{item.local} = {w.write(a.value)}; /* {c_comment(a.location)} */")
             return out
 
         fire = []
@@ -544,8 +544,8 @@ def build_view(program: Program, board, library: bool = False, probes: bool = Fa
     b = _Builder(program, board, probes)
     specs = [b.spec_view(s) for s in program.specs]
     states = [(specs[i.spec].state_type, f"el_a{i.id}_{ident(i.name)}",
-               f"{program.dataflows[i.dataflow].name}.{i.name} ({i.location})") for i in program.instances]
-    dataflows = [(f"el_df{df.id}_{ident(df.name)}", f"dataflow {df.name} ({df.location}), schedule "
+               f"{program.dataflows[i.dataflow].name}.{i.name} ({c_comment(i.location)})") for i in program.instances]
+    dataflows = [(f"el_df{df.id}_{ident(df.name)}", f"dataflow {df.name} ({c_comment(df.location)}), schedule "
                   f"{df.schedule.text()}", b.dataflow_code(df)) for df in program.dataflows]
     charts = [b.chart_view(c) for c in program.charts]
     tasks = [b.task_view(t) for t in program.tasks]

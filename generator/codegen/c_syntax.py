@@ -20,6 +20,44 @@ _DIV_SUFFIX = {"int8": "i8", "int16": "i16", "int32": "i32", "uint8": "u8", "uin
 
 
 
+def c_string(text: str) -> str:
+    """``text`` as a C string literal whose bytes are its UTF-8: printable
+    ASCII as is, but '\\', '"' and '?' escaped (no trigraph such as '??/'
+    can form), every other byte an octal escape (no control, bidi or
+    non-ASCII character reaches the C source). Every model string written
+    into C as a literal goes through here (docs/language.md, "Strings in
+    the generated C")."""
+    out = []
+    for ch in text:
+        if ch in '\\"?':
+            out.append("\\" + ch)
+        elif " " <= ch <= "~":
+            out.append(ch)
+        else:
+            out.append("".join(f"\\{b:03o}" for b in ch.encode("utf-8", "surrogatepass")))
+    return '"' + "".join(out) + '"'
+
+
+def c_comment(text) -> str:
+    """``text`` made safe inside a C block comment: printable ASCII as is,
+    except that no '*/' (which would end the comment), '/*' (-Wcomment) or
+    '??' (a trigraph) can form; every other character as a \\u escape.
+    Every model string written into a C comment (titles, file names of
+    locations) goes through here; a value that is no string is shown by str()."""
+    out = []
+    for ch in str(text):
+        if ch == "\\":
+            out.append("\\\\")
+        elif " " <= ch <= "~":
+            # A '\\' after '*', '/' or '?' keeps '*/', '/*' and '??' apart.
+            if out and out[-1][-1:] + ch in ("*/", "/*", "??"):
+                out.append("\\")
+            out.append(ch)
+        else:
+            out.append(f"\\u{ord(ch):04x}" if ord(ch) <= 0xFFFF else f"\\U{ord(ch):08x}")
+    return "".join(out)
+
+
 def ident(text: str) -> str:
     """A C identifier fragment from a model path."""
     return re.sub(r"[^A-Za-z0-9_]", "_", text)
@@ -35,7 +73,7 @@ def c_literal(t: T.ValueType, value) -> str:
             text += ".0"
         return f"{text}f"
     if t is T.STRING:
-        return '"' + str(value).replace("\\", "\\\\").replace('"', '\\"') + '"'
+        return c_string(str(value))
     value = int(value)
     if t is T.TIME:
         return f"((el_time_t){value}u)"

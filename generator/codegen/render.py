@@ -17,7 +17,7 @@ from ..core.paths import templates_dir
 from ..ir.program import Device, Program
 from . import debug, service
 from .c_model import CModel, build_view
-from .c_syntax import ident
+from .c_syntax import c_comment, c_string, ident
 
 
 class Target(Protocol):
@@ -50,6 +50,9 @@ def environment(template_dir: Path | None = None) -> jinja2.Environment:
                              undefined=jinja2.StrictUndefined, trim_blocks=True, lstrip_blocks=True,
                              keep_trailing_newline=True)
     env.filters["c_ident"] = ident
+    # Model strings (titles, names of files) in comments and literals.
+    env.filters["c_comment"] = c_comment
+    env.filters["c_string"] = c_string
     return env
 
 

@@ -30,6 +30,7 @@ from dataclasses import dataclass
 
 from .. import __version__
 from ..core import types as T
+from .c_syntax import c_string
 from ..core.crc import crc16  # persist keys are CRCs of the item's name and type
 from ..core.errors import BuildError
 from ..ir.program import Item, Program
@@ -257,18 +258,6 @@ def _bits(t: T.ValueType, value) -> str:
     return f"0x{pattern:08x}UL"
 
 
-def _c_string(text: str) -> str:
-    out = []
-    for ch in text:
-        if ch in '\\"':
-            out.append("\\" + ch)
-        elif 32 <= ord(ch) < 127:
-            out.append(ch)
-        else:
-            out.append("".join(f"\\{b:03o}" for b in ch.encode("utf-8")))
-    return '"' + "".join(out) + '"'
-
-
 def _uart_index(resource: str | None) -> int:
     m = re.search(r"(\d+)", resource or "")
     return int(m.group(1)) if m else 0
@@ -297,7 +286,7 @@ def c_view(smap: ServiceMap, view, service_api: bool = False) -> dict:
         lo, hi = (_bits(e.item.type, e.item.range[0]), _bits(e.item.type, e.item.range[1])) \
             if e.item.range is not None else ("0UL", "0UL")
         entries.append({
-            "e": e, "c_name": iv.c_name, "c_extern": c_extern, "name": _c_string(e.name), "lo": lo, "hi": hi,
+            "e": e, "c_name": iv.c_name, "c_extern": c_extern, "name": c_string(e.name), "lo": lo, "hi": hi,
             "type": C_TYPES[e.item.type.name], "table": C_TABLES[e.table], "flags": flags,
             "nv_key": f"0x{e.nv_key:04x}u" if e.nv_key is not None else "0u",
             "nv_slot": f"{e.nv_slot}u" if e.nv_slot is not None else "0u",
@@ -317,9 +306,9 @@ def c_view(smap: ServiceMap, view, service_api: bool = False) -> dict:
         tcp = {"port": smap.tcp.settings["port"]}
     return {
         "version": __version__, "program": p, "entries": entries, "order": order, "first": first, "size": size,
-        "nv_count": smap.nv_count, "vendor": _c_string("EasyLab"), "model": _c_string(p.name),
-        "title": _c_string(p.title or p.name), "easylab": _c_string(__version__),
-        "program_text": _c_string(f"0x{p.program_id:08x}"), "program_id": f"0x{p.program_id:08x}UL",
+        "nv_count": smap.nv_count, "vendor": c_string("EasyLab"), "model": c_string(p.name),
+        "title": c_string(p.title or p.name), "easylab": c_string(__version__),
+        "program_text": c_string(f"0x{p.program_id:08x}"), "program_id": f"0x{p.program_id:08x}UL",
         "rtu": rtu, "tcp": tcp,
         "map_used": rtu is not None or tcp is not None or smap.nv_count > 0 or service_api,
     }

@@ -56,6 +56,25 @@ STRING = ValueType("string", "const char *", 0)
 
 # The largest finite float32, (2 - 2**-23) * 2**127.
 FLOAT32_MAX = (2 ** 24 - 1) * 2 ** 104
+
+
+def to_double(value) -> float:
+    """``float(value)`` that saturates to +-inf where the exact value (a
+    Fraction such as 1e309) is beyond a double, instead of raising."""
+    try:
+        return float(value)
+    except OverflowError:
+        return float("inf") if value > 0 else float("-inf")
+
+
+def show_real(value) -> str:
+    """A compile-time real for a message: '%g' of its double, or its power
+    of ten where it is beyond a double."""
+    double = to_double(value)
+    if double not in (float("inf"), float("-inf")):
+        return f"{double:g}"
+    digits = str(abs(int(value)))
+    return f"{'-' if value < 0 else ''}{digits[0]}e+{len(digits) - 1}"
 # The largest `time` (a uint32 count of milliseconds), in microseconds.
 TIME_MAX_US = (2 ** 32 - 1) * 1000
 

@@ -58,7 +58,7 @@ def const_node(t: T.ValueType, value) -> I.Const:
         ms = Fraction(value) / 1000
         return I.Const(t, int(ms) if ms.denominator == 1 else ms)
     if t is T.FLOAT32:
-        return I.Const(t, float(value))
+        return I.Const(t, T.to_double(value))
     return I.Const(t, value)
 
 
@@ -100,7 +100,7 @@ class ExprTyper:
         if not self.assignable(v, target, e.span, what):
             return ERROR
         if v.const is not None and target is T.FLOAT32 and abs(v.const) > T.FLOAT32_MAX:
-            self.diags.error(e.span, f"{what}: {float(v.const):g} is beyond the range of 'float32'")
+            self.diags.error(e.span, f"{what}: {T.show_real(v.const)} is beyond the range of 'float32'")
             return ERROR
         if v.const is not None and target is T.TIME and not 0 <= v.const <= T.TIME_MAX_US:
             self.diags.error(e.span, f"{what}: a 'time' is from 0 to {T.TIME_MAX_US // 1000} ms")

@@ -57,6 +57,13 @@ def _display_name(path: Path) -> str:
         return str(path)
 
 
+def as_if_read(text: str) -> str:
+    """A model text given in memory as reading its file would give it: the
+    byte order mark dropped and line ends ('\\r\\n', a lone '\\r') made
+    '\\n', so a given text and its file get the same diagnostics."""
+    return text.removeprefix("\ufeff").replace("\r\n", "\n").replace("\r", "\n")
+
+
 def _load_file(path: Path, sources: SourceCache, diags: Diagnostics,
                loaded: dict, order: list, stack: list[Path], importer: ast.Import | None):
     key = path.resolve()
@@ -72,6 +79,8 @@ def _load_file(path: Path, sources: SourceCache, diags: Diagnostics,
         if text is None:
             _check_readable(path)
             text = path.read_text(encoding="utf-8-sig")  # an editor's byte order mark is no error
+        else:
+            text = as_if_read(text)
         if "\0" in text:  # valid UTF-8, but no text file has NUL bytes
             raise UnicodeDecodeError("utf-8", text.encode("utf-8"), text.index("\0"), text.index("\0") + 1,
                                      "a NUL byte: a binary file, not a model")

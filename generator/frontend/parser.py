@@ -27,7 +27,8 @@ def _ast_parser() -> tuple[lark.Lark, ToAst]:
     the file and its inline C before each parse; parsing holds a lock."""
     transformer = ToAst("<string>", {})
     return lark.Lark(_grammar_text(), parser="lalr", lexer="contextual", keep_all_tokens=True,
-                     maybe_placeholders=False, transformer=transformer), transformer
+                     maybe_placeholders=False, transformer=transformer,
+                     lexer_callbacks={"NAME": transformer.checked_name}), transformer
 
 
 def parse_text(text: str, file: str = "<string>") -> ast.Module:

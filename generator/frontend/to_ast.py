@@ -53,6 +53,15 @@ def _with_span(f, _data, children, _meta):
     return f(meta, [c for c in children if not isinstance(c, Token) or c.type in kept])
 
 
+# The longest name (docs/language.md, "Lexical structure"): C99 keeps 63
+# significant characters of an identifier, and a dotted path of a few such
+# names stays far below C89's 509 characters of a string literal.
+MAX_NAME_LENGTH = 63
+# The longest string, in bytes of its UTF-8: a title is a C string literal
+# of as many characters, within C89's 509 however it is escaped.
+MAX_STRING_BYTES = 255
+
+
 def token_span(file: str, tok: Token) -> Span:
     return Span(file, tok.line, tok.column, tok.end_line, tok.end_column)
 
@@ -76,6 +85,15 @@ class ToAst(Transformer):
     def _tspan(self, tok: Token) -> Span:
         return token_span(self.file, tok)
 
+    def checked_name(self, tok: Token) -> Token:
+        """A NAME token, refused beyond MAX_NAME_LENGTH characters: names
+        reach C identifiers and the strings of the debug and service tables,
+        which compilers limit (C89's 509-character string literals)."""
+        if len(tok) > MAX_NAME_LENGTH:
+            raise ModelError([Diagnostic(self._tspan(tok), f"name '{tok[:20]}...' has {len(tok)} characters, "
+                                                           f"more than the {MAX_NAME_LENGTH} a name may have")])
+        return tok
+
     _ESCAPES = {"n": "\n", "t": "\t", "r": "\r", "0": "\0", '"': '"', "\\": "\\"}
 
     def _string(self, tok: Token) -> str:
@@ -87,7 +105,12 @@ class ToAst(Transformer):
                                              f"unknown escape '\\{m.group(1)}' in a string",
                                              "the escapes are \\n \\t \\r \\0 \\\" and \\\\")])
             return self._ESCAPES[m.group(1)]
-        return re.sub(r"\\(.)", escape, tok[1:-1])
+        text = re.sub(r"\\(.)", escape, tok[1:-1])
+        if len(text.encode("utf-8", "surrogatepass")) > MAX_STRING_BYTES:
+            raise ModelError([Diagnostic(self._tspan(tok), f"string of {len(text.encode('utf-8', 'surrogatepass'))} "
+                                                           f"bytes in UTF-8, more than the {MAX_STRING_BYTES} a "
+                                                           "string may have")])
+        return text
 
     def _number(self, tok: Token) -> int | Fraction:
         """The value of an INT or REAL token. Leading zeros are decimal; a

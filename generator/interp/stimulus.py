@@ -12,8 +12,10 @@ items by name, so a stimulus follows a live replacement of the model.
 
 from __future__ import annotations
 
+import io
 import math
 import re
+from array import array
 from bisect import bisect_right
 from dataclasses import dataclass, field
 
@@ -22,11 +24,26 @@ from ..ir.program import Program
 from . import values as V
 
 LINE_MAX = 65536
+# Most values (non-empty value cells) of a stimulus: EL_HOST_STIMULUS_MAX_EVENTS
+# of boards/host/host_internal.h; a bigger file is reported, not loaded.
+MAX_VALUES = 4 * 1024 * 1024
 _FLOAT_MAX = float(T.FLOAT32_MAX)
-_DECIMAL = re.compile(r"[+-]?(\d+\.?\d*|\.\d+)([eE][+-]?\d+)?")
-_HEX = re.compile(r"[+-]?0[xX]([0-9a-fA-F]+\.?[0-9a-fA-F]*|\.[0-9a-fA-F]+)([pP][+-]?\d+)?")
-_SPECIAL = re.compile(r"[+-]?(inf|infinity|nan(\([0-9A-Za-z_]*\))?)", re.IGNORECASE)
-_INTEGER = re.compile(r"[+-]?\d+")
+# The grammar of boards/host/README.md, "Stimulus CSV", in ASCII only: Python's
+# \d and int() would also take other scripts' digits, which C's reader refuses.
+_DECIMAL = re.compile(r"[+-]?([0-9]+\.?[0-9]*|\.[0-9]+)([eE][+-]?[0-9]+)?", re.ASCII)
+_HEX = re.compile(r"[+-]?0[xX]([0-9a-fA-F]+\.?[0-9a-fA-F]*|\.[0-9a-fA-F]+)([pP][+-]?[0-9]+)?", re.ASCII)
+_SPECIAL = re.compile(r"[+-]?(inf|infinity|nan(\([0-9A-Za-z_]*\))?)", re.IGNORECASE | re.ASCII)
+_INTEGER = re.compile(r"[+-]?[0-9]+", re.ASCII)
+_DIGITS = re.compile(r"[0-9]+", re.ASCII)
+_INDEXED = re.compile(r"(.*)\[([0-9]+)\]", re.ASCII | re.DOTALL)
+
+
+def _whole(digits: str) -> int | None:
+    """An ASCII decimal integer (optionally signed), or None beyond 64 bits:
+    int() of thousands of digits is refused by Python, and C's strtoll and
+    strtoull say ERANGE long before."""
+    body = digits.lstrip("+-").lstrip("0")
+    return None if len(body) > 20 else int(digits)
 _RANGES = {t.name: (t.min, t.max) for t in T.INTEGERS} | {"time": (0, V.TIME_MAX), "bool": (0, 1)}
 
 
@@ -46,7 +63,7 @@ class Column:
     type: T.ValueType  # the item's, which the values were read as
     first: int
     count: int  # elements set: 1, or the item's count for a whole-item column
-    times: list[int] = field(default_factory=list)
+    times: array = field(default_factory=lambda: array("Q"))  # 8 bytes a row, not a Python int
     values: list = field(default_factory=list)
     written: int = 0
     applied: int = 0  # for a device datum: the rows up to which a read has applied
@@ -59,7 +76,10 @@ def parse_strtod(text: str) -> float | None:
         return float(text)
     if _HEX.fullmatch(text):
         sign = -1.0 if text.startswith("-") else 1.0
-        return sign * float.fromhex(text.lstrip("+-"))
+        try:
+            return sign * float.fromhex(text.lstrip("+-"))
+        except OverflowError:  # strtod gives HUGE_VAL and ERANGE
+            return sign * math.inf
     if _SPECIAL.fullmatch(text):
         word = text.lstrip("+-").lower()
         value = math.inf if word.startswith("inf") else math.nan
@@ -179,10 +199,11 @@ class _Reader:
     def parse(self, data: bytes) -> list[Column]:
         columns: list[Column] | None = None
         last_time = None
-        lines = data.split(b"\n")
-        if lines and lines[-1] == b"":
-            lines.pop()
-        for self.line, raw in enumerate(lines, start=1):
+        values = 0
+        # One line at a time: a list of every line would hold the file twice over.
+        for self.line, raw in enumerate(io.BytesIO(data), start=1):
+            if raw.endswith(b"\n"):
+                raw = raw[:-1]
             if raw.endswith(b"\r"):
                 raw = raw[:-1]
             if len(raw) > LINE_MAX:
@@ -197,22 +218,26 @@ class _Reader:
             cells = [c.strip(" \t") for c in text.split(",")]
             if columns is None:
                 columns = self._header(cells)
+                parsed: list[dict] = [{} for _ in columns]
                 continue
             if len(cells) != len(columns) + 1:
                 raise self.error(f"{len(cells)} cells, expected {len(columns) + 1} as in the header")
-            if not cells[0].isdigit() or not cells[0].isascii():
-                raise self.error(f"bad time '{cells[0]}' (time_us: whole microseconds, 0 or more)")
-            time_us = int(cells[0])
-            if time_us >= 2 ** 64:
+            time_us = _whole(cells[0]) if _DIGITS.fullmatch(cells[0]) else None
+            if time_us is None or time_us >= 2 ** 64:
                 raise self.error(f"bad time '{cells[0]}' (time_us: whole microseconds, 0 or more)")
             if last_time is not None and time_us < last_time:
                 raise self.error(f"time {cells[0]} is before the previous row's time {last_time} "
                                  "(times must not decrease)")
             last_time = time_us
-            for col, cell in zip(columns, cells[1:]):
+            for col, cell, seen in zip(columns, cells[1:], parsed):
                 if cell:
+                    # Stimuli repeat their values: each distinct cell of a column is read once.
+                    value = seen[cell] if cell in seen else seen.setdefault(cell, self._value(cell, col))
+                    if values == MAX_VALUES:
+                        raise self.error(f"more than {MAX_VALUES} values: stimulus too big")
+                    values += 1
                     col.times.append(time_us)
-                    col.values.append(self._value(cell, col.type, col.name))
+                    col.values.append(value)
         if columns is None:
             self.line = 1
             raise self.error("empty file: the first line must be the header time_us,DATUM,...")
@@ -236,9 +261,11 @@ class _Reader:
             raise self.error("empty column name", True)
         item, index = self.items.get(name), None
         if item is None:
-            m = re.fullmatch(r"(.*)\[(\d+)\]", name)
+            m = _INDEXED.fullmatch(name)
             if m and m.group(1) in self.items:
-                item, index = self.items[m.group(1)], int(m.group(2))
+                # C's reader stops counting past 65535: any index beyond is too big.
+                item, index = self.items[m.group(1)], _whole(m.group(2))
+                index = 65536 if index is None else min(index, 65536)
         if item is None:
             raise self.error(f"unknown column '{name}'", True)
         if item.kind == "dev_in":
@@ -249,7 +276,18 @@ class _Reader:
             raise self.error(f"column '{name}': {item.name} has {item.count} element{elements}", True)
         return Column(name, item.name, item.type, index or 0, 1 if index is not None else item.count)
 
-    def _value(self, cell: str, t: T.ValueType, column: str):
+    def _value(self, cell: str, col: Column):
+        """The value of a cell of ``col``, within its item's declared range
+        (a range the debug and service interfaces also hold writes to)."""
+        value = self._typed_value(cell, col.type, col.name)
+        bounds = self.items[col.item].range
+        if bounds is not None and not bounds[0] <= value <= bounds[1]:
+            lo, hi = (f"{b:.9g}" if col.type is T.FLOAT32 else str(int(b)) for b in bounds)
+            raise self.error(f"value {cell} out of range for column '{col.name}' "
+                             f"(the declared range of {col.item}: {lo} .. {hi})")
+        return value
+
+    def _typed_value(self, cell: str, t: T.ValueType, column: str):
         if t is T.BOOL:
             if cell in ("1", "true"):
                 return True
@@ -262,8 +300,8 @@ class _Reader:
             what = ": whole milliseconds" if t is T.TIME else ": a decimal integer"
             raise self.error(f"bad number '{cell}' for column '{column}' ({t.name}{what})")
         lo, hi = _RANGES[t.name]
-        value = int(cell)
-        if not lo <= value <= hi:
+        value = _whole(cell)
+        if value is None or not lo <= value <= hi:
             raise self.error(f"value {cell} out of range for column '{column}' ({t.name}: {lo} .. {hi})")
         return value
 

@@ -24,7 +24,7 @@ def _runtime_value(t: T.ValueType, value):
     if t is T.TIME:
         return int(Fraction(value) / 1000)
     if t is T.FLOAT32:
-        return float(value)
+        return T.to_double(value)
     if t is T.BOOL:
         return bool(value)
     return int(value) if not isinstance(value, str) else value

@@ -21,19 +21,20 @@ def test_example_runs_clean_under_sanitizers(name, example_runs):
 
 
 def test_blink_follows_half_period(example_runs):
-    """data/blink.stimulus.csv: half_period 3 at 0 ms, 7 from 100 ms, 20 from
-    250 ms. SquareWave toggles at its first firing and then every
+    """data/blink.stimulus.csv: half_period 10 at 0 ms, 14 from 100 ms, 20
+    from 250 ms (within its declared range 10..5000, which a stimulus must
+    keep). SquareWave toggles at its first firing and then every
     half_period firings (its count restarts when it reaches half_period);
     the task runs every 1 ms and publishes 1 ms after each release."""
     t = example_runs("blink").trace
     changes = [time for time, _ in t.changes("led.level")][1:]
-    # Firings 0, 3, 6, ... toggle while half_period is 3: visible at 1, 4, 7, ... ms.
-    assert changes[:4] == [1000, 4000, 7000, 10000]
+    # Firings 0, 10, 20, ... toggle while half_period is 10: visible at 1, 11, 21, ... ms.
+    assert changes[:4] == [1000, 11000, 21000, 31000]
     toggles, count, level = [], 0, False
-    half = 3
+    half = 10
     for release in range(0, 2999):  # published by 2999 ms, the last instant of a 3 s run
         if release == 100:
-            half = 7
+            half = 14
         if release == 250:
             half = 20
         if count == 0:

@@ -295,6 +295,22 @@ def in_library(span: Span) -> bool:
     return span.file.startswith("<")
 
 
+def short_name(text: str, limit: int = 60) -> str:
+    """``text`` cut to ``limit`` characters for a message."""
+    return text if len(text) <= limit else text[:limit - 3] + "..."
+
+
+def missing_file(path: FsPath) -> str | None:
+    """Why the file a model names cannot be used ('not found', or the
+    system's reason such as 'File name too long'), or None when it is a
+    file: a bad name is a diagnostic, never an OSError out of the checker."""
+    try:
+        return None if path.is_file() else "not found"
+    except (OSError, ValueError) as err:  # ValueError: an embedded NUL
+        reason = getattr(err, "strerror", None) or str(err)
+        return f"cannot be read: {reason[:1].lower()}{reason[1:]}"
+
+
 def whole_ms(value) -> bool:
     return Fraction(value) % 1000 == 0
 
@@ -315,5 +331,5 @@ def show_value(value, t: T.ValueType) -> str:
     if isinstance(value, bool):
         return "true" if value else "false"
     if isinstance(value, Fraction):
-        return str(float(value))
+        return str(T.to_double(value))
     return str(value)

@@ -11,7 +11,7 @@ from .. import ast
 from ..expressions import ERROR, Symbol
 from ..loader import module_dir
 from ..model import ActorInstanceInfo, ArgValue, DataflowInfo, EdgeInfo, Endpoint, Writer
-from .base import C_RESERVED, with_article, kind_name, show_value, port_of, sizing_params
+from .base import C_RESERVED, with_article, kind_name, missing_file, show_value, port_of, short_name, sizing_params
 
 
 class DataflowRules:
@@ -62,8 +62,10 @@ class DataflowRules:
                 self.error(decl.impl_span, "an actor type has either inline C blocks or an 'impl' file, not both")
             base = FsPath(self.actor_type_files[decl.name]) if decl.name in self.actor_type_files else FsPath(".")
             impl_path = module_dir(base) / decl.impl
-            if not impl_path.is_file():
-                self.error(decl.impl_span, f"implementation file '{decl.impl}' not found (looked at {impl_path})")
+            problem = missing_file(impl_path)
+            if problem:
+                self.error(decl.impl_span, f"implementation file '{short_name(decl.impl)}' {problem} "
+                                           f"(looked at {short_name(str(impl_path), 200)})")
         elif "step" not in kinds:
             self.error(decl.name_span, f"actor type '{decl.name}' has no 'step' block and no 'impl' file",
                        "add step {{ ... }} with the C code of one firing")

@@ -12,7 +12,7 @@ from .. import ast
 from ..expressions import ERROR, ExprTyper, Symbol
 from ..loader import module_dir
 from ..model import Claim, DeviceDatum, DevicePort, PrimitiveDevice, RemoteInfo
-from .base import C_RESERVED, MAX_RATE, show_value, in_library, whole_ms, whole_us
+from .base import C_RESERVED, MAX_RATE, in_library, missing_file, short_name, show_value, whole_ms, whole_us
 
 # `remote overruns K`: the proxy counts them in a byte (docs/remote.md).
 MAX_OVERRUN_LIMIT = 255
@@ -54,8 +54,10 @@ class DeviceRules:
                 continue
             boards[impl.board] = impl.span
             path = self.handler_path(decl, impl)
-            if not path.is_file():
-                self.error(impl.span, f"handler file '{impl.file}' not found (looked at {path})")
+            problem = missing_file(path)
+            if problem:
+                self.error(impl.span, f"handler file '{short_name(impl.file)}' {problem} "
+                                      f"(looked at {short_name(str(path), 200)})")
         for st in decl.states:
             self.resolve_type(st.type)
         if decl.states and not decl.impls:
