@@ -28,6 +28,8 @@
  * function code implies (EL_MB_PORT_UNTIMED: the runtime's `early` mode).
  * Garbage followed by a silence is dropped with it; garbage glued to a
  * request without a silence spoils that request, as it would on a line.
+ * Replies are never waited for: when the pty is full of replies nobody
+ * reads, those are discarded (el_port_mb_rtu_send).
  *
  * Local execution replaces a model's interfaces library while it runs
  * (host_interp.c): el_host_modbus_handover passes the listening socket,
@@ -95,30 +97,18 @@ static uint64_t now_ns(void)
     return (uint64_t)ts.tv_sec * 1000000000u + (uint64_t)ts.tv_nsec;
 }
 
-/* Write all of `data` to a non-blocking descriptor, waiting at most about
- * 100 ms for room. */
-static bool write_all(int fd, const uint8_t *data, size_t len)
+/* Write `data` to a non-blocking descriptor as far as it takes it now,
+ * never waiting: whether all of it went. */
+static bool write_now(int fd, const uint8_t *data, size_t len)
 {
-    int waits = 0;
     while (len > 0u) {
         ssize_t n = write(fd, data, len);
         if (n > 0) {
             data += n;
             len -= (size_t)n;
-            continue;
+        } else if (n == 0 || errno != EINTR) {
+            return false;
         }
-        if (n < 0 && errno == EINTR)
-            continue;
-        if (n < 0 && (errno == EAGAIN || errno == EWOULDBLOCK) && waits < 10) {
-            struct pollfd p;
-            p.fd = fd;
-            p.events = POLLOUT;
-            p.revents = 0;
-            (void)poll(&p, 1, 10);
-            waits++;
-            continue;
-        }
-        return false;
     }
     return true;
 }
@@ -361,8 +351,14 @@ int16_t el_port_mb_rtu_getc(void)
 
 void el_port_mb_rtu_send(const uint8_t *adu, uint16_t len)
 {
-    if (rtu_fd >= 0)
-        (void)write_all(rtu_fd, adu, len); /* nobody listening: the reply is lost, as on a line */
+    if (rtu_fd < 0 || write_now(rtu_fd, adu, len))
+        return;
+    /* The pty is full of replies nobody reads (a client that does not
+     * read, or that left): they are dropped, with whatever part of this
+     * one went, and this one is written whole. Never waited for; if the
+     * pty still has no room, the reply is lost, as on a line. */
+    if (rtu_keep >= 0 && tcflush(rtu_keep, TCIFLUSH) == 0)
+        (void)write_now(rtu_fd, adu, len);
 }
 
 /* ---- TCP ---- */
