@@ -169,6 +169,11 @@ bool el_remote_port_write(const uint8_t *frame, uint16_t len)
     return true;
 }
 
+bool el_remote_port_stopping(void)
+{
+    return false; /* every session runs until STOP or the end of its input */
+}
+
 void el_remote_port_end(void)
 {
     stopped = true;

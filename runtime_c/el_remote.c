@@ -276,7 +276,9 @@ void el_remote_boot(void)
     down_done = false;
     el_cobs_decoder_init(&rx, rx_buf, (uint16_t)sizeof rx_buf);
     apply_safe_values();
-    while (state != EL_RMT_STATE_RUNNING) { /* the clock starts at START */
+    /* The clock starts at START; a board that wants the run to end (the
+     * host board: SIGTERM) ends it before, at the first tick. */
+    while (state != EL_RMT_STATE_RUNNING && !el_remote_port_stopping()) {
         el_port_idle(50u);
     }
     el_port_resync(); /* tick 0 is due now, not when the board started (an MCU's timer runs from boot) */
@@ -332,7 +334,8 @@ void el_remote_body(uint8_t task)
         }
     }
     send(EL_RMT_CMD_UP, released_tick, at);
-    while (mode == EL_RMT_MODE_LOCK_STEP && !down_done && state == EL_RMT_STATE_RUNNING) {
+    while (mode == EL_RMT_MODE_LOCK_STEP && !down_done && state == EL_RMT_STATE_RUNNING &&
+           !el_remote_port_stopping()) {
         el_port_idle(20u);
     }
 }

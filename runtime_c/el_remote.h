@@ -56,5 +56,10 @@ void el_remote_shutdown(void);           /* safe values */
 uint16_t el_remote_port_read(uint8_t *buf, uint16_t max); /* received bytes, without waiting */
 bool el_remote_port_write(const uint8_t *frame, uint16_t len);
 void el_remote_port_end(void); /* the host stopped the session: end the run where the board can */
+/* Whether the board wants the run to end (the host board: a SIGTERM or
+ * SIGINT came): the proxy stops waiting for its host (START, a lock-step
+ * DOWN) and the run ends at the next tick, safe values applied. Boards
+ * that run until reset return false. */
+bool el_remote_port_stopping(void);
 
 #endif /* EL_REMOTE_H */

@@ -38,6 +38,11 @@ bool el_remote_port_write(const uint8_t *frame, uint16_t len)
     return el_avr_uart_write(EL_AVR_REMOTE_UART, frame, len, TX_WAIT_MS);
 }
 
+bool el_remote_port_stopping(void)
+{
+    return false; /* an MCU runs until reset */
+}
+
 void el_remote_port_end(void)
 {
     /* STOP's answer drains from the ring (interrupts stay on) while the

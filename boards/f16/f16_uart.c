@@ -181,6 +181,11 @@ bool el_remote_port_write(const uint8_t *frame, uint16_t len)
     return uart1_write(frame, len, REMOTE_TX_WAIT_MS);
 }
 
+bool el_remote_port_stopping(void)
+{
+    return false; /* an MCU runs until reset */
+}
+
 void el_remote_port_end(void)
 {
     /* STOP's answer drains from the ring (interrupts stay on), then a

@@ -47,13 +47,17 @@ extern const uint16_t el_host_range_count
 
 /* ---- descriptors served between instants (host_serve.c) ---- */
 
-/* Called when `fd` is readable or closed (revents as poll() sets them). */
+/* Called when `fd` is readable or closed, or writable while output waits
+ * (revents as poll() sets them). */
 typedef void (*el_host_fd_handler_t)(int fd, short revents, void *ctx);
 
 /* Serve `fd` between instants (while waiting in real time, at every
  * instant in virtual time, and while halted: el_port_idle). */
 bool el_host_watch_fd(int fd, el_host_fd_handler_t handler, void *ctx);
 void el_host_unwatch_fd(int fd);
+/* Whether a watched `fd`'s handler also runs when it is writable (POLLOUT):
+ * while output waits to be written without blocking the loop. */
+void el_host_watch_output(int fd, bool want);
 /* Wait at most timeout_ms (0: just look) for the watched descriptors, run
  * the handlers of those that are ready, then el_idle (the interfaces). */
 void el_host_serve_fds(int timeout_ms);
@@ -71,6 +75,10 @@ int el_host_listen_tcp(const char *option, const char *port_text, const char *wh
 /* A client of a listener made by el_host_listen_tcp, non-blocking and without
  * Nagle's delay; -1 when none could be taken. */
 int el_host_accept_tcp(int listen_fd);
+
+/* Whether a SIGINT or SIGTERM came: the run ends at the next tick, and
+ * whatever waits between ticks (a proxy waiting for its host) stops. */
+bool el_host_stop_requested(void);
 
 /* ---- messages (host_port.c) ---- */
 

@@ -3,7 +3,10 @@
  *
  *   --modbus-tcp PORT      serve the model's `modbus tcp` interface on
  *                          127.0.0.1:PORT (default: the model's port),
- *                          EL_HOST_MB_TCP_CONNS clients at once
+ *                          EL_HOST_MB_TCP_CONNS clients at once (a new
+ *                          client replaces the least recently active one);
+ *                          a client that does not read its replies is
+ *                          dropped, never waited for
  *   --modbus-rtu pty:LINK  serve its `modbus rtu` interface on a new
  *                          pseudo-terminal; LINK is a symlink to it
  *                          (replaced if it is a stale symlink, removed at
@@ -25,6 +28,8 @@
  * function code implies (EL_MB_PORT_UNTIMED: the runtime's `early` mode).
  * Garbage followed by a silence is dropped with it; garbage glued to a
  * request without a silence spoils that request, as it would on a line.
+ * Replies are never waited for: when the pty is full of replies nobody
+ * reads, those are discarded (el_port_mb_rtu_send).
  *
  * Local execution replaces a model's interfaces library while it runs
  * (host_interp.c): el_host_modbus_handover passes the listening socket,
@@ -57,10 +62,17 @@
 #include <time.h>
 #include <unistd.h>
 
-/* TCP clients served at once; one more is accepted and closed at once. */
+/* TCP clients served at once. When every slot is taken, a new client
+ * takes the slot of the least recently active one (the one whose last
+ * request is the oldest), so a new client is always served and idle
+ * clients never lock the others out. */
 #define EL_HOST_MB_TCP_CONNS 10u
-/* Bytes buffered per TCP client (at least one whole ADU, 260 bytes). */
+/* Request bytes buffered per TCP client (at least one whole ADU, 260). */
 #define EL_HOST_MB_TCP_BUF 1024u
+/* Reply bytes kept per TCP client once its socket takes no more (the
+ * client does not read): written when the socket has room again, never
+ * waited for; a reply that does not fit drops the client. */
+#define EL_HOST_MB_TCP_OUT 2048u
 /* Receive events buffered on the RTU pty (bytes and silence marks). */
 #define EL_HOST_MB_RTU_RING 1024u
 /* The shortest silence that ends an RTU frame on a pty, in microseconds
@@ -85,30 +97,18 @@ static uint64_t now_ns(void)
     return (uint64_t)ts.tv_sec * 1000000000u + (uint64_t)ts.tv_nsec;
 }
 
-/* Write all of `data` to a non-blocking descriptor, waiting at most about
- * 100 ms for room. */
-static bool write_all(int fd, const uint8_t *data, size_t len)
+/* Write `data` to a non-blocking descriptor as far as it takes it now,
+ * never waiting: whether all of it went. */
+static bool write_now(int fd, const uint8_t *data, size_t len)
 {
-    int waits = 0;
     while (len > 0u) {
         ssize_t n = write(fd, data, len);
         if (n > 0) {
             data += n;
             len -= (size_t)n;
-            continue;
+        } else if (n == 0 || errno != EINTR) {
+            return false;
         }
-        if (n < 0 && errno == EINTR)
-            continue;
-        if (n < 0 && (errno == EAGAIN || errno == EWOULDBLOCK) && waits < 10) {
-            struct pollfd p;
-            p.fd = fd;
-            p.events = POLLOUT;
-            p.revents = 0;
-            (void)poll(&p, 1, 10);
-            waits++;
-            continue;
-        }
-        return false;
     }
     return true;
 }
@@ -351,16 +351,28 @@ int16_t el_port_mb_rtu_getc(void)
 
 void el_port_mb_rtu_send(const uint8_t *adu, uint16_t len)
 {
-    if (rtu_fd >= 0)
-        (void)write_all(rtu_fd, adu, len); /* nobody listening: the reply is lost, as on a line */
+    if (rtu_fd < 0 || write_now(rtu_fd, adu, len))
+        return;
+    /* The pty is full of replies nobody reads (a client that does not
+     * read, or that left): they are dropped, with whatever part of this
+     * one went, and this one is written whole. Never waited for; if the
+     * pty still has no room, the reply is lost, as on a line. */
+    if (rtu_keep >= 0 && tcflush(rtu_keep, TCIFLUSH) == 0)
+        (void)write_now(rtu_fd, adu, len);
 }
 
 /* ---- TCP ---- */
 
+/* A client's slot. Nothing here ever waits for a client: requests are
+ * read as they come, replies go out as far as the socket takes them and
+ * the rest waits in `out` until poll() says the socket has room. */
 typedef struct {
-    int fd; /* -1: free */
-    size_t len;
+    int fd;             /* -1: free */
+    size_t len;         /* request bytes in buf */
+    size_t out_len;     /* reply bytes waiting in out */
+    uint64_t active_ns; /* when the client last sent bytes, or connected */
     uint8_t buf[EL_HOST_MB_TCP_BUF];
+    uint8_t out[EL_HOST_MB_TCP_OUT];
 } tcp_conn_t;
 
 static int tcp_listen = -1;
@@ -387,25 +399,77 @@ void el_port_mb_tcp_close(uint8_t conn)
     close(tcp_conns[conn].fd);
     tcp_conns[conn].fd = -1;
     tcp_conns[conn].len = 0;
+    tcp_conns[conn].out_len = 0;
+}
+
+/* Write what the socket takes now, never waiting: the number of bytes
+ * written (0 when its send buffer is full), or -1 when the connection is
+ * broken. MSG_NOSIGNAL: a client gone is an error here, not a SIGPIPE. */
+static ssize_t send_now(int fd, const uint8_t *data, size_t len)
+{
+    ssize_t n;
+    do {
+        n = send(fd, data, len, MSG_NOSIGNAL);
+    } while (n < 0 && errno == EINTR);
+    if (n >= 0)
+        return n;
+    return errno == EAGAIN || errno == EWOULDBLOCK ? 0 : -1;
+}
+
+/* Write as much of the replies waiting for `c` as its socket takes now,
+ * and watch for room while some remain; false when the connection broke. */
+static bool flush_out(tcp_conn_t *c)
+{
+    ssize_t n;
+    if (c->out_len == 0u)
+        return true;
+    n = send_now(c->fd, c->out, c->out_len);
+    if (n < 0)
+        return false;
+    memmove(c->out, c->out + n, c->out_len - (size_t)n);
+    c->out_len -= (size_t)n;
+    el_host_watch_output(c->fd, c->out_len > 0u);
+    return true;
 }
 
 static void conn_readable(int fd, short revents, void *ctx)
 {
     tcp_conn_t *c = (tcp_conn_t *)ctx;
     ssize_t n;
-    (void)revents;
     if (c->fd != fd)
+        return;
+    if ((revents & POLLOUT) != 0 && !flush_out(c)) {
+        el_port_mb_tcp_close((uint8_t)(c - tcp_conns));
+        return;
+    }
+    if ((revents & (POLLIN | POLLHUP | POLLERR | POLLNVAL)) == 0)
         return;
     if (c->len >= sizeof c->buf)
         return; /* full of whole requests: the slave takes them right after this */
     n = read(fd, c->buf + c->len, sizeof c->buf - c->len);
     if (n > 0) {
         c->len += (size_t)n;
+        c->active_ns = now_ns();
         return;
     }
     if (n < 0 && (errno == EAGAIN || errno == EWOULDBLOCK || errno == EINTR))
         return;
     el_port_mb_tcp_close((uint8_t)(c - tcp_conns)); /* closed by the client, or an error */
+}
+
+/* The slot for a new client: a free one, else that of the least recently
+ * active client, which is dropped (a new client is always served). */
+static size_t slot_for_new_client(void)
+{
+    size_t i, oldest = 0u;
+    for (i = 0; i < EL_HOST_MB_TCP_CONNS; i++) {
+        if (tcp_conns[i].fd < 0)
+            return i;
+        if (tcp_conns[i].active_ns < tcp_conns[oldest].active_ns)
+            oldest = i;
+    }
+    el_port_mb_tcp_close((uint8_t)oldest);
+    return oldest;
 }
 
 static void accept_ready(int fd, short revents, void *ctx)
@@ -414,18 +478,22 @@ static void accept_ready(int fd, short revents, void *ctx)
     int c;
     (void)revents;
     (void)ctx;
-    c = accept(fd, NULL, NULL); /* refused at once when there is no room, or no Modbus TCP in the model */
+    c = accept(fd, NULL, NULL); /* closed at once when the model has no Modbus TCP */
     if (c < 0)
         return;
-    for (i = 0; i < EL_HOST_MB_TCP_CONNS; i++)
-        if (tcp_conns[i].fd < 0)
-            break;
-    if (!tcp_served || i == EL_HOST_MB_TCP_CONNS || !set_flags(c) || !el_host_watch_fd(c, conn_readable, &tcp_conns[i])) {
-        close(c); /* no room: refused */
+    if (!tcp_served || !set_flags(c)) {
+        close(c);
+        return;
+    }
+    i = slot_for_new_client();
+    if (!el_host_watch_fd(c, conn_readable, &tcp_conns[i])) {
+        close(c);
         return;
     }
     tcp_conns[i].fd = c;
     tcp_conns[i].len = 0;
+    tcp_conns[i].out_len = 0;
+    tcp_conns[i].active_ns = now_ns();
 }
 
 static bool tcp_listen_on(uint16_t port, const char *what)
@@ -441,6 +509,8 @@ static bool tcp_listen_on(uint16_t port, const char *what)
         for (i = 0; i < handed_conn_count; i++) {
             tcp_conns[i].fd = handed_conns[i];
             tcp_conns[i].len = 0;
+            tcp_conns[i].out_len = 0;
+            tcp_conns[i].active_ns = now_ns();
             if (!el_host_watch_fd(tcp_conns[i].fd, conn_readable, &tcp_conns[i]))
                 el_port_mb_tcp_close((uint8_t)i);
         }
@@ -531,12 +601,29 @@ void el_port_mb_tcp_consume(uint8_t conn, uint16_t n)
 
 bool el_port_mb_tcp_send(uint8_t conn, const uint8_t *adu, uint16_t len)
 {
+    tcp_conn_t *c;
+    ssize_t sent = 0;
     if (conn >= EL_HOST_MB_TCP_CONNS || tcp_conns[conn].fd < 0)
         return false;
-    if (!write_all(tcp_conns[conn].fd, adu, len)) {
-        el_port_mb_tcp_close(conn); /* a client that does not read its replies */
+    c = &tcp_conns[conn];
+    if (!flush_out(c)) {
+        el_port_mb_tcp_close(conn);
         return false;
     }
+    if (c->out_len == 0u) { /* nothing waiting: straight to the socket, in order */
+        sent = send_now(c->fd, adu, len);
+        if (sent < 0) {
+            el_port_mb_tcp_close(conn);
+            return false;
+        }
+    }
+    if ((size_t)len - (size_t)sent > sizeof c->out - c->out_len) {
+        el_port_mb_tcp_close(conn); /* a client that does not read its replies: dropped, never waited for */
+        return false;
+    }
+    memcpy(c->out + c->out_len, adu + sent, (size_t)len - (size_t)sent);
+    c->out_len += (size_t)len - (size_t)sent;
+    el_host_watch_output(c->fd, c->out_len > 0u);
     return true;
 }
 
@@ -546,6 +633,9 @@ bool el_host_modbus_handover(void)
 {
     char text[16 * (3u + EL_HOST_MB_TCP_CONNS)];
     size_t i, used;
+    for (i = 0; i < EL_HOST_MB_TCP_CONNS; i++)
+        if (tcp_conns[i].fd >= 0)
+            (void)flush_out(&tcp_conns[i]); /* what the socket takes now; the rest is lost with this library */
     used = (size_t)snprintf(text, sizeof text, "%d %d %d", tcp_listen, rtu_fd, rtu_keep);
     for (i = 0; i < EL_HOST_MB_TCP_CONNS; i++)
         if (tcp_conns[i].fd >= 0 && used < sizeof text)

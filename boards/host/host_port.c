@@ -48,6 +48,11 @@ int el_host_exit_status(void)
     return exit_status;
 }
 
+bool el_host_stop_requested(void)
+{
+    return stop_signal != 0;
+}
+
 uint64_t el_host_now_us(void)
 {
     return now_us;

@@ -115,6 +115,11 @@ bool el_remote_port_write(const uint8_t *frame, uint16_t len)
     return done == len;
 }
 
+bool el_remote_port_stopping(void)
+{
+    return el_host_stop_requested();
+}
+
 void el_remote_port_end(void)
 {
     el_host_drain_pty(keep_fd); /* the host reads STOP's answer before the pty goes */

@@ -33,6 +33,7 @@ typedef struct {
     int fd;
     el_host_fd_handler_t handler;
     void *ctx;
+    short events; /* POLLIN, with POLLOUT while output waits (el_host_watch_output) */
 } watched_t;
 
 static watched_t watched[EL_HOST_MAX_WATCHED];
@@ -47,8 +48,20 @@ bool el_host_watch_fd(int fd, el_host_fd_handler_t handler, void *ctx)
     watched[watched_count].fd = fd;
     watched[watched_count].handler = handler;
     watched[watched_count].ctx = ctx;
+    watched[watched_count].events = POLLIN;
     watched_count++;
     return true;
+}
+
+void el_host_watch_output(int fd, bool want)
+{
+    size_t i;
+    for (i = 0; i < watched_count; i++) {
+        if (watched[i].fd == fd) {
+            watched[i].events = want ? (short)(POLLIN | POLLOUT) : (short)POLLIN;
+            return;
+        }
+    }
 }
 
 void el_host_unwatch_fd(int fd)
@@ -84,7 +97,7 @@ void el_host_serve_fds(int timeout_ms)
     for (i = 0; i < n; i++) {
         copy[i] = watched[i]; /* handlers may watch or unwatch */
         fds[i].fd = watched[i].fd;
-        fds[i].events = POLLIN;
+        fds[i].events = watched[i].events;
         fds[i].revents = 0;
     }
     r = poll(fds, (nfds_t)n, timeout_ms);

@@ -37,6 +37,11 @@ bool el_remote_port_write(const uint8_t *frame, uint16_t len)
     return el_pic18_uart_write(frame, len, TX_WAIT_MS);
 }
 
+bool el_remote_port_stopping(void)
+{
+    return false; /* an MCU runs until reset */
+}
+
 void el_remote_port_end(void)
 {
     /* STOP's answer drains from the ring (interrupts stay on), then the

@@ -4,6 +4,7 @@ the device-model id, the two connect errors, corrupted frames, overruns."""
 from __future__ import annotations
 
 import os
+import signal
 import struct
 import time
 
@@ -422,3 +423,34 @@ def test_the_proxy_buffers_hold_the_device_models_largest_frames(name):
     assert (sizes.rx_wire, sizes.tx_wire) == (sizes.rx + 2, sizes.tx + 2)  # COBS' first code byte, the delimiter
     config = render_proxy(program, load_board("host").configure(None))["el_remote_config.h"]
     assert f"#define EL_RMT_RX_FRAME {sizes.rx}u" in config and f"#define EL_RMT_TX_FRAME {sizes.tx}u" in config
+
+
+def test_a_proxy_waiting_for_its_host_ends_at_the_first_sigterm(build_cache, tmp_path):
+    """Waiting for START (no host yet) and waiting in lock-step for a DOWN
+    that does not come, the first SIGTERM ends the proxy, with status 0,
+    as it does between ticks."""
+    exe = proxy_of(build_cache, BLINK)
+    waiting = Proxy(exe, tmp_path / "boot-link")
+    try:
+        time.sleep(0.2)  # in its wait for START
+        waiting.proc.send_signal(signal.SIGTERM)
+        status, err = waiting.finish(timeout=5.0)  # before the fix: still waiting after the first SIGTERM
+        assert status == 0, err
+    finally:
+        waiting.kill()
+
+    program, _ = lower_file(BLINK)
+    lock_step = Proxy(exe, tmp_path / "lock-step-link")
+    link = None
+    try:
+        link = Link(str(lock_step.link), device_model(program))
+        link.connect()
+        link.start(lock_step=True)
+        assert link.up(0, 5.0)[0] == K.STATE_RUNNING  # the proxy now waits for instant 0's DOWN
+        lock_step.proc.send_signal(signal.SIGTERM)
+        status, err = lock_step.finish(timeout=5.0)
+        assert status == 0, err
+    finally:
+        if link:
+            link.close()
+        lock_step.kill()
