@@ -32,7 +32,7 @@ from pycparser import c_ast, c_generator, c_parser
 from easylab.core.errors import BuildError
 
 from . import (bankcheck, boolconv, buildcache, ctypes64, datapointers, inline, linkmap, lower64, lower64_stmt,
-               messages, prune, saves, sdcc_quirks, shifts, strength)
+               messages, prune, saves, sdcc_quirks, selfops, shifts, strength)
 from .ctypes64 import LowerError, Target
 from .lower64_stmt import lower_unit
 
@@ -180,6 +180,7 @@ class Build:
             inline.inline_single_calls(ast)
             strength.reduce_products(ast, TARGET)
             shifts.split_shifts(ast)
+            selfops.rewrite_self_operations(ast)
             boolconv.fix_bool_conversions(ast, TARGET)
             datapointers.data_pointers(ast)
         big_start = sdcc_quirks.place_big_objects(units, TARGET, ram_end)
