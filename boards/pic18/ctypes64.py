@@ -282,6 +282,37 @@ def each_function(ast: c_ast.FileAST, env: TypeEnv, visit) -> None:
             env.pop()
 
 
+class BottomUpRewriter(c_ast.NodeVisitor):
+    """Replaces expressions in a unit's function bodies, children first:
+    a subclass's ``rewrite`` returns a node or what stands for it (and
+    counts it in ``count``)."""
+
+    def __init__(self):
+        self.count = 0
+
+    def rewrite(self, node: c_ast.Node) -> c_ast.Node:
+        return node
+
+    def generic_visit(self, node: c_ast.Node) -> None:
+        for name, child in node.children():
+            self.visit(child)
+            base = name.split("[")[0]
+            if "[" in name:
+                items = list(getattr(node, base))
+                k = int(name.split("[")[1].rstrip("]"))
+                items[k] = self.rewrite(items[k])
+                setattr(node, base, items)
+            else:
+                setattr(node, base, self.rewrite(getattr(node, base)))
+
+    def run(self, ast: c_ast.FileAST) -> int:
+        """Rewrite every function body of the unit in place; how many nodes were replaced."""
+        for ext in ast.ext:
+            if isinstance(ext, c_ast.FuncDef):
+                self.visit(ext.body)
+        return self.count
+
+
 def pure(e: c_ast.Node) -> bool:
     """Evaluating it twice is the same as once (no calls, no assignments)."""
     if isinstance(e, (c_ast.FuncCall, c_ast.Assignment)):

@@ -17,7 +17,7 @@ from __future__ import annotations
 
 from pycparser import c_ast, c_generator
 
-from .ctypes64 import pure
+from .ctypes64 import BottomUpRewriter, pure
 
 _TEXT = c_generator.CGenerator()
 _INTEGER_NAMES = {"char", "short", "int", "long", "signed", "unsigned", "_Bool", "int8_t", "int16_t", "int32_t",
@@ -32,23 +32,8 @@ def _integer_cast(e: c_ast.Node) -> bool:
     return bool(names) and set(names) <= _INTEGER_NAMES
 
 
-class _Rewriter(c_ast.NodeVisitor):
-    def __init__(self):
-        self.count = 0
-
-    def generic_visit(self, node: c_ast.Node) -> None:
-        for name, child in node.children():
-            self.visit(child)
-            base = name.split("[")[0]
-            if "[" in name:
-                items = list(getattr(node, base))
-                k = int(name.split("[")[1].rstrip("]"))
-                items[k] = self._rewrite(items[k])
-                setattr(node, base, items)
-            else:
-                setattr(node, base, self._rewrite(getattr(node, base)))
-
-    def _rewrite(self, node: c_ast.Node) -> c_ast.Node:
+class _Rewriter(BottomUpRewriter):
+    def rewrite(self, node: c_ast.Node) -> c_ast.Node:
         if not isinstance(node, c_ast.BinaryOp) or node.op not in ("^", "-") or not _integer_cast(node.left) \
                 or not pure(node.left):
             return node
@@ -60,8 +45,4 @@ class _Rewriter(c_ast.NodeVisitor):
 
 def rewrite_self_operations(ast: c_ast.FileAST) -> int:
     """Rewrite the unit's `e ^ e` and `e - e` in place; returns how many."""
-    r = _Rewriter()
-    for ext in ast.ext:
-        if isinstance(ext, c_ast.FuncDef):
-            r.visit(ext.body)
-    return r.count
+    return _Rewriter().run(ast)

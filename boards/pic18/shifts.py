@@ -17,7 +17,7 @@ from __future__ import annotations
 
 from pycparser import c_ast
 
-from .ctypes64 import const_value
+from .ctypes64 import BottomUpRewriter, const_value
 
 STEP = 7  # the widest shift sdcc narrows right
 
@@ -29,23 +29,8 @@ def _count(e: c_ast.Node) -> int | None:
         return None
 
 
-class _Splitter(c_ast.NodeVisitor):
-    def __init__(self):
-        self.count = 0
-
-    def generic_visit(self, node: c_ast.Node) -> None:
-        for name, child in node.children():
-            self.visit(child)
-            base = name.split("[")[0]
-            if "[" in name:
-                items = list(getattr(node, base))
-                k = int(name.split("[")[1].rstrip("]"))
-                items[k] = self._split(items[k])
-                setattr(node, base, items)
-            else:
-                setattr(node, base, self._split(getattr(node, base)))
-
-    def _split(self, node: c_ast.Node) -> c_ast.Node:
+class _Splitter(BottomUpRewriter):
+    def rewrite(self, node: c_ast.Node) -> c_ast.Node:
         if not isinstance(node, c_ast.BinaryOp) or node.op != "<<":
             return node
         k = _count(node.right)
@@ -62,8 +47,4 @@ class _Splitter(c_ast.NodeVisitor):
 
 def split_shifts(ast: c_ast.FileAST) -> int:
     """Rewrite the unit's left shifts by 8 or more in place; returns how many."""
-    s = _Splitter()
-    for ext in ast.ext:
-        if isinstance(ext, c_ast.FuncDef):
-            s.visit(ext.body)
-    return s.count
+    return _Splitter().run(ast)
