@@ -129,9 +129,11 @@ class ExprWriter:
         if kind == "shr":
             return f"({a} >> {rng.randint(0, 31)})"
         if kind == "div":
-            return f"({a} / {rng.choice([2, 3, 7, 10, 255, 1000, 65537, 4000000000])}uL)"
+            # the quotient fits 32 bits: the cast keeps the expression uint32_t
+            # where unsigned long has 64 (the host board) as where it has 32
+            return f"(uint32_t)({a} / {rng.choice([2, 3, 7, 10, 255, 1000, 65537, 4000000000])}uL)"
         if kind == "mod":
-            return f"({a} % {rng.choice([2, 3, 10, 256, 1000, 70000])}uL)"
+            return f"(uint32_t)({a} % {rng.choice([2, 3, 10, 256, 1000, 70000])}uL)"
         if kind == "sdiv":
             k = rng.choice([2, 3, 7, 100, -2, -3, -10, -1000])
             return f"(uint32_t)((int32_t){a} / {k}L)"

@@ -75,3 +75,24 @@ def test_the_stimulus_names_only_the_models_inputs(models):
         for column in header[1:]:
             name = column.split(".")[0]
             assert re.search(rf"^(param|var|device) {name}\b", m.text, re.M), (seed, part, column)
+
+
+def test_every_uint32_expression_has_32_bits_where_long_has_64(tmp_path):
+    """A u32 expression is uint32_t with gcc on x86-64, where `unsigned
+    long` has 64 bits, as on the MCU boards, where it has 32: a quotient by
+    a `uL` constant left as `unsigned long` compared 64-bit values on the
+    host board and 32-bit ones on the PIC18 (seed 1204)."""
+    import random
+    import subprocess
+
+    from ctypes_gen import ExprWriter
+
+    operands = {"a": "uint8", "b": "int16", "c": "uint32", "d": "int32"}
+    lines = ["#include <stdint.h>", "uint8_t a; int16_t b; uint32_t c; int32_t d;"]
+    for seed in range(400):
+        expr = ExprWriter(random.Random(seed), operands).u32(4)
+        lines.append(f"_Static_assert(sizeof({expr}) == 4u, \"seed {seed}\");")
+    src = tmp_path / "widths.c"
+    src.write_text("\n".join(lines) + "\n")
+    proc = subprocess.run(["gcc", "-std=c11", "-fsyntax-only", "-w", str(src)], capture_output=True, text=True)
+    assert proc.returncode == 0, proc.stderr[:2000]
