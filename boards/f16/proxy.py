@@ -25,6 +25,8 @@ from easylab.board.cbuild import compile_objects, defined_symbols, elf_sections,
 from easylab.core.errors import BuildError
 from easylab.board.sdcc_rescue import crashed, rescue_source
 
+from . import stack8051
+
 _PACKAGES = "gcc clang clang-tidy sdcc sdcc-libraries sdcc-ucsim"
 
 
@@ -123,7 +125,8 @@ def _rescued(sdcc: list[str], flags: list[str], src: Path, rel: Path,
 def sdcc_link(board, sources: list[Path], flags: list[str], work: Path, name: str) -> Path:
     """Compile each source with sdcc (in parallel) and link NAME.ihx; a
     warning fails, and so does a program that does not fit the 8051's 64 KB
-    of code, saying so."""
+    of code, saying so. The image's stack bound goes beside it
+    (stack8051)."""
     sdcc = sdcc_command(board)
     obj = work / "obj8051"
     if obj.exists():
@@ -151,6 +154,8 @@ def sdcc_link(board, sources: list[Path], flags: list[str], work: Path, name: st
         if "Insufficient" in text or "exceeds" in text or "overlap" in text.lower():
             raise BuildError(f"the program does not fit the 16-bit proxy's 8051 (64 KB of code, 64 KB of data):\n{text}")
         raise BuildError(f"linking the 16-bit proxy with sdcc failed:\n{text}")
+    memory = [f for f in sdcc if f.startswith(("-m", "--model-", "--stack-"))]
+    stack8051.write_report(sorted(obj.glob("*.asm")), ihx, stack8051.library_needs(sdcc, memory))
     return ihx
 
 

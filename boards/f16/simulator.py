@@ -16,7 +16,7 @@ from easylab.core.errors import BuildError
 from easylab.core.paths import runtime_dir
 from easylab.ir.program import Program
 
-from . import proxy
+from . import proxy, stack8051
 from .part import tick_timer
 
 # s51 runs the 8052 at 48 MHz: four machine cycles per microsecond, which
@@ -89,7 +89,8 @@ def run_model_source(program: Program, board, ihx: Path) -> str:
     lines += [f"const char f16p_ihx_default[] = {c_string(str(ihx.resolve()))};",
               "const char f16p_s51[] = \"s51\";",
               f"const char f16p_s51_cpu[] = {c_string(spec['s51_cpu'])};",
-              f"const char f16p_s51_xtal[] = {c_string(spec['s51_xtal'])};", ""]
+              f"const char f16p_s51_xtal[] = {c_string(spec['s51_xtal'])};",
+              f"const char f16p_stack_note[] = {c_string(stack8051.describe(ihx))};", ""]
     return "\n".join(lines)
 
 

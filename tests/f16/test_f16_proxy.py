@@ -101,3 +101,49 @@ def test_every_examples_generated_c_passes_the_c89_checks(build_cache, name, tmp
     proxy.clang_objects(board, sources, flags, tmp_path / "clang", out)
     proxy.tidy_check(board, sources, flags)
     assert {p.name for p in sources} >= {"model.c", "debug_tables.c"}
+
+
+def test_a_stack_that_overflows_the_8051_is_named_not_a_wrong_value(tmp_path):
+    """200 bytes of locals fit every board but the proxy's 8051 (some 220
+    bytes of stack, part of them the runtime's): its run stops at the
+    stack's top and says the model does not fit, with the build's bound and
+    the call chain, where it went on over the registers and traced 113 for
+    6 before."""
+    model = HERE / "models" / "deep_stack.elab"
+    host = build(model, "host", tmp_path / "host")
+    assert [r["out"] for r in trace(host.executable, tmp_path / "host.csv")] == ["0", "6"]
+    proxy = build(model, "f16", tmp_path / "f16", "--sim")
+    proc = subprocess.run([str(proxy.simulator), "--duration", "50ms", "--trace", str(tmp_path / "proxy.csv")],
+                          capture_output=True, text=True, timeout=300, stdin=subprocess.DEVNULL)
+    assert proc.returncode == 1, proc.stderr
+    assert "the program's stack reached the top of the 8051's internal RAM" in proc.stderr
+    assert "the model does not fit the 16-bit proxy" in proc.stderr
+    bound = re.search(r"bounds its deepest call chain at (\d+) bytes of stack, (\d+) are free: (main -> .*)",
+                      proc.stderr)
+    assert bound and int(bound.group(1)) > int(bound.group(2)), proc.stderr
+    assert "el_spec1_Scratch_0_step" in bound.group(3)
+
+
+def test_the_stack_bound_follows_sdccs_frames(tmp_path):
+    """stack8051 reads sdcc's assembly: a prologue of 200 bytes (0xc8, not
+    -56), an argument cleanup (0xfb is -5), a call through a pointer."""
+    import sys
+    sys.path.insert(0, str(HERE.parents[1] / "boards" / "f16"))
+    import stack8051
+
+    asm = "\n".join([
+        ";	function main", "_main:", "\tlcall\t_big", "\tpush\tacc", "\tlcall\t_args", "\tret",
+        ";	function big", "_big:", "\tpush\t_bp", "\tmov\ta,sp", "\tmov\t_bp,a", "\tadd\ta,#0xc8", "\tmov\tsp,a",
+        "\tmov\tsp,_bp", "\tpop\t_bp", "\tret",
+        ";	function args", "_args:", "\tpush\tar2", "\tpush\tar3", "\tpush\tar4", "\tpush\tar5", "\tpush\tar6",
+        "\tlcall\t_leaf", "\tmov\ta,sp", "\tadd\ta,#0xfb", "\tmov\tsp,a", "\tmov\tdptr,#_leaf", "\tlcall\t__sdcc_call_dptr",
+        "\tret",
+        ";	function leaf", "_leaf:", "\tpush\tacc", "\tpop\tacc", "\tret",
+    ])
+    program = stack8051.Program()
+    stack8051.read_assembly(asm, program)
+    bound = stack8051.StackBound(program, {})
+    assert bound.need("_leaf") == 1
+    assert bound.need("_big") == 201  # _bp and 200 bytes of locals
+    assert bound.need("_args") == 5 + 2 + 1  # five arguments, the call, the leaf's push
+    assert bound.need("_main") == 2 + 201

@@ -37,6 +37,7 @@ extern const char f16p_ihx_default[];
 extern const char f16p_s51[];
 extern const char f16p_s51_cpu[];
 extern const char f16p_s51_xtal[];
+extern const char f16p_stack_note[];
 
 #define EXIT_OK 0
 #define EXIT_RUN 1
@@ -178,15 +179,22 @@ static void on_alarm(int sig)
         kill(child, SIGKILL);
 }
 
-/* s51 until the program stops the simulator; false (reported) otherwise.
- * Its console reads `commands`: run (until the program stops itself), quit. */
+/* s51's console: a watch on the top byte of the internal RAM, where the
+ * 8051's stack ends, that stops the run at its second write (the start-up
+ * code's clearing of the RAM is the first); run until the program stops
+ * itself; quit. A stack that reaches the top would go on over the
+ * registers at address 0 and give wrong values without a word. */
+#define S51_COMMANDS "break iram w 0xff 2\nrun\nquit\n"
+#define S51_STACK_TOP_EVENT "Event `write' at iram[0xff]"
+
+/* s51 until the program stops the simulator; false (reported) otherwise. */
 static bool run_s51(const char *in, const char *out, const char *commands, const char *log)
 {
     char sif[4096];
     int status;
     struct sigaction sa;
     FILE *cmd = fopen(commands, "w");
-    if (cmd == NULL || fputs("run\nquit\n", cmd) < 0 || fclose(cmd) != 0) {
+    if (cmd == NULL || fputs(S51_COMMANDS, cmd) < 0 || fclose(cmd) != 0) {
         el_host_error("cannot write %s: %s", commands, strerror(errno));
         return false;
     }
@@ -257,6 +265,16 @@ static long replay(const char *path)
         instants++;
     }
     fclose(f);
+    if (c == head[0]) {
+        /* its report's header again: the program jumped to its reset
+         * vector, which a return into a stack overwritten past the top of
+         * the internal RAM does (s51 does not stop it) */
+        bool noted = f16p_stack_note[0] != '\0';
+        el_host_error("the proxy program started again from its reset vector after %ld instants: its stack overflowed "
+                      "the 8051's internal RAM, so the model does not fit the 16-bit proxy%s%s%s", instants,
+                      noted ? " (" : "", f16p_stack_note, noted ? ")" : "");
+        return -1;
+    }
     if (c != 'X') {
         el_host_error("the proxy program stopped before the end of the run (after %ld instants)", instants);
         return -1;
@@ -270,7 +288,11 @@ static void explain_stop(const char *log)
     char line[512];
     FILE *f = fopen(log, "r");
     while (f != NULL && fgets(line, sizeof line, f) != NULL) {
-        if (strstr(line, "Stack overflow") != NULL)
+        if (strstr(line, S51_STACK_TOP_EVENT) != NULL)
+            el_host_error("the program's stack reached the top of the 8051's internal RAM (s51 stopped it at a write "
+                          "to iram[0xff]): the model does not fit the 16-bit proxy%s%s",
+                          f16p_stack_note[0] != '\0' ? "; " : "", f16p_stack_note);
+        else if (strstr(line, "Stack overflow") != NULL)
             el_host_error("s51: %s    (the 8051's stack, some 220 bytes of internal RAM, is too small for this "
                           "model's deepest call chain: it does not fit the 16-bit proxy)", strtok(line, "\r\n"));
         else if (strstr(line, "rroneous") != NULL || strstr(line, "nvalid") != NULL)
