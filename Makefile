@@ -21,7 +21,7 @@ DEB_PACKAGES := gcc make pkg-config graphviz tmux socat \
 	chromium chromium-driver \
 	cyclonedds-dev cyclonedds-tools
 
-.PHONY: crosscheck-tally setup deps venv toolchains test demo bench clean help flash sim crosscheck
+.PHONY: mutations crosscheck-tally setup deps venv toolchains test demo bench clean help flash sim crosscheck
 
 help:
 	@echo "make setup   install Debian packages (when missing) and the virtual environment"
@@ -31,6 +31,8 @@ help:
 	@echo "make crosscheck N=100 BOARDS=host,avr,pic18 [SEED=1000] [JOBS=2]"
 	@echo "             back-to-back testing: N random models per part, every mode against local execution"
 	@echo "             (modes: host avr avr328 pic18 f16 remote-host remote-avr; docs/testing.md)"
+	@echo "make mutations N=10000 [SEED=1] [JOBS=2]"
+	@echo "             mutated examples through the checker, the accepted ones through a host build"
 	@echo "make flash BOARD=avr MODEL=m.elab PORT=/dev/ttyACM0 [MCU=..] [PROGRAMMER=..] [BUILD_FLAGS=--release]"
 	@echo "             build and burn with the board's programmer (\`make -n flash ...\` shows the commands;"
 	@echo "             BOARD=pic18: a PICkit on USB, PORT=usb)"
@@ -133,3 +135,8 @@ sim: setup
 clean:
 	rm -rf build bench/results $(VENV) *.egg-info .pytest_cache
 	find . -name __pycache__ -type d -prune -exec rm -rf {} +
+
+# The mutation campaign (docs/testing.md, "Mutated models"): N mutants of
+# the examples through the checker, the accepted ones through a host build.
+mutations: setup
+	$(PY) tests/frontend/mutation_campaign.py -n $(N) --seed $(SEED) --jobs $(JOBS) --out build/mutations

@@ -10,7 +10,6 @@ derandomized (the same cases on every machine) and bounded in number.
 
 from __future__ import annotations
 
-import re
 from pathlib import Path
 
 import pytest
@@ -18,72 +17,30 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from easylab.pipeline import check_file
+from mutations import mutate
 
 ROOT = Path(__file__).resolve().parents[2]
 # The examples, and a model with every construct of the language once.
 SEEDS = [*sorted((ROOT / "examples").glob("*.elab")), Path(__file__).parent / "models" / "all_features.elab"]
 TOTAL_CASES = 3000
 
-# Whitespace, comments, strings, inline-C delimiters, operators, words, numbers.
-TOKEN = re.compile(r'\s+|//[^\n]*|/\*.*?\*/|"(?:[^"\\\n]|\\.)*"|\{\{|\}\}|->|\.\.|[<>=!]=|[A-Za-z_]\w*'
-                   r'|\d+(?:\.\d+)?|.', re.S)
-INSERTS = [
-    "{", "}", "(", ")", "[", "]", ",", ":", "=", "->", "..", ".", "<", ">", '"', "{{", "}}", "/*", "*/", "//",
-    "@", "-", "+", "*", "/", "%", "==", "\\", "$", "'", "#", "\t", "\n", "\r", "\f", "\u2028", "é",
-    "model", "import", "const", "param", "var", "channel", "device", "type", "actor", "dataflow", "chart",
-    "task", "step", "initial", "transition", "when", "run", "entry", "exit", "in", "out", "rate", "delay",
-    "part", "claims", "driver", "impl", "state", "start", "stop", "period", "offset", "deadline", "wcet",
-    "debug", "modbus", "rtu", "tcp", "on", "baud", "parity", "unit", "port", "range", "service", "persist",
-    "ro", "rw", "schedule", "sas", "flat", "min-buffer", "std", "true", "false", "not", "and", "or",
-    "int8", "uint8", "int16", "uint16", "int32", "uint32", "float32", "bool", "time", "string", "number",
-    "integer", "T", "x", "y", "0", "1", "-1", "255", "65536", "4294967296", "0x", "0b2", "1.5", "1e40", "007",
-    "ms", "s", "us", '"PB5"', '"\\q"', "adc", "uart0", "pin",
-]
 
+class HypothesisChooser:
+    """A mutation's choices drawn by hypothesis (shrinkable)."""
 
-KEYWORDS = {w for w in INSERTS if w.isalpha() and w.islower() and w not in ("x", "y", "adc", "pin")}
+    def __init__(self, draw):
+        self.draw = draw
 
+    def integer(self, lo: int, hi: int) -> int:
+        return self.draw(st.integers(lo, hi))
 
-def _significant(tokens: list[str]) -> list[int]:
-    """Indices of the tokens that are neither whitespace nor comments."""
-    return [i for i, t in enumerate(tokens) if t.strip() and not t.startswith(("//", "/*"))] or [0]
+    def pick(self, items):
+        return self.draw(st.sampled_from(items))
 
 
 @st.composite
 def mutated(draw, text: str) -> str:
-    tokens = TOKEN.findall(text)
-    words = sorted({t for t in tokens if re.fullmatch(r"[A-Za-z_]\w*|\d+(\.\d+)?", t)} - KEYWORDS)
-    for _ in range(draw(st.integers(1, 4))):
-        kind = draw(st.sampled_from(["delete", "duplicate", "swap", "insert", "replace", "replace", "replace",
-                                     "delete line", "duplicate line", "swap lines"]))
-        if kind.endswith(("line", "lines")):
-            lines = "".join(tokens).split("\n")
-            i = draw(st.integers(0, len(lines) - 1))
-            j = draw(st.integers(0, len(lines) - 1))
-            if kind == "delete line":
-                del lines[i]
-            elif kind == "duplicate line":
-                lines.insert(i, lines[j])
-            else:
-                lines[i], lines[j] = lines[j], lines[i]
-            tokens = TOKEN.findall("\n".join(lines)) or [""]
-            continue
-        significant = _significant(tokens)
-        i = significant[draw(st.integers(0, len(significant) - 1))]
-        if kind == "delete":
-            del tokens[i]
-        elif kind == "duplicate":
-            tokens.insert(i, tokens[i])
-        elif kind == "swap":
-            j = significant[draw(st.integers(0, len(significant) - 1))]
-            tokens[i], tokens[j] = tokens[j], tokens[i]
-        elif kind == "replace":  # a name or number by another of the file: mostly semantic errors
-            names = [k for k in significant if tokens[k] in words] or significant
-            tokens[names[draw(st.integers(0, len(names) - 1))]] = draw(st.sampled_from(words or INSERTS))
-        else:
-            tokens.insert(i, draw(st.sampled_from(INSERTS)) + draw(st.sampled_from(["", " "])))
-        tokens = tokens or [""]
-    return "".join(tokens)
+    return mutate(text, HypothesisChooser(draw))
 
 
 def _check_never_crashes(path: Path, text: str) -> None:

@@ -275,7 +275,7 @@ def reference(g: Graph, activations: int) -> dict[str, list[int]]:
     return out
 
 
-@settings(max_examples=25, deadline=None, derandomize=True, phases=[Phase.explicit, Phase.generate],
+@settings(max_examples=15, deadline=None, derandomize=True, phases=[Phase.explicit, Phase.generate],
           suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.too_slow, HealthCheck.data_too_large])
 @given(g=graphs())
 def test_random_dataflow_matches_the_reference(g, tmp_path_factory):
