@@ -21,7 +21,7 @@ DEB_PACKAGES := gcc make pkg-config graphviz tmux socat \
 	chromium chromium-driver \
 	cyclonedds-dev cyclonedds-tools
 
-.PHONY: mutations crosscheck-tally setup deps venv toolchains test demo bench clean help flash sim crosscheck
+.PHONY: fuzz mutations crosscheck-tally setup deps venv toolchains test demo bench clean help flash sim crosscheck
 
 help:
 	@echo "make setup   install Debian packages (when missing) and the virtual environment"
@@ -32,6 +32,9 @@ help:
 	@echo "             back-to-back testing: N random models per part, every mode against local execution"
 	@echo "             (modes: host avr avr328 pic18 f16 remote-host remote-avr; docs/testing.md)"
 	@echo "make mutations N=10000 [SEED=1] [JOBS=2]"
+	@echo "             mutated examples through the checker, the accepted ones through a host build"
+	@echo "make fuzz [FUZZ_RUNS=10000000]"
+	@echo "             every libFuzzer target to FUZZ_RUNS executions, figures in build/fuzz/figures.md"
 	@echo "             mutated examples through the checker, the accepted ones through a host build"
 	@echo "make flash BOARD=avr MODEL=m.elab PORT=/dev/ttyACM0 [MCU=..] [PROGRAMMER=..] [BUILD_FLAGS=--release]"
 	@echo "             build and burn with the board's programmer (\`make -n flash ...\` shows the commands;"
@@ -140,3 +143,11 @@ clean:
 # the examples through the checker, the accepted ones through a host build.
 mutations: setup
 	$(PY) tests/frontend/mutation_campaign.py -n $(N) --seed $(SEED) --jobs $(JOBS) --out build/mutations
+
+# Every libFuzzer target (fuzz/) to 10^7 executions under ASan and UBSan;
+# figures in build/fuzz/figures.md (docs/testing.md, "Fuzzing").
+FUZZ_RUNS ?= 10000000
+fuzz: setup
+	rm -f build/fuzz/figures.md
+	EASYLAB_FUZZ_RUNS=$(FUZZ_RUNS) $(PY) -m pytest -q -n $(TEST_JOBS) tests/debug/test_debug_fuzz.py tests/service/test_service_fuzz.py tests/remote/test_remote_fuzz.py
+	cat build/fuzz/figures.md
