@@ -154,6 +154,26 @@ static void on_down(uint32_t instant, const uint8_t *p, uint16_t n)
     }
 }
 
+static void send_hello_answer(uint32_t instant)
+{
+    frame[EL_RMT_HEADER] = (uint8_t)EL_RMT_PROTOCOL_VERSION;
+    put_u32(&frame[EL_RMT_HEADER + 1u], el_rmt_device_model_id);
+    frame[EL_RMT_HEADER + 5u] = el_rmt_device_count_;
+    frame[EL_RMT_HEADER + 6u] = state;
+    send((uint8_t)(EL_RMT_CMD_HELLO | EL_RMT_RESPONSE), instant, EL_RMT_HELLO_ANSWER);
+}
+
+/* A damaged frame (bad CRC, malformed): counted; before START also answered
+ * as HELLO is, so that a host that cannot frame the proxy's bytes (another
+ * baud rate) sees them and says so, and one that can gets its answer. */
+static void damaged(uint8_t counter)
+{
+    count(counter);
+    if (!started) {
+        send_hello_answer(0u);
+    }
+}
+
 static void on_frame(uint16_t n)
 {
     uint8_t cmd;
@@ -161,11 +181,11 @@ static void on_frame(uint16_t n)
     uint16_t payload, i;
     const uint8_t *p = rx_buf + EL_RMT_HEADER;
     if (n < EL_RMT_HEADER + EL_RMT_TRAILER) {
-        count(EL_RMT_COUNTER_MALFORMED);
+        damaged(EL_RMT_COUNTER_MALFORMED);
         return;
     }
     if (el_crc16(rx_buf, n) != 0u) {
-        count(EL_RMT_COUNTER_BAD_CRC);
+        damaged(EL_RMT_COUNTER_BAD_CRC);
         return;
     }
     count(EL_RMT_COUNTER_FRAMES);
@@ -175,11 +195,7 @@ static void on_frame(uint16_t n)
     payload = (uint16_t)(n - EL_RMT_HEADER - EL_RMT_TRAILER);
     switch (cmd) {
     case EL_RMT_CMD_HELLO:
-        frame[EL_RMT_HEADER] = (uint8_t)EL_RMT_PROTOCOL_VERSION;
-        put_u32(&frame[EL_RMT_HEADER + 1u], el_rmt_device_model_id);
-        frame[EL_RMT_HEADER + 5u] = el_rmt_device_count_;
-        frame[EL_RMT_HEADER + 6u] = state;
-        send((uint8_t)(cmd | EL_RMT_RESPONSE), instant, EL_RMT_HELLO_ANSWER);
+        send_hello_answer(instant);
         break;
     case EL_RMT_CMD_DEVICE: {
         const char *path;
@@ -247,7 +263,7 @@ void el_remote_poll(void)
             if (r == EL_COBS_FRAME) {
                 on_frame(rx.len);
             } else if (r == EL_COBS_OVERSIZE || r == EL_COBS_BAD) {
-                count(EL_RMT_COUNTER_MALFORMED);
+                damaged(EL_RMT_COUNTER_MALFORMED);
             }
         }
     }

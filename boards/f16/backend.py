@@ -101,6 +101,11 @@ class F16Board(BoardBase):
             return simulator.files(program)
         return project.files(program, self.part, checked, release)
 
+    def check_link_baud(self, baud: int) -> None:
+        """UART1 makes only some rates from the machine clock (part.py's
+        usable_rates, whose divisors the generated el_f16_config.h holds)."""
+        project.check_link_baud(self.part, baud)
+
     # ---------------------------------------------------------------- compile
 
     def compile(self, program: Program, checked: object, out_dir: Path, generated: list[Path],

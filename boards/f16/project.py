@@ -105,6 +105,22 @@ def _link_uart(mcu: Mcu, res: Resolved) -> int | None:
     return next((n for n in mcu.driven_uarts if n not in res.uarts), None)
 
 
+def link_rates_message(mcu: Mcu) -> str:
+    """What a proxy's link at a rate UART1 does not make is told: the rates
+    it makes (usable_rates, the table remote_link writes into the C)."""
+    return (f"the proxy's link: UART1 of the {mcu.name} makes these rates within 2 %: "
+            f"{', '.join(str(b) for b, _ in usable_rates(mcu))} (easylab proxy --baud)")
+
+
+def check_link_baud(mcu: Mcu, baud: int) -> None:
+    """A proxy's link at ``baud``: one of the rates remote_link gives
+    divisors for, else a BuildError listing them (before any compiler
+    runs; the generated #error stays for a Makefile run with another
+    EL_REMOTE_BAUD)."""
+    if baud not in [b for b, _ in usable_rates(mcu)]:
+        raise BuildError(f"{baud} baud: {link_rates_message(mcu)}")
+
+
 def remote_link(mcu: Mcu, res: Resolved) -> list[str]:
     """A remote-execution proxy's link (f16_uart.c) on UART1, its rings
     sized from the device model's frames (el_remote_config.h), its
@@ -125,9 +141,7 @@ def remote_link(mcu: Mcu, res: Resolved) -> list[str]:
         lines += [f"#{'if' if k == 0 else 'elif'} EL_REMOTE_BAUD == {baud}UL /* {rate.baud:.0f} baud "
                   f"({rate.error * 100:+.2f} %) */",
                   f"#define EL_F16_UART1_DIV {rate.div}u", f"#define EL_F16_UART1_CS {rate.cs}u"]
-    lines += ["#else",
-              f"#error \"the proxy's link: UART1 of the {mcu.name} makes these rates within 2 %: "
-              f"{', '.join(str(b) for b, _ in rates)} (easylab proxy --baud)\"", "#endif",
+    lines += ["#else", f"#error \"{link_rates_message(mcu)}\"", "#endif",
               f"#define EL_F16_UART1_RX_VECTOR {mcu.vectors['uart1_rx']}u",
               f"#define EL_F16_UART1_TX_VECTOR {mcu.vectors['uart1_tx']}u",
               f"#define EL_F16_UART_LEVEL {LEVEL_UART}u"]

@@ -84,6 +84,13 @@ class BoardBase:
         only for those that serve it over Modbus or persist params."""
         return bool(self.description.raw.get("service_api", False))
 
+    def check_link_baud(self, baud: int) -> None:
+        """A remote-execution proxy's link at ``baud`` (``easylab proxy
+        --baud``), checked before anything is generated or compiled: a
+        BuildError when the board's link cannot run at that rate. Any rate
+        here (a board whose divisors come within its C, or whose link is
+        no serial port)."""
+
     # ---------------------------------------------------------------- code
 
     def device_call(self, device: Device, handler: str) -> str:

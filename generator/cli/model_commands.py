@@ -26,6 +26,8 @@ def cmd_check(args) -> int:
             status = EXIT_MODEL_ERROR
         elif result.model.nodes and _node_problems(result):
             status = EXIT_MODEL_ERROR
+        elif result.model.remote is not None and _remote_problems(result):
+            status = EXIT_MODEL_ERROR
         elif not args.quiet:
             m = result.model
             print(f"{path}: ok (model '{m.name}': {len(m.devices)} devices, {len(m.dataflows)} dataflows, "
@@ -42,6 +44,24 @@ def _node_problems(result) -> bool:
     for problem in problems:
         print(problem, file=sys.stderr)
     return bool(problems)
+
+
+def _remote_problems(result) -> bool:
+    """Report what `easylab proxy` would refuse in the model's `remote`
+    settings (device_model.watchdog_problem, the same rule) as an error at
+    the watchdog time; whether there was anything."""
+    from ..ir.lower import lower
+    from ..remote.device_model import watchdog_problem
+
+    problem = watchdog_problem(lower(result.model, result.timing))
+    if problem is None:
+        return False
+    decl = result.model.remote.decl
+    span = next((a.value.span for a in decl.attrs if a.key == "watchdog"), decl.span)
+    result.diagnostics.error(span, problem)
+    print(result.report(), file=sys.stderr)
+    print(f"{result.model.file}: 1 error", file=sys.stderr)
+    return True
 
 
 def _checked_model(path: str):

@@ -85,7 +85,22 @@ def cmd_proxy(args) -> int:
                             baud=args.baud, check=args.check)
     except BuildError as err:
         raise CliError(str(err)) from None
+    _say_budget(program, args.baud)
     return report_built(built)
+
+
+def _say_budget(program, baud: int) -> None:
+    """Say, as an error, when `easylab remote` will refuse a real-time run
+    at ``baud`` (budget.refusal, the same check): the proxy serves
+    lock-step runs (--fast) only. The build stands: lock-step runs need no
+    budget."""
+    from ..remote.budget import refusal
+    from ..remote.device_model import device_model
+
+    why = refusal(program, device_model(program), baud)
+    if why is not None:
+        _say(f"easylab proxy: error: `easylab remote` will refuse a real-time run at {baud} baud: {why}; "
+             f"this proxy serves lock-step runs (easylab remote --fast) only")
 
 
 def cmd_remote(args) -> int:

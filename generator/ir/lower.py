@@ -298,7 +298,8 @@ def lower(model: CheckedModel, timing: Timing) -> Program:
         program.deployment = _deployment(model, timing, program, low)
     if model.remote is not None:
         r = model.remote
-        program.remote = RemoteSettings(r.watchdog_us, r.overrun_limit, location(r.decl.span))
+        watchdog = next((str(a.value.span) for a in r.decl.attrs if a.key == "watchdog"), location(r.decl.span))
+        program.remote = RemoteSettings(r.watchdog_us, r.overrun_limit, location(r.decl.span), watchdog)
     program.program_id = program_id(program)
     return program
 

@@ -291,6 +291,7 @@ class RemoteSettings:
     watchdog_us: int | None = None
     overrun_limit: int | None = None
     location: str = "?"
+    watchdog_location: str = "?"  # FILE:LINE:COL of the watchdog time
 
 
 @dataclass

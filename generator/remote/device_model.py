@@ -216,6 +216,30 @@ def device_model(program: Program) -> DeviceModel:
     return model
 
 
+def watchdog_problem(program: Program, model: DeviceModel | None = None) -> str | None:
+    """What is wrong with the watchdog time the model declares (``remote
+    watchdog T``; its place is ``program.remote.watchdog_location``), or
+    None: it must be longer than the longest gap between two release
+    instants (frames come only at those, so a shorter one would apply the
+    safe values in a run that keeps up) and at most 2^32 - 1 ticks. The one
+    rule of `easylab check` and `easylab proxy`."""
+    settings = program.remote
+    if settings is None or settings.watchdog_us is None:
+        return None
+    model = model or device_model(program)
+    gap = longest_gap(model.hyperperiod, model.release_ticks())
+    if model.watchdog_ticks <= gap:
+        return (f"the watchdog time ({_ms(settings.watchdog_us)}) must be longer than the longest time between two "
+                f"frames of the device model ({_ms(gap * model.tick_us)})")
+    if model.watchdog_ticks > 0xFFFFFFFF:
+        return f"the watchdog time ({_ms(settings.watchdog_us)}) is more than 2^32 - 1 ticks of {model.tick_us} us"
+    return None
+
+
+def _ms(us: int) -> str:
+    return f"{us / 1000:g} ms"
+
+
 def proxy_program(program: Program, model: DeviceModel | None = None) -> Program:
     """The proxy as an IR program of its own: the device data as its items
     (renumbered), the devices, the proxy tasks (no bodies; reading their

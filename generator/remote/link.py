@@ -29,6 +29,17 @@ class OtherDeviceModel(RemoteError):
     """The proxy was built from another device model."""
 
 
+class Misframed(RemoteError):
+    """Bytes come from the proxy, but no valid frame: the two ends of the
+    link are at different baud rates, most likely."""
+
+
+# Damaged frames in a row (no good one between them) that end a session as
+# misframed: a link at the right baud rate damages one now and then, never
+# so many in a row.
+MISFRAMED_IN_A_ROW = 8
+
+
 class Link:
     """A connected proxy at ``url`` (anything pyserial opens: a device path,
     a pty, ``socket://host:port``) for ``model``."""
@@ -36,12 +47,14 @@ class Link:
     def __init__(self, url: str, model: DeviceModel, baudrate: int = 115200):
         self.url = url
         self.model = model
+        self.baudrate = baudrate
         try:
             self.transport = FrameTransport.open(url, baudrate)
         except TransportError as err:
             raise RemoteError(str(err)) from None
         self.frames_in = 0
         self.dropped = 0  # frames with a bad CRC, COBS or length
+        self.dropped_in_a_row = 0  # since the last good frame
         self.lock_step = False
         # The latest COUNTERS answer that came while waiting for another frame (ask_counters).
         self.latest_counters: dict | None = None
@@ -76,12 +89,27 @@ class Link:
             frame = P.decode(wire)
             if frame is None:
                 self.dropped += 1
+                self.dropped_in_a_row += 1
+                if self.dropped_in_a_row >= MISFRAMED_IN_A_ROW:
+                    raise self.misframed()
                 continue
             self.frames_in += 1
+            self.dropped_in_a_row = 0
             if frame[0] == cmd:
                 return frame[1], frame[2]
             if frame[0] == K.CMD_COUNTERS | K.RESPONSE:
                 self.latest_counters = _counters(frame[2])
+
+    def misframed(self) -> Misframed:
+        """The error of a link whose bytes from the proxy do not frame at
+        this baud rate (the link's statistics: damaged frames and bytes
+        since the last good frame)."""
+        seen = (f"{self.dropped_in_a_row} damaged frame{'s' if self.dropped_in_a_row != 1 else ''} in a row"
+                if self.dropped_in_a_row else f"{self.transport.bytes_in} bytes")
+        since = "no valid frame yet" if self.frames_in == 0 else "no valid frame since"
+        return Misframed(f"{self.url}: the proxy's bytes do not frame at {self.baudrate} baud ({seen}, {since}): "
+                         f"the proxy runs at another baud rate, most likely; give `easylab proxy` and "
+                         f"`easylab remote` the same --baud")
 
     def _request(self, cmd: int, payload: bytes = b"", timeout: float = ANSWER_S) -> bytes:
         self._send(cmd, 0, payload)
@@ -100,6 +128,8 @@ class Link:
             self._send(K.CMD_HELLO, 0)
             answer = self._receive(K.CMD_HELLO | K.RESPONSE, HELLO_EVERY_S)
         if answer is None:
+            if self.frames_in == 0 and (self.dropped or self.transport.bytes_in):  # bytes came, no frame
+                raise self.misframed()
             raise NoAnswer(f"{self.url}: no proxy answers (no valid HELLO answer within {timeout:g} s)")
         body = answer[1]
         if len(body) < 7:
@@ -150,6 +180,8 @@ class Link:
         while True:
             frame = self._receive(K.CMD_UP, timeout)
             if frame is None:
+                if self.dropped_in_a_row:
+                    raise self.misframed()
                 raise NoAnswer(f"{self.url}: no device data from the proxy for instant {tick} within {timeout:g} s")
             instant, payload = frame
             if instant == tick & 0xFFFFFFFF:

@@ -19,7 +19,7 @@ from ..codegen.c_syntax import C_KIND_ENUM, C_TYPE_ENUM, c_literal
 from ..codegen.render import environment
 from ..ir.program import Program
 from .budget import DEFAULT_BAUD
-from .device_model import DeviceModel, device_model, item_bytes, longest_gap, proxy_program, safe_value
+from .device_model import DeviceModel, device_model, item_bytes, proxy_program, safe_value, watchdog_problem
 from .protocol import K
 
 # The flag every C file of a proxy build sees (runtime_c/el_remote.c, the
@@ -115,23 +115,11 @@ def check_frames(program: Program, model: DeviceModel) -> None:
 
 
 def check_watchdog(program: Program, model: DeviceModel) -> None:
-    """A watchdog time the model sets must be longer than the longest gap
-    between two release instants: frames come only at those, so a shorter
-    one would apply the safe values in a run that keeps up."""
-    settings = program.remote
-    if settings is None or settings.watchdog_us is None:
-        return
-    gap = longest_gap(model.hyperperiod, model.release_ticks())
-    if model.watchdog_ticks <= gap:
-        raise BuildError(f"{settings.location}: the watchdog time ({_ms(settings.watchdog_us)}) must be longer "
-                         f"than the longest time between two frames of the device model ({_ms(gap * model.tick_us)})")
-    if model.watchdog_ticks > 0xFFFFFFFF:
-        raise BuildError(f"{settings.location}: the watchdog time ({_ms(settings.watchdog_us)}) is more than "
-                         f"2^32 - 1 ticks of {model.tick_us} us")
-
-
-def _ms(us: int) -> str:
-    return f"{us / 1000:g} ms"
+    """The watchdog time the model declares (device_model.watchdog_problem,
+    the rule `easylab check` applies too); BuildError when it is wrong."""
+    problem = watchdog_problem(program, model)
+    if problem is not None:
+        raise BuildError(f"{program.remote.watchdog_location}: {problem}")
 
 
 def render_proxy(program: Program, board, model: DeviceModel | None = None) -> dict[str, str]:
@@ -172,12 +160,18 @@ def build_proxy(program: Program, board_name: str, out_dir: Path, mcu: str | Non
     build.build does for firmware), its link at ``baud`` where the board's
     link is a serial port; ``check``: the board's further checks of the C
     (``easylab build --check``). BuildError when a frame of its device
-    model would not fit the protocol's largest frame."""
+    model would not fit the protocol's largest frame, when its declared
+    watchdog time is wrong (device_model.watchdog_problem), or when the
+    board's link cannot run at ``baud`` (the board's ``check_link_baud``,
+    before anything is generated)."""
     model = device_model(program)
     check_frames(program, model)
     check_watchdog(program, model)
     proxy = proxy_program(program, model)
     board = load_board(board_name, board_path).configure(mcu, sim)
+    check_link = getattr(board, "check_link_baud", None)  # BoardBase's; any rate for a board without it
+    if check_link is not None:
+        check_link(int(baud))
     checked = board.check(proxy)
     files = render_proxy(program, board, model)
     files.update(board.produce(proxy, checked, False))

@@ -230,3 +230,81 @@ class LatencyRelay:
         self._stop.set()
         self.thread.join(5)
         self.server.close()
+
+
+def uart_resample(data: bytes, sent_baud: int, read_baud: int) -> bytes:
+    """What a UART reading at ``read_baud`` makes of ``data`` sent back to
+    back at ``sent_baud`` (8N1, the line idle before and after): it waits
+    for a start bit's falling edge, samples each bit in its middle at its
+    own rate and keeps the byte, stop bit or not (as a driver that ignores
+    the framing error flag). Equal rates give ``data`` back. Times are
+    integers in units of 1 / (sent_baud * read_baud) s."""
+    ts, tr = read_baud, sent_baud  # one bit on each side
+    end = 10 * ts * len(data)
+
+    def level(t: int) -> int:
+        if t < 0 or t >= end:
+            return 1
+        k, bit = divmod(t // ts, 10)
+        return 0 if bit == 0 else 1 if bit == 9 else (data[k] >> (bit - 1)) & 1
+
+    out, t = bytearray(), 0
+    while True:
+        j = -(-t // ts)  # the edges are at the sender's bit boundaries
+        while j * ts < end and not (level(j * ts) == 0 and level(j * ts - 1) == 1):
+            j += 1
+        if j * ts >= end:
+            return bytes(out)
+        start = j * ts
+        out.append(sum(level(start + (2 * i + 3) * tr // 2) << i for i in range(8)))
+        t = start + 19 * tr // 2  # the middle of the stop bit: ready for the next start bit
+
+
+class BaudMismatchRelay:
+    """Two ends of a serial link at different baud rates, on real ptys:
+    relays between a proxy's pty link (``target``, the proxy at
+    ``proxy_baud``) and a new pty (symlink ``link``, for `easylab remote`
+    at ``host_baud``), each way through uart_resample with the sender's
+    and the reader's rates."""
+
+    def __init__(self, target: Path, link: Path, proxy_baud: int, host_baud: int):
+        import os
+        import threading
+        import tty
+
+        self.proxy_fd = os.open(target, os.O_RDWR | os.O_NOCTTY)
+        tty.setraw(self.proxy_fd)
+        self.master, slave = os.openpty()
+        tty.setraw(slave)
+        self.slave = slave  # kept open: the host's side outlives each of its opens
+        link.symlink_to(os.ttyname(slave))
+        self.link = link
+        self.bauds = (proxy_baud, host_baud)
+        self._stop = threading.Event()
+        self.thread = threading.Thread(target=self._serve, name="baud-relay", daemon=True)
+        self.thread.start()
+
+    def _serve(self) -> None:
+        import os
+        import select
+
+        proxy_baud, host_baud = self.bauds
+        while not self._stop.is_set():
+            ready, _, _ = select.select([self.proxy_fd, self.master], [], [], 0.01)
+            for fd in ready:
+                try:
+                    data = os.read(fd, 4096)
+                except OSError:
+                    return
+                if fd == self.proxy_fd:
+                    os.write(self.master, uart_resample(data, proxy_baud, host_baud))
+                else:
+                    os.write(self.proxy_fd, uart_resample(data, host_baud, proxy_baud))
+
+    def close(self) -> None:
+        import os
+
+        self._stop.set()
+        self.thread.join(5)
+        for fd in (self.proxy_fd, self.master, self.slave):
+            os.close(fd)

@@ -64,6 +64,19 @@ def test_a_baud_rate_uart1_does_not_make_is_refused(tmp_path):
             "19200, 38400, 76800 (easylab proxy --baud)") in proc.stderr
 
 
+def test_an_unmade_baud_rate_is_one_error_before_any_compiler_runs(tmp_path):
+    """The rates come from part.py's usable_rates, the table the generated
+    el_f16_config.h holds: checked before anything is generated, so the
+    build says it once, with no compiler's output, and writes nothing."""
+    out = tmp_path / "p"
+    proc = proxy(out, "--baud", "57600")
+    assert proc.returncode == 1
+    assert proc.stderr.strip().splitlines() == [
+        "easylab: error: 57600 baud: the proxy's link: UART1 of the mb90f543 makes these rates within 2 %: 1200, "
+        "2400, 4800, 9600, 19200, 38400, 76800 (easylab proxy --baud)"]
+    assert not out.exists()
+
+
 def test_a_simulation_build_of_the_proxy_is_refused(tmp_path):
     """The board's s51 simulation has no UART to carry the link."""
     proc = proxy(tmp_path / "p", "--sim", "--baud", "76800")

@@ -17,7 +17,7 @@ from easylab.remote.device_model import device_model
 from easylab.remote.link import Link, NoAnswer, RemoteError
 from easylab.remote.protocol import K
 from easylab.remote.proxy import build_proxy
-from remote_testlib import EXAMPLES, Proxy, proxy_of, remote
+from remote_testlib import EXAMPLES, BaudMismatchRelay, Proxy, proxy_of, remote
 
 BLINK = EXAMPLES / "blink.elab"
 PT100 = EXAMPLES / "pt100_sensor.elab"
@@ -92,8 +92,59 @@ def test_a_watchdog_time_shorter_than_the_frames_gap_is_refused(tmp_path):
     with pytest.raises(BuildError) as err:
         build_proxy(program, "host", tmp_path / "proxy")
     line = path.read_text().splitlines().index("remote watchdog 20 ms") + 1
-    assert str(err.value) == (f"{path}:{line}: the watchdog time (20 ms) must be longer than the longest time "
+    assert str(err.value) == (f"{path}:{line}:17: the watchdog time (20 ms) must be longer than the longest time "
                               "between two frames of the device model (20 ms)")
+
+
+def test_easylab_check_refuses_the_watchdog_times_easylab_proxy_refuses(tmp_path):
+    """One rule (device_model.watchdog_problem) for both commands: blink's
+    frames come every 1 ms, so 1 ms is refused at the time's line and
+    column, 2 ms accepted by both."""
+    import subprocess
+    import sys
+
+    def run(*argv: str) -> subprocess.CompletedProcess:
+        return subprocess.run([sys.executable, "-m", "easylab", *argv], capture_output=True, text=True, timeout=300,
+                              stdin=subprocess.DEVNULL)
+
+    short = tmp_path / "short.elab"
+    short.write_text(BLINK.read_text() + "remote watchdog 1 ms\n")
+    line = short.read_text().splitlines().index("remote watchdog 1 ms") + 1
+    rule = "the watchdog time (1 ms) must be longer than the longest time between two frames of the device model (1 ms)"
+    checked = run("check", str(short))
+    assert checked.returncode == 1, checked.stdout
+    assert f"{short}:{line}:17: error: {rule}" in checked.stderr
+    assert f"{short}: 1 error" in checked.stderr
+    built = run("proxy", str(short), "-o", str(tmp_path / "p"))
+    assert built.returncode == 1
+    assert f"{short}:{line}:17: {rule}" in built.stderr
+    longer = tmp_path / "longer.elab"
+    longer.write_text(BLINK.read_text() + "remote watchdog 2 ms\n")
+    assert run("check", str(longer)).returncode == 0
+    assert run("proxy", str(longer), "-o", str(tmp_path / "q")).returncode == 0
+
+
+def test_easylab_proxy_says_when_easylab_remote_will_refuse_its_baud_rate(tmp_path):
+    """blink's 1 ms deadline does not fit 115200 baud: `easylab proxy` says
+    so as an error with `easylab remote`'s own numbers (budget.refusal); the
+    build stands for lock-step runs. At 1 Mbaud it fits: nothing said."""
+    import subprocess
+    import sys
+
+    def run(*argv: str) -> subprocess.CompletedProcess:
+        return subprocess.run([sys.executable, "-m", "easylab", *argv], capture_output=True, text=True, timeout=300,
+                              stdin=subprocess.DEVNULL)
+
+    slow = run("proxy", str(BLINK), "-o", str(tmp_path / "slow"), "--baud", "115200")
+    assert slow.returncode == 0, slow.stderr
+    refused = run("remote", str(BLINK), "--target", str(tmp_path / "nothing"), "--baud", "115200")
+    assert refused.returncode == 1
+    why = refused.stderr.strip().removeprefix("easylab remote: ")
+    assert why.startswith("the link cannot carry the device data in time: main at tick 0: 24 bytes")
+    assert (f"easylab proxy: error: `easylab remote` will refuse a real-time run at 115200 baud: {why}; this proxy "
+            "serves lock-step runs (easylab remote --fast) only") in slow.stderr
+    fast = run("proxy", str(BLINK), "-o", str(tmp_path / "fast"), "--baud", "1000000")
+    assert fast.returncode == 0 and fast.stderr == "", fast.stderr
 
 
 def test_a_proxy_of_another_device_model_is_refused_by_name(build_cache, tmp_path):
@@ -454,3 +505,30 @@ def test_a_proxy_waiting_for_its_host_ends_at_the_first_sigterm(build_cache, tmp
         if link:
             link.close()
         lock_step.kill()
+
+
+def test_a_baud_rate_mismatch_is_named_with_its_fix(build_cache, tmp_path):
+    """A proxy at 115200 baud and `easylab remote --baud 57600`, the two
+    ends of a serial link on real ptys (BaudMismatchRelay resamples the
+    bits of each way at the reader's rate): the host sees the proxy's
+    bytes (a proxy answers damaged frames before START) but no valid frame,
+    and says that they do not frame at its baud rate and to give both the
+    same --baud. The same relay at equal rates carries a whole run."""
+    exe = proxy_of(build_cache, PT100)
+    for host_baud, expected in ((57600, 1), (115200, 0)):
+        run_dir = tmp_path / str(host_baud)
+        run_dir.mkdir()
+        proxy = Proxy(exe, run_dir / "proxy-link", "--fast")
+        relay = BaudMismatchRelay(run_dir / "proxy-link", run_dir / "link", 115200, host_baud)
+        try:
+            proc = remote(PT100, relay.link, "--fast", "--baud", str(host_baud), "--duration", "50ms",
+                          "--connect-timeout", "2")
+        finally:
+            relay.close()
+            proxy.kill()
+        assert proc.returncode == expected, proc.stderr
+        if expected:
+            assert f"{relay.link}: the proxy's bytes do not frame at 57600 baud (" in proc.stderr
+            assert ("the proxy runs at another baud rate, most likely; give `easylab proxy` and `easylab remote` "
+                    "the same --baud") in proc.stderr
+            assert "no proxy answers" not in proc.stderr
