@@ -90,7 +90,7 @@ def cmd_proxy(args) -> int:
 
 
 def _say_budget(program, baud: int) -> None:
-    """Say, as an error, when `easylab remote` will refuse a real-time run
+    """Warn when `easylab remote` will refuse a real-time run
     at ``baud`` (budget.refusal, the same check): the proxy serves
     lock-step runs (--fast) only. The build stands: lock-step runs need no
     budget."""
@@ -99,7 +99,7 @@ def _say_budget(program, baud: int) -> None:
 
     why = refusal(program, device_model(program), baud)
     if why is not None:
-        _say(f"easylab proxy: error: `easylab remote` will refuse a real-time run at {baud} baud: {why}; "
+        _say(f"easylab proxy: warning: `easylab remote` will refuse a real-time run at {baud} baud: {why}; "
              f"this proxy serves lock-step runs (easylab remote --fast) only")
 
 

@@ -141,7 +141,7 @@ def test_easylab_proxy_says_when_easylab_remote_will_refuse_its_baud_rate(tmp_pa
     assert refused.returncode == 1
     why = refused.stderr.strip().removeprefix("easylab remote: ")
     assert why.startswith("the link cannot carry the device data in time: main at tick 0: 24 bytes")
-    assert (f"easylab proxy: error: `easylab remote` will refuse a real-time run at 115200 baud: {why}; this proxy "
+    assert (f"easylab proxy: warning: `easylab remote` will refuse a real-time run at 115200 baud: {why}; this proxy "
             "serves lock-step runs (easylab remote --fast) only") in slow.stderr
     fast = run("proxy", str(BLINK), "-o", str(tmp_path / "fast"), "--baud", "1000000")
     assert fast.returncode == 0 and fast.stderr == "", fast.stderr
