@@ -120,6 +120,80 @@ void el_port_idle(uint16_t max_ms)
     el_host_serve_fds((int)max_ms);
 }
 
+/* ---- output that never waits for its peer ---- */
+
+void el_host_out_init(el_host_out_t *o, int fd, bool socket, uint8_t *data, uint16_t cap)
+{
+    o->fd = fd;
+    o->socket = socket;
+    o->len = 0u;
+    o->cap = cap;
+    o->data = data;
+}
+
+/* Write what the descriptor takes now, never waiting: the number of bytes
+ * written (0 when it takes none now), or -1 when the connection is broken. */
+static int32_t write_now(const el_host_out_t *o, const uint8_t *data, uint16_t len)
+{
+    ssize_t n;
+    do {
+        n = o->socket ? send(o->fd, data, len, MSG_NOSIGNAL) : write(o->fd, data, len);
+    } while (n < 0 && errno == EINTR);
+    if (n >= 0)
+        return (int32_t)n;
+    return errno == EAGAIN || errno == EWOULDBLOCK ? 0 : -1;
+}
+
+bool el_host_out_flush(el_host_out_t *o)
+{
+    int32_t n;
+    if (o->fd < 0)
+        return false;
+    if (o->len == 0u)
+        return true;
+    n = write_now(o, o->data, o->len);
+    if (n < 0)
+        return false;
+    memmove(o->data, o->data + n, (size_t)(o->len - (uint16_t)n));
+    o->len = (uint16_t)(o->len - (uint16_t)n);
+    el_host_watch_output(o->fd, o->len > 0u);
+    return true;
+}
+
+uint8_t el_host_out_put(el_host_out_t *o, const uint8_t *frame, uint16_t len)
+{
+    int32_t sent = 0;
+    if (!el_host_out_flush(o))
+        return EL_HOST_OUT_BROKEN;
+    if (len > o->cap - o->len)
+        return EL_HOST_OUT_FULL;
+    if (o->len == 0u) { /* nothing waiting: straight to the descriptor, in order */
+        sent = write_now(o, frame, len);
+        if (sent < 0)
+            return EL_HOST_OUT_BROKEN;
+    }
+    memcpy(o->data + o->len, frame + sent, (size_t)(len - (uint16_t)sent));
+    o->len = (uint16_t)(o->len + (len - (uint16_t)sent));
+    el_host_watch_output(o->fd, o->len > 0u);
+    return EL_HOST_OUT_SENT;
+}
+
+bool el_host_out_drain(el_host_out_t *o, int max_ms)
+{
+    int waited;
+    for (waited = 0; o->fd >= 0 && o->len > 0u && waited < max_ms; waited += 10) {
+        struct pollfd p;
+        p.fd = o->fd;
+        p.events = POLLOUT;
+        p.revents = 0;
+        if (poll(&p, 1, 10) < 0 && errno != EINTR)
+            break;
+        if (!el_host_out_flush(o))
+            return false;
+    }
+    return o->fd >= 0 && o->len == 0u;
+}
+
 void el_host_drain_pty(int slave)
 {
     int i, pending = 0, idle = 0;
