@@ -104,8 +104,10 @@ bool el_host_out_drain(el_host_out_t *o, int max_ms);
  * port, printed on stderr as "PROG: WHAT on 127.0.0.1:N"): a non-blocking
  * socket, closed on exec, or -1 after reporting the error. */
 int el_host_listen_tcp(const char *option, const char *port_text, const char *what);
-/* A client of a listener made by el_host_listen_tcp, non-blocking and without
- * Nagle's delay; -1 when none could be taken. */
+/* A client of a listener made by el_host_listen_tcp, non-blocking, without
+ * Nagle's delay and with a send buffer of EL_HOST_TCP_SNDBUF bytes (the
+ * kernel may double it); -1 when none could be taken. */
+#define EL_HOST_TCP_SNDBUF 16384u
 int el_host_accept_tcp(int listen_fd);
 
 /* Whether a SIGINT or SIGTERM came: the run ends at the next tick, and

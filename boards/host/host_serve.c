@@ -208,12 +208,16 @@ void el_host_drain_pty(int slave)
 
 int el_host_accept_tcp(int listen_fd)
 {
-    int client = accept(listen_fd, NULL, NULL), one = 1, fl;
+    int client = accept(listen_fd, NULL, NULL), one = 1, fl, sndbuf = (int)EL_HOST_TCP_SNDBUF;
     if (client < 0)
         return -1;
-    /* Frames are small and answer each other: no Nagle delay. */
+    /* Frames are small and answer each other: no Nagle delay. A bounded
+     * send buffer (no autotuning to megabytes): a peer that stops reading
+     * fills it, and the link's own buffer behind it, within a bounded
+     * number of frames, so the link notices (el_host_out_put). */
     if ((fl = fcntl(client, F_GETFL)) < 0 || fcntl(client, F_SETFL, fl | O_NONBLOCK) != 0 ||
-        setsockopt(client, IPPROTO_TCP, TCP_NODELAY, &one, sizeof one) != 0) {
+        setsockopt(client, IPPROTO_TCP, TCP_NODELAY, &one, sizeof one) != 0 ||
+        setsockopt(client, SOL_SOCKET, SO_SNDBUF, &sndbuf, sizeof sndbuf) != 0) {
         (void)close(client);
         return -1;
     }
