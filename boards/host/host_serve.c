@@ -1,6 +1,8 @@
 /* EasyLab host board: the file descriptors served between instants (the
- * debug and Modbus transports, the HMI, a proxy's link), el_port_idle and
- * the TCP listening sockets of the options that take tcp:PORT.
+ * debug and Modbus transports, the HMI, a proxy's link), output that never
+ * waits for its peer (el_host_out_*: the debug, remote and Modbus TCP
+ * links), el_port_idle and the TCP listening sockets of the options that
+ * take tcp:PORT.
  *
  * Shared by the host firmware (host_port.c waits for ticks through it) and
  * by the interfaces library of local execution (host_interp.c), which
