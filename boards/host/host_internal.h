@@ -77,11 +77,11 @@ void el_host_drain_pty(int slave);
  * link decides what that means (docs/protocol.md, docs/remote.md,
  * docs/service.md). */
 typedef struct {
-    int fd;        /* -1: none */
-    bool socket;   /* send(MSG_NOSIGNAL): a peer gone is an error, not a SIGPIPE */
-    uint16_t len;  /* bytes waiting in data */
-    uint16_t cap;  /* size of data */
-    uint8_t *data; /* the link's own static buffer */
+    int fd;         /* -1: none */
+    bool is_socket; /* send(MSG_NOSIGNAL): a peer gone is an error, not a SIGPIPE */
+    uint16_t len;   /* bytes waiting in data */
+    uint16_t cap;   /* size of data */
+    uint8_t *data;  /* the link's own static buffer */
 } el_host_out_t;
 
 #define EL_HOST_OUT_SENT 0u   /* written, or waiting in the buffer */
@@ -90,7 +90,7 @@ typedef struct {
 
 /* Start `o` on descriptor fd (-1: none), nothing waiting, with buffer
  * data[0 .. cap). */
-void el_host_out_init(el_host_out_t *o, int fd, bool socket, uint8_t *data, uint16_t cap);
+void el_host_out_init(el_host_out_t *o, int fd, bool is_socket, uint8_t *data, uint16_t cap);
 /* Write as much of what waits as the descriptor takes now, and watch for
  * room while some remains; false when the connection is broken. */
 bool el_host_out_flush(el_host_out_t *o);

@@ -124,10 +124,10 @@ void el_port_idle(uint16_t max_ms)
 
 /* ---- output that never waits for its peer ---- */
 
-void el_host_out_init(el_host_out_t *o, int fd, bool socket, uint8_t *data, uint16_t cap)
+void el_host_out_init(el_host_out_t *o, int fd, bool is_socket, uint8_t *data, uint16_t cap)
 {
     o->fd = fd;
-    o->socket = socket;
+    o->is_socket = is_socket;
     o->len = 0u;
     o->cap = cap;
     o->data = data;
@@ -139,7 +139,7 @@ static int32_t write_now(const el_host_out_t *o, const uint8_t *data, uint16_t l
 {
     ssize_t n;
     do {
-        n = o->socket ? send(o->fd, data, len, MSG_NOSIGNAL) : write(o->fd, data, len);
+        n = o->is_socket ? send(o->fd, data, len, MSG_NOSIGNAL) : write(o->fd, data, len);
     } while (n < 0 && errno == EINTR);
     if (n >= 0)
         return (int32_t)n;
