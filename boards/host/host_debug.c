@@ -11,8 +11,13 @@
  *
  * The descriptors are served between instants (el_host_watch_fd): while
  * waiting in real time, at every instant with --fast, and while the
- * program is halted. Responses are written without blocking; one the
- * kernel cannot take is dropped and counted by the server.
+ * program is halted. Responses are never waited for (el_host_out_put):
+ * what the kernel does not take now waits in a buffer of
+ * EL_HOST_DEBUG_OUT bytes, written when there is room. A debugger that
+ * does not read its responses never stalls the program: on the pty, a
+ * response that does not fit is dropped and counted by the server
+ * (tx_dropped), said once on stderr until the debugger reads again; over
+ * TCP, the client is dropped (said on stderr), and the next one is served.
  *
  * Reset (the protocol's RESET): the process executes itself again with the
  * same command line, handing over the open descriptors (environment
@@ -54,8 +59,18 @@
 #define FDS_ENV "EL_HOST_DEBUG_FDS"
 #define HALT_ENV "EL_HOST_DEBUG_HALT"
 
+/* Response bytes waiting for the debugger to read (at least two of the
+ * longest encoded response). */
+#define EL_HOST_DEBUG_OUT 1024u
+#if EL_HOST_DEBUG_OUT < 2u * (EL_DBG_MAX_FRAME + 8u)
+#error "EL_HOST_DEBUG_OUT must hold two of the longest responses"
+#endif
+
 static enum { NONE, PTY, TCP } mode;
 static int conn_fd = -1;    /* pty master, or the TCP client */
+static el_host_out_t out;   /* responses waiting for room on conn_fd */
+static uint8_t out_data[EL_HOST_DEBUG_OUT];
+static bool dropping;       /* pty: responses are dropped (said once) until the debugger reads again */
 static int keep_fd = -1;    /* pty: our own slave descriptor (no hangup between clients) */
 static int listen_fd = -1;  /* TCP */
 static char link_path[4096];
@@ -108,18 +123,50 @@ static void remove_link(void)
     }
 }
 
+/* conn_fd (-1: none) is the debugger's link from now on. */
+static void set_conn(int fd)
+{
+    conn_fd = fd;
+    dropping = false;
+    el_host_out_init(&out, fd, mode == TCP, out_data, (uint16_t)sizeof out_data);
+}
+
+/* pty: room again after responses were dropped. */
+static void reads_again(void)
+{
+    if (dropping) {
+        dropping = false;
+        el_host_error("debug interface: the debugger reads its responses again");
+    }
+}
+
+/* Close the TCP client. */
+static void drop_client(void)
+{
+    el_host_unwatch_fd(conn_fd);
+    (void)close(conn_fd);
+    set_conn(-1);
+}
+
 static void on_conn(int fd, short revents, void *ctx)
 {
     (void)ctx;
+    if (fd != conn_fd)
+        return;
+    /* Room for the responses waiting. */
+    if ((revents & POLLOUT) != 0) {
+        if (!el_host_out_flush(&out) && mode == TCP) {
+            drop_client();
+            return;
+        }
+        if (out.len == 0u)
+            reads_again();
+    }
     /* Data are taken by el_debug_poll (from el_idle, right after this). A
      * TCP client that went away is closed; a pty never hangs up (we hold
      * its slave side open). */
-    if (mode == TCP && (revents & (POLLHUP | POLLERR | POLLNVAL)) != 0 && (revents & POLLIN) == 0) {
-        el_host_unwatch_fd(fd);
-        (void)close(fd);
-        if (fd == conn_fd)
-            conn_fd = -1;
-    }
+    if (mode == TCP && (revents & (POLLHUP | POLLERR | POLLNVAL)) != 0 && (revents & POLLIN) == 0)
+        drop_client();
 }
 
 static void on_listen(int fd, short revents, void *ctx)
@@ -128,14 +175,12 @@ static void on_listen(int fd, short revents, void *ctx)
     (void)ctx;
     if ((revents & POLLIN) == 0 || (client = el_host_accept_tcp(fd)) < 0)
         return;
-    if (conn_fd >= 0) { /* a new client replaces the old one */
-        el_host_unwatch_fd(conn_fd);
-        (void)close(conn_fd);
-    }
-    conn_fd = client;
+    if (conn_fd >= 0) /* a new client replaces the old one */
+        drop_client();
+    set_conn(client);
     if (!el_host_watch_fd(client, on_conn, NULL)) {
         (void)close(client);
-        conn_fd = -1;
+        set_conn(-1);
     }
     el_debug_boot(); /* a fresh decoder for the new client */
 }
@@ -174,6 +219,7 @@ static bool open_pty(const char *link)
         el_host_error("--debug pty:%s: cannot set up %s: %s", link, slave, strerror(errno));
         return false;
     }
+    set_conn(conn_fd);
     (void)unlink(link);
     if (symlink(slave, link) != 0) {
         el_host_error("--debug pty:%s: cannot make the link: %s", link, strerror(errno));
@@ -215,6 +261,7 @@ static bool adopt(const char *spec, bool *halt)
         listen_fd = a;
         conn_fd = b;
     }
+    set_conn(conn_fd);
     *halt = h != NULL && strcmp(h, "1") == 0;
     (void)unsetenv(FDS_ENV);
     (void)unsetenv(HALT_ENV);
@@ -271,39 +318,33 @@ uint16_t el_debug_port_read(uint8_t *buf, uint16_t max)
     r = read(conn_fd, buf, max);
     if (r > 0)
         return (uint16_t)r;
-    if (r == 0 && mode == TCP) { /* the client closed */
-        el_host_unwatch_fd(conn_fd);
-        (void)close(conn_fd);
-        conn_fd = -1;
-    }
+    if (r == 0 && mode == TCP) /* the client closed */
+        drop_client();
     return 0u;
 }
 
+/* Never waits for the debugger (docs/protocol.md, "A debugger that does
+ * not read"): false drops the response, which the server counts. */
 bool el_debug_port_write(const uint8_t *frame, uint16_t len)
 {
-    size_t done = 0u;
-    int tries = 0;
+    uint8_t r;
     if (conn_fd < 0)
         return false;
-    while (done < len) {
-        ssize_t w = write(conn_fd, frame + done, len - done);
-        if (w > 0) {
-            done += (size_t)w;
-            continue;
-        }
-        if (w < 0 && errno != EAGAIN && errno != EWOULDBLOCK && errno != EINTR)
-            return false;
-        if (done == 0u || ++tries > 10) /* nothing taken: drop; a partial frame: give it 100 ms */
-            return false;
-        {
-            struct pollfd p;
-            p.fd = conn_fd;
-            p.events = POLLOUT;
-            p.revents = 0;
-            (void)poll(&p, 1, 10);
-        }
+    r = el_host_out_put(&out, frame, len);
+    if (r == EL_HOST_OUT_SENT) {
+        reads_again();
+        return true;
     }
-    return true;
+    if (mode == TCP) {
+        if (r == EL_HOST_OUT_FULL)
+            el_host_error("debug interface: the client does not read its responses: dropped");
+        drop_client(); /* the next client is served */
+    } else if (!dropping) {
+        dropping = true;
+        el_host_error("debug interface: the debugger does not read its responses on %s: they are dropped "
+                      "(counted: tx_dropped) until it reads again", link_path);
+    }
+    return false;
 }
 
 static char **read_cmdline(void)
@@ -337,6 +378,7 @@ static bool keep_on_exec(int fd)
 bool el_host_debug_handover(uint8_t flags)
 {
     char fds[64];
+    (void)el_host_out_drain(&out, 100); /* the last responses; a debugger that does not read loses them */
     snprintf(fds, sizeof fds, "%d:%d:%d", (int)mode, mode == PTY ? conn_fd : listen_fd,
              mode == PTY ? keep_fd : conn_fd);
     if (!keep_on_exec(conn_fd) || !keep_on_exec(keep_fd) || !keep_on_exec(listen_fd) ||

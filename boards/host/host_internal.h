@@ -68,12 +68,46 @@ bool el_host_watching(void);
  * slave descriptor (-1: nothing to wait for). */
 void el_host_drain_pty(int slave);
 
+/* Output that never waits for its peer: bytes for a non-blocking
+ * descriptor (a socket, a pty's master) go straight to it while nothing
+ * waits; what the kernel does not take now waits in the link's own bounded
+ * buffer, written when poll() says there is room (the descriptor's handler
+ * calls el_host_out_flush when it is writable). A frame that does not fit
+ * is refused whole, none of it written: the peer does not read, and each
+ * link decides what that means (docs/protocol.md, docs/remote.md,
+ * docs/service.md). */
+typedef struct {
+    int fd;         /* -1: none */
+    bool is_socket; /* send(MSG_NOSIGNAL): a peer gone is an error, not a SIGPIPE */
+    uint16_t len;   /* bytes waiting in data */
+    uint16_t cap;   /* size of data */
+    uint8_t *data;  /* the link's own static buffer */
+} el_host_out_t;
+
+#define EL_HOST_OUT_SENT 0u   /* written, or waiting in the buffer */
+#define EL_HOST_OUT_FULL 1u   /* the peer does not read: the frame is refused, none of it written */
+#define EL_HOST_OUT_BROKEN 2u /* the connection is broken (or there is none) */
+
+/* Start `o` on descriptor fd (-1: none), nothing waiting, with buffer
+ * data[0 .. cap). */
+void el_host_out_init(el_host_out_t *o, int fd, bool is_socket, uint8_t *data, uint16_t cap);
+/* Write as much of what waits as the descriptor takes now, and watch for
+ * room while some remains; false when the connection is broken. */
+bool el_host_out_flush(el_host_out_t *o);
+/* Send frame[0 .. len): EL_HOST_OUT_SENT, _FULL or _BROKEN. */
+uint8_t el_host_out_put(el_host_out_t *o, const uint8_t *frame, uint16_t len);
+/* At the end of a link's use (a stop, an exec), not in the loop: wait at
+ * most max_ms for what waits to be written; whether it all was. */
+bool el_host_out_drain(el_host_out_t *o, int max_ms);
+
 /* Listen on 127.0.0.1:PORT for `option tcp:PORT` (port_text "0": any free
  * port, printed on stderr as "PROG: WHAT on 127.0.0.1:N"): a non-blocking
  * socket, closed on exec, or -1 after reporting the error. */
 int el_host_listen_tcp(const char *option, const char *port_text, const char *what);
-/* A client of a listener made by el_host_listen_tcp, non-blocking and without
- * Nagle's delay; -1 when none could be taken. */
+/* A client of a listener made by el_host_listen_tcp, non-blocking, without
+ * Nagle's delay and with a send buffer of EL_HOST_TCP_SNDBUF bytes (the
+ * kernel may double it); -1 when none could be taken. */
+#define EL_HOST_TCP_SNDBUF 16384u
 int el_host_accept_tcp(int listen_fd);
 
 /* Whether a SIGINT or SIGTERM came: the run ends at the next tick, and

@@ -365,14 +365,15 @@ void el_port_mb_rtu_send(const uint8_t *adu, uint16_t len)
 
 /* A client's slot. Nothing here ever waits for a client: requests are
  * read as they come, replies go out as far as the socket takes them and
- * the rest waits in `out` until poll() says the socket has room. */
+ * the rest waits in `out` until poll() says the socket has room
+ * (el_host_out_put, host_serve.c). */
 typedef struct {
     int fd;             /* -1: free */
     size_t len;         /* request bytes in buf */
-    size_t out_len;     /* reply bytes waiting in out */
+    el_host_out_t out;  /* replies waiting, in out_buf */
     uint64_t active_ns; /* when the client last sent bytes, or connected */
     uint8_t buf[EL_HOST_MB_TCP_BUF];
-    uint8_t out[EL_HOST_MB_TCP_OUT];
+    uint8_t out_buf[EL_HOST_MB_TCP_OUT];
 } tcp_conn_t;
 
 static int tcp_listen = -1;
@@ -399,37 +400,17 @@ void el_port_mb_tcp_close(uint8_t conn)
     close(tcp_conns[conn].fd);
     tcp_conns[conn].fd = -1;
     tcp_conns[conn].len = 0;
-    tcp_conns[conn].out_len = 0;
+    tcp_conns[conn].out.fd = -1;
+    tcp_conns[conn].out.len = 0u;
 }
 
-/* Write what the socket takes now, never waiting: the number of bytes
- * written (0 when its send buffer is full), or -1 when the connection is
- * broken. MSG_NOSIGNAL: a client gone is an error here, not a SIGPIPE. */
-static ssize_t send_now(int fd, const uint8_t *data, size_t len)
+/* Slot i serves client fd from now on. */
+static void tcp_take(size_t i, int fd)
 {
-    ssize_t n;
-    do {
-        n = send(fd, data, len, MSG_NOSIGNAL);
-    } while (n < 0 && errno == EINTR);
-    if (n >= 0)
-        return n;
-    return errno == EAGAIN || errno == EWOULDBLOCK ? 0 : -1;
-}
-
-/* Write as much of the replies waiting for `c` as its socket takes now,
- * and watch for room while some remain; false when the connection broke. */
-static bool flush_out(tcp_conn_t *c)
-{
-    ssize_t n;
-    if (c->out_len == 0u)
-        return true;
-    n = send_now(c->fd, c->out, c->out_len);
-    if (n < 0)
-        return false;
-    memmove(c->out, c->out + n, c->out_len - (size_t)n);
-    c->out_len -= (size_t)n;
-    el_host_watch_output(c->fd, c->out_len > 0u);
-    return true;
+    tcp_conns[i].fd = fd;
+    tcp_conns[i].len = 0;
+    tcp_conns[i].active_ns = now_ns();
+    el_host_out_init(&tcp_conns[i].out, fd, true, tcp_conns[i].out_buf, (uint16_t)sizeof tcp_conns[i].out_buf);
 }
 
 static void conn_readable(int fd, short revents, void *ctx)
@@ -438,7 +419,7 @@ static void conn_readable(int fd, short revents, void *ctx)
     ssize_t n;
     if (c->fd != fd)
         return;
-    if ((revents & POLLOUT) != 0 && !flush_out(c)) {
+    if ((revents & POLLOUT) != 0 && !el_host_out_flush(&c->out)) {
         el_port_mb_tcp_close((uint8_t)(c - tcp_conns));
         return;
     }
@@ -490,10 +471,7 @@ static void accept_ready(int fd, short revents, void *ctx)
         close(c);
         return;
     }
-    tcp_conns[i].fd = c;
-    tcp_conns[i].len = 0;
-    tcp_conns[i].out_len = 0;
-    tcp_conns[i].active_ns = now_ns();
+    tcp_take(i, c);
 }
 
 static bool tcp_listen_on(uint16_t port, const char *what)
@@ -507,10 +485,7 @@ static bool tcp_listen_on(uint16_t port, const char *what)
         tcp_listen = handed_listen;
         handed_listen = -1;
         for (i = 0; i < handed_conn_count; i++) {
-            tcp_conns[i].fd = handed_conns[i];
-            tcp_conns[i].len = 0;
-            tcp_conns[i].out_len = 0;
-            tcp_conns[i].active_ns = now_ns();
+            tcp_take(i, handed_conns[i]);
             if (!el_host_watch_fd(tcp_conns[i].fd, conn_readable, &tcp_conns[i]))
                 el_port_mb_tcp_close((uint8_t)i);
         }
@@ -601,29 +576,13 @@ void el_port_mb_tcp_consume(uint8_t conn, uint16_t n)
 
 bool el_port_mb_tcp_send(uint8_t conn, const uint8_t *adu, uint16_t len)
 {
-    tcp_conn_t *c;
-    ssize_t sent = 0;
     if (conn >= EL_HOST_MB_TCP_CONNS || tcp_conns[conn].fd < 0)
         return false;
-    c = &tcp_conns[conn];
-    if (!flush_out(c)) {
+    if (el_host_out_put(&tcp_conns[conn].out, adu, len) != EL_HOST_OUT_SENT) {
+        /* Broken, or a client that does not read its replies: dropped, never waited for. */
         el_port_mb_tcp_close(conn);
         return false;
     }
-    if (c->out_len == 0u) { /* nothing waiting: straight to the socket, in order */
-        sent = send_now(c->fd, adu, len);
-        if (sent < 0) {
-            el_port_mb_tcp_close(conn);
-            return false;
-        }
-    }
-    if ((size_t)len - (size_t)sent > sizeof c->out - c->out_len) {
-        el_port_mb_tcp_close(conn); /* a client that does not read its replies: dropped, never waited for */
-        return false;
-    }
-    memcpy(c->out + c->out_len, adu + sent, (size_t)len - (size_t)sent);
-    c->out_len += (size_t)len - (size_t)sent;
-    el_host_watch_output(c->fd, c->out_len > 0u);
     return true;
 }
 
@@ -635,7 +594,7 @@ bool el_host_modbus_handover(void)
     size_t i, used;
     for (i = 0; i < EL_HOST_MB_TCP_CONNS; i++)
         if (tcp_conns[i].fd >= 0)
-            (void)flush_out(&tcp_conns[i]); /* what the socket takes now; the rest is lost with this library */
+            (void)el_host_out_flush(&tcp_conns[i].out); /* what the socket takes now; the rest is lost with this library */
     used = (size_t)snprintf(text, sizeof text, "%d %d %d", tcp_listen, rtu_fd, rtu_keep);
     for (i = 0; i < EL_HOST_MB_TCP_CONNS; i++)
         if (tcp_conns[i].fd >= 0 && used < sizeof text)

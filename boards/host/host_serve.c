@@ -1,6 +1,8 @@
 /* EasyLab host board: the file descriptors served between instants (the
- * debug and Modbus transports, the HMI, a proxy's link), el_port_idle and
- * the TCP listening sockets of the options that take tcp:PORT.
+ * debug and Modbus transports, the HMI, a proxy's link), output that never
+ * waits for its peer (el_host_out_*: the debug, remote and Modbus TCP
+ * links), el_port_idle and the TCP listening sockets of the options that
+ * take tcp:PORT.
  *
  * Shared by the host firmware (host_port.c waits for ticks through it) and
  * by the interfaces library of local execution (host_interp.c), which
@@ -120,6 +122,80 @@ void el_port_idle(uint16_t max_ms)
     el_host_serve_fds((int)max_ms);
 }
 
+/* ---- output that never waits for its peer ---- */
+
+void el_host_out_init(el_host_out_t *o, int fd, bool is_socket, uint8_t *data, uint16_t cap)
+{
+    o->fd = fd;
+    o->is_socket = is_socket;
+    o->len = 0u;
+    o->cap = cap;
+    o->data = data;
+}
+
+/* Write what the descriptor takes now, never waiting: the number of bytes
+ * written (0 when it takes none now), or -1 when the connection is broken. */
+static int32_t write_now(const el_host_out_t *o, const uint8_t *data, uint16_t len)
+{
+    ssize_t n;
+    do {
+        n = o->is_socket ? send(o->fd, data, len, MSG_NOSIGNAL) : write(o->fd, data, len);
+    } while (n < 0 && errno == EINTR);
+    if (n >= 0)
+        return (int32_t)n;
+    return errno == EAGAIN || errno == EWOULDBLOCK ? 0 : -1;
+}
+
+bool el_host_out_flush(el_host_out_t *o)
+{
+    int32_t n;
+    if (o->fd < 0)
+        return false;
+    if (o->len == 0u)
+        return true;
+    n = write_now(o, o->data, o->len);
+    if (n < 0)
+        return false;
+    memmove(o->data, o->data + n, (size_t)(o->len - (uint16_t)n));
+    o->len = (uint16_t)(o->len - (uint16_t)n);
+    el_host_watch_output(o->fd, o->len > 0u);
+    return true;
+}
+
+uint8_t el_host_out_put(el_host_out_t *o, const uint8_t *frame, uint16_t len)
+{
+    int32_t sent = 0;
+    if (!el_host_out_flush(o))
+        return EL_HOST_OUT_BROKEN;
+    if (len > o->cap - o->len)
+        return EL_HOST_OUT_FULL;
+    if (o->len == 0u) { /* nothing waiting: straight to the descriptor, in order */
+        sent = write_now(o, frame, len);
+        if (sent < 0)
+            return EL_HOST_OUT_BROKEN;
+    }
+    memcpy(o->data + o->len, frame + sent, (size_t)(len - (uint16_t)sent));
+    o->len = (uint16_t)(o->len + (len - (uint16_t)sent));
+    el_host_watch_output(o->fd, o->len > 0u);
+    return EL_HOST_OUT_SENT;
+}
+
+bool el_host_out_drain(el_host_out_t *o, int max_ms)
+{
+    int waited;
+    for (waited = 0; o->fd >= 0 && o->len > 0u && waited < max_ms; waited += 10) {
+        struct pollfd p;
+        p.fd = o->fd;
+        p.events = POLLOUT;
+        p.revents = 0;
+        if (poll(&p, 1, 10) < 0 && errno != EINTR)
+            break;
+        if (!el_host_out_flush(o))
+            return false;
+    }
+    return o->fd >= 0 && o->len == 0u;
+}
+
 void el_host_drain_pty(int slave)
 {
     int i, pending = 0, idle = 0;
@@ -134,12 +210,16 @@ void el_host_drain_pty(int slave)
 
 int el_host_accept_tcp(int listen_fd)
 {
-    int client = accept(listen_fd, NULL, NULL), one = 1, fl;
+    int client = accept(listen_fd, NULL, NULL), one = 1, fl, sndbuf = (int)EL_HOST_TCP_SNDBUF;
     if (client < 0)
         return -1;
-    /* Frames are small and answer each other: no Nagle delay. */
+    /* Frames are small and answer each other: no Nagle delay. A bounded
+     * send buffer (no autotuning to megabytes): a peer that stops reading
+     * fills it, and the link's own buffer behind it, within a bounded
+     * number of frames, so the link notices (el_host_out_put). */
     if ((fl = fcntl(client, F_GETFL)) < 0 || fcntl(client, F_SETFL, fl | O_NONBLOCK) != 0 ||
-        setsockopt(client, IPPROTO_TCP, TCP_NODELAY, &one, sizeof one) != 0) {
+        setsockopt(client, IPPROTO_TCP, TCP_NODELAY, &one, sizeof one) != 0 ||
+        setsockopt(client, SOL_SOCKET, SO_SNDBUF, &sndbuf, sizeof sndbuf) != 0) {
         (void)close(client);
         return -1;
     }

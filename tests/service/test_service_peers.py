@@ -7,8 +7,6 @@ recently active one)."""
 
 from __future__ import annotations
 
-import re
-import shutil
 import socket
 import subprocess
 import time
@@ -16,6 +14,8 @@ from pathlib import Path
 
 import pytest
 
+import realtime_peers
+from realtime_peers import overruns, real_time_prefix
 from svc_testlib import RawPty, RawTcp, free_port, host_only, mbap, read_regs_pdu, rtu_frame
 
 GAIN = read_regs_pdu(0x03, 0, 1)  # holding 0 = gain, 3 at boot (tests/service/data/service_peers.elab)
@@ -27,23 +27,6 @@ IDENTIFY = bytes([0x2B, 0x0E, 0x03, 0x00])
 # Long enough for the flooding client to be dropped several times; the task
 # runs 1,600 activations meanwhile, each of which must keep its deadline.
 RUN_SECONDS = 8
-
-
-def overruns(stderr: str) -> int:
-    """The overruns the host firmware reports at its end ("PROG: overruns:
-    TASK N ...")."""
-    return sum(int(n) for line in stderr.splitlines() if "overruns:" in line
-               for n in re.findall(r" (\d+)\b", line.split("overruns:", 1)[1]))
-
-
-def real_time_prefix() -> list[str]:
-    """`chrt -f 10` where the system allows real-time scheduling, else
-    nothing: under SCHED_FIFO the firmware's 5 ms deadlines measure its own
-    loop, not the other jobs of a loaded machine."""
-    chrt = shutil.which("chrt")
-    if chrt and subprocess.run([chrt, "-f", "10", "true"], capture_output=True).returncode == 0:
-        return [chrt, "-f", "10"]
-    return []
 
 
 def start_firmware(exe, port: int, prefix: list[str], rtu: Path | None = None) -> subprocess.Popen:
@@ -68,14 +51,9 @@ def start_firmware(exe, port: int, prefix: list[str], rtu: Path | None = None) -
 
 
 def skip_unless_deadlines_hold(exe, prefix: list[str]) -> None:
-    """Without real-time scheduling, a loaded machine alone may cost 5 ms
-    deadlines: skip when a run with no client at all misses one."""
-    if prefix:
-        return
-    baseline = start_firmware(exe, free_port(), [])
-    if overruns(baseline.communicate(timeout=RUN_SECONDS + 30)[1]):
-        pytest.skip("this machine misses 5 ms deadlines with no client at all, and real-time "
-                    "scheduling (chrt -f) is not allowed here")
+    """Skip when this machine misses 5 ms deadlines with no client at all."""
+    realtime_peers.skip_unless_deadlines_hold(
+        prefix, lambda: start_firmware(exe, free_port(), []).communicate(timeout=RUN_SECONDS + 30)[1])
 
 
 def non_reading_client(port: int) -> socket.socket:
