@@ -146,6 +146,22 @@ def test_resources_the_part_lacks_are_refused_with_the_claim_and_its_line(tmp_pa
     assert re.search(rf"{re.escape(str(model))}:\d+: error: ", err), err
 
 
+def test_the_boards_problems_are_reported_sorted_by_position(tmp_path):
+    """docs/language.md: every error of a run is sorted by position. The
+    claims are checked devices first, then interfaces, then the part's own
+    rules: an interface declared above two devices with pins the part lacks
+    is reported first, and the devices in line order."""
+    model = write_model(tmp_path, "order", 'var x: uint8 service ro\nmodbus rtu on uart1 baud 19200\n'
+                                           'device b: DigitalOut(pin = "RQ1")\ndevice a: DigitalOut(pin = "RZ9")\n'
+                                           + LOOP % "w = SquareWave(half_period = 5)  w.y -> a.level  w.y -> b.level")
+    err = pic18_build(model, tmp_path / "o", ok=False).proc.stderr
+    assert err.startswith("easylab: error: the model does not fit the pic18 board with the pic18f4520 "
+                          "(3 problems):\n"), err
+    lines = [int(m.group(1)) for m in re.finditer(rf"^{re.escape(str(model))}:(\d+): error: ", err, re.M)]
+    assert lines == [5, 6, 7], err
+    assert "uart[1]" in err.splitlines()[1] and "RQ1" in err.splitlines()[2] and "RZ9" in err.splitlines()[3], err
+
+
 def test_unknown_mcu(tmp_path):
     proc = cli("build", ROOT / "examples/blink.elab", "--board", "pic18", "--mcu", "pic18f452", "-o", tmp_path / "x")
     assert proc.returncode == 1
