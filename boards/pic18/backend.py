@@ -42,6 +42,7 @@ class Pic18Board(BoardBase):
         self.all_mcus = read_mcus(description.table("mcu"))
         self.drivers: dict[str, dict] = description.table("drivers")
         self.clock_hz = int(description.raw.get("clock_hz", 40_000_000))
+        self.persist_bytes = int(description.raw.get("persist_program_bytes", 0))  # what persist params cost
 
     @property
     def fcy(self) -> int:
@@ -188,6 +189,8 @@ class Pic18Board(BoardBase):
             msg += "; the debug server takes about 9 KB of program memory: a --release build has none"
         if ram_over and options.schedule != "min-buffer" and any(df.buffers for df in program.dataflows):
             msg += "; dataflow buffers shrink with --schedule min-buffer"
+        if flash_over:
+            msg += self._persist_hint(program, measured)
         bigger = [m for m in self.all_mcus.values()
                   if (flash_over and m.flash > mcu.flash) or (ram_over and m.ram > mcu.ram)]
         if bigger:
@@ -198,6 +201,21 @@ class Pic18Board(BoardBase):
             lines.append("largest in RAM: " + ", ".join(f"{name} {size} B ({src}.c)"
                                                         for size, name, src in measured.largest_ram()))
         return "\n".join(lines)
+
+    def _persist_hint(self, program: Program, measured: linkmap.LinkMap) -> str:
+        """What the program's persist params cost of program memory (board.toml
+        ``persist_program_bytes``), for a program that overflows it; '' when
+        it has none."""
+        persist = [it.name for it in program.items if it.persist]
+        if not persist or not self.persist_bytes:
+            return ""
+        n, mcu = self.persist_bytes, self.part
+        fits = bool(measured.sections) and measured.flash - n <= mcu.flash
+        return (f"; its {len(persist)} persist param{'s' if len(persist) != 1 else ''} ({', '.join(persist)}) "
+                f"cost about {n / 1024:.1f} KB of program memory on the {mcu.name} ({n} bytes: the EEPROM records, "
+                f"their checks and the service layer they are written through"
+                f"{'; without persist the program would fit' if fits else ''}): drop persist from the params "
+                f"that need not survive a reset")
 
     # ---------------------------------------------------------------- running, flashing
 

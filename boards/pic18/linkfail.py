@@ -82,7 +82,8 @@ def _sections(obj: Path) -> list[tuple[str, int, str, list[str]]]:
     symbols: dict[str, list[str]] = {}
     for line in table.splitlines():
         s = _SYMBOL.match(line)
-        if s and s.group("cls") in ("C_EXT", "C_STAT") and s.group("name").startswith("_"):
+        # objects and functions (a static function's name is a label); not sdcc's own labels (_00105_DS_)
+        if s and s.group("cls") in ("C_EXT", "C_STAT", "C_LABEL") and re.match(r"_[A-Za-z]", s.group("name")):
             symbols.setdefault(s.group("section"), []).append(s.group("name")[1:])
     sections = []
     name = size = None

@@ -73,6 +73,43 @@ def test_a_debug_build_too_big_for_the_pic18f4520_says_by_how_much(tmp_path):
     assert not (tmp_path / "b" / "pneumatic_cylinder.hex").exists()
 
 
+def test_a_program_too_big_with_persist_params_says_what_persist_costs(tmp_path):
+    """pneumatic_cylinder's debug build for the PIC18F4520 overflows its
+    program memory; its three persist params cost board.toml's
+    persist_program_bytes, and without them it would fit."""
+    import tomllib
+
+    from firmware_builds import board_model
+
+    cost = tomllib.loads((BOARD / "board.toml").read_text(encoding="utf-8"))["persist_program_bytes"]
+    model = board_model("pic18", ROOT / "examples" / "pneumatic_cylinder.elab", "debug", tmp_path / "model")
+    err = pic18_build(model, tmp_path / "b", ok=False).proc.stderr
+    flash = int(re.search(r"pic18f4520: program memory (\d+) of 32768 bytes", err).group(1))
+    assert flash - cost <= 32768 < flash, err
+    assert (f"; its 3 persist params (target, kp, ki) cost about {cost / 1024:.1f} KB of program memory on the "
+            f"pic18f4520 ({cost} bytes: the EEPROM records, their checks and the service layer they are written "
+            f"through; without persist the program would fit): drop persist from the params that need not "
+            f"survive a reset; or build for --mcu pic18f4620") in err, err
+
+
+def test_what_persist_costs_on_the_pic18f4520_is_measured(tmp_path):
+    """board.toml's persist_program_bytes against two release builds of the
+    board's pneumatic_cylinder for the PIC18F4520, with and without its
+    persist params (within 3 %: the runtime may move a little)."""
+    import tomllib
+
+    cost = tomllib.loads((BOARD / "board.toml").read_text(encoding="utf-8"))["persist_program_bytes"]
+    text = (BOARD / "conformance" / "pneumatic_cylinder.elab").read_text(encoding="utf-8")
+    assert text.count(" persist") == 3
+    flash = {}
+    for name, body in (("with", text), ("without", text.replace(" persist", ""))):
+        (tmp_path / name).mkdir()
+        model = tmp_path / name / "pneumatic_cylinder.elab"
+        model.write_text(body, encoding="utf-8")
+        flash[name] = sizes(pic18_build(model, tmp_path / name / "b", "--release"))["flash"]
+    assert abs(flash["with"] - flash["without"] - cost) <= 0.03 * cost, (flash, cost)
+
+
 def test_a_program_too_big_for_the_ram_names_the_largest_objects(tmp_path):
     """Objects larger than a 256-byte bank sit between the banks and the
     stack (sdcc_quirks.place_big_objects): too many are refused before
@@ -86,6 +123,25 @@ def test_a_program_too_big_for_the_ram_names_the_largest_objects(tmp_path):
             "take 1804 bytes, more than the 1023 bytes of RAM between the access bank and the stack: el_t1 604 B, "
             "el_ch0_ring 600 B, el_df1_b0 600 B; dataflow buffers shrink with --schedule min-buffer; or build for "
             "--mcu pic18f4620") in err, err
+
+
+def test_a_section_gplink_cannot_place_is_named_with_gplinks_message_and_its_size(tmp_path):
+    """cd_to_dat's min-buffer schedule copies the checksum's 160 tokens out
+    of their ring into a local array: sdcc gives it a RAM section of its own,
+    640 bytes, and no 256-byte bank holds it. The error quotes gplink, names
+    the section, its memory, size and symbol, and guesses nothing about
+    program memory or the debug server."""
+    built = pic18_build(ROOT / "examples" / "cd_to_dat.elab", tmp_path / "b", "--mcu", "pic18f4620",
+                        "--schedule", "min-buffer", ok=False)
+    err = built.proc.stderr
+    assert err.startswith("easylab: error: the program does not fit the pic18f4620's RAM banks: gplink could not "
+                          "place a 640-byte RAM section, and a RAM section must fit within one 256-byte bank"), err
+    assert "a dataflow with the sas schedule hands them over in place" in err, err
+    m = re.search(r'^gplink: error: No target memory available for section "(\w+)"', err, re.M)
+    assert m, err
+    assert re.search(rf'^section "{m.group(1)}": RAM, 640 bytes, el_df0_\w*el_in_x\w* in model\.c$', err, re.M), err
+    assert "debug server" not in err and "program memory" not in err, err
+    assert not (tmp_path / "b" / "cd_to_dat.hex").exists()
 
 
 def test_pt100_sensor_on_the_pic18f4520_names_the_missing_second_uart(tmp_path):
