@@ -50,6 +50,7 @@ class Unplaced:
 
     @property
     def larger_than_a_bank(self) -> bool:
+        """A RAM section no bank can hold, however empty."""
         return self.memory == "RAM" and self.size is not None and self.size > BANK_BYTES
 
 
@@ -63,8 +64,10 @@ def unplaced_sections(error: str, objects: list[Path]) -> list[Unplaced]:
             found.append(Unplaced(line.strip().removeprefix("error: "), m.group("section")))
     wanted = {u.section: u for u in found}
     for obj in objects:
-        if not wanted or not obj.is_file():
+        if not wanted:
             break
+        if not obj.is_file():
+            continue
         for name, size, memory, symbols in _sections(obj):
             u = wanted.pop(name, None)
             if u is not None:
@@ -101,5 +104,6 @@ def _sections(obj: Path) -> list[tuple[str, int, str, list[str]]]:
 
 
 def _gpvo(option: str, obj: Path) -> str:
+    """gpvo's listing of an object: ``-s`` its section headers, ``-t`` its symbols."""
     return subprocess.run(["gpvo", option, str(obj)], capture_output=True, text=True, timeout=60,
                           stdin=subprocess.DEVNULL, check=True).stdout

@@ -331,6 +331,7 @@ def by_position(problems: list[str]) -> list[str]:
     as every error of a run is (docs/language.md, "Errors"); those without a
     position come last, in their order."""
     def key(problem: str) -> tuple:
+        """(no position?, file, line, column) of a problem."""
         m = _POSITION.match(problem)
         if m is None:
             return (1, "", 0, 0)

@@ -121,6 +121,7 @@ def _analyze(args) -> int:
 
 
 def cmd_build(args) -> int:
+    """``easylab build FILE``: one board's program, or a model of nodes node by node."""
     import shlex
 
     from ..build import BuildError, build

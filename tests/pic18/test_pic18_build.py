@@ -90,6 +90,9 @@ def test_a_program_too_big_with_persist_params_says_what_persist_costs(tmp_path)
             f"pic18f4520 ({cost} bytes: the EEPROM records, their checks and the service layer they are written "
             f"through; without persist the program would fit): drop persist from the params that need not "
             f"survive a reset; or build for --mcu pic18f4620") in err, err
+    m = re.search(r'^gplink: error: No target memory available for section "(\S+)"\.$', err, re.M)
+    assert m, err
+    assert re.search(rf'^section "{re.escape(m.group(1))}": program memory, \d+ bytes, \w+ in \w+\.c$', err, re.M), err
 
 
 def test_what_persist_costs_on_the_pic18f4520_is_measured(tmp_path):
