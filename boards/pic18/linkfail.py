@@ -14,7 +14,7 @@ import subprocess
 from dataclasses import dataclass, field
 from pathlib import Path
 
-BANK_BYTES = 256  # a RAM section must fit within one bank
+from .sdcc_quirks import BANK_BYTES  # a RAM section must fit within one bank
 
 _NO_MEMORY = re.compile(r'^(?:error: )?No target memory available for section "(?P<section>[^"]+)"\.?\s*$')
 _HEADER_NAME = re.compile(r"^Name\s+(\S+)\s*$")
