@@ -173,12 +173,12 @@ class Pic18Board(BoardBase):
         if over:
             msg = f"the program does not fit the {mcu.name}'s " + ", nor its ".join(over)
         elif too_wide:
+            # a local array without an initializer is placed as a big object (sdcc_quirks._hoist_big_locals)
             msg = (f"the program does not fit the {mcu.name}'s RAM banks: gplink could not place a "
                    f"{too_wide[0].size}-byte RAM section, and a RAM section must fit within one "
-                   f"{linkfail.BANK_BYTES}-byte bank (sdcc gives each function's local array a section of its own)")
-            if any("_el_in_" in sym for u in too_wide for sym in u.symbols):
-                msg += ("; it holds an actor's input tokens, copied out of a ring buffer: a dataflow with the sas "
-                        "schedule hands them over in place")
+                   f"{linkfail.BANK_BYTES}-byte bank (sdcc gives each function's local array a section of its "
+                   f"own); a local array with an initializer stays there: a table that is only read can be "
+                   f"'static const' (program memory), one that changes can be the actor's state")
         elif measured.sections:  # the totals fit, their parts do not
             msg = (f"gplink could not place the program's sections in the {mcu.name}'s memory, though "
                    f"in all they fit (each RAM section must fit within a 256-byte bank)")

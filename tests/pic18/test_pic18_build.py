@@ -129,22 +129,43 @@ def test_a_program_too_big_for_the_ram_names_the_largest_objects(tmp_path):
 
 
 def test_a_section_gplink_cannot_place_is_named_with_gplinks_message_and_its_size(tmp_path):
-    """cd_to_dat's min-buffer schedule copies the checksum's 160 tokens out
-    of their ring into a local array: sdcc gives it a RAM section of its own,
-    640 bytes, and no 256-byte bank holds it. The error quotes gplink, names
-    the section, its memory, size and symbol, and guesses nothing about
-    program memory or the debug server."""
-    built = pic18_build(ROOT / "examples" / "cd_to_dat.elab", tmp_path / "b", "--mcu", "pic18f4620",
-                        "--schedule", "min-buffer", ok=False)
-    err = built.proc.stderr
+    """An actor's initialised local array of 300 bytes: sdcc gives it a RAM
+    section of its own, and no 256-byte bank holds it. The error quotes
+    gplink, names the section, its memory, size and symbol, and guesses
+    nothing about program memory or the debug server."""
+    model = write_model(tmp_path, "table", "actor type Lookup<T: integer>(k: T = 1) {\n    in  x: T\n    out y: T\n"
+                                           "    step {{ uint8_t t[300] = {1, 2, 3}; y = (T)(k * t[(uint16_t)x % 300u]); }}\n"
+                                           "}\nvar v: uint8\n"
+                                           + LOOP % "s = Const<uint8>(value = 7)  a = Lookup<uint8>()  s.y -> a.x  a.y -> v")
+    err = pic18_build(model, tmp_path / "b", "--mcu", "pic18f4620", ok=False).proc.stderr
     assert err.startswith("easylab: error: the program does not fit the pic18f4620's RAM banks: gplink could not "
-                          "place a 640-byte RAM section, and a RAM section must fit within one 256-byte bank"), err
-    assert "a dataflow with the sas schedule hands them over in place" in err, err
-    m = re.search(r'^gplink: error: No target memory available for section "(\w+)"', err, re.M)
+                          "place a 300-byte RAM section, and a RAM section must fit within one 256-byte bank"), err
+    assert "a table that is only read can be 'static const' (program memory)" in err, err
+    m = re.search(r'^gplink: error: No target memory available for section "(\w+)"\.$', err, re.M)
     assert m, err
-    assert re.search(rf'^section "{m.group(1)}": RAM, 640 bytes, el_df0_\w*el_in_x\w* in model\.c$', err, re.M), err
-    assert "debug server" not in err and "program memory" not in err, err
-    assert not (tmp_path / "b" / "cd_to_dat.hex").exists()
+    assert re.search(rf'^section "{m.group(1)}": RAM, 300 bytes, el_df0_D_t_\w+ in model\.c$', err, re.M), err
+    assert "debug server" not in err and "program memory of" not in err, err
+    assert not (tmp_path / "b" / "table.hex").exists()
+
+
+def test_cd_to_dat_with_the_min_buffer_schedule_gives_the_host_trace_on_the_pic18f4620(tmp_path):
+    """The min-buffer schedule copies the checksum's 160 tokens out of their
+    ring into a local array of 640 bytes, larger than a bank: it is placed
+    with the other big objects (sdcc_quirks), the build fits the PIC18F4620
+    (debug too) and runs as the host board's."""
+    from firmware_builds import build
+
+    model = ROOT / "examples" / "cd_to_dat.elab"
+    debug = sizes(pic18_build(model, tmp_path / "d", "--mcu", "pic18f4620", "--schedule", "min-buffer"))
+    assert debug["flash"] <= 65536 and debug["ram"] <= 3968, debug
+    pic = pic18_build(model, tmp_path / "p", "--mcu", "pic18f4620", "--schedule", "min-buffer", "--sim", "--release")
+    assert "el_in_x__el_df0_" in (tmp_path / "p" / "obj" / "model_gen.sdcc.c").read_text()
+    host = build(model, "host", tmp_path / "h", "--schedule", "min-buffer")
+    args = ["--fast", "--duration", "2s"]
+    run(host.executable, *args, "--trace", tmp_path / "host.csv")
+    assert run(pic.simulator, *args, "--trace", tmp_path / "pic18.csv").stderr == ""
+    host_trace = (tmp_path / "host.csv").read_text()
+    assert (tmp_path / "pic18.csv").read_text() == host_trace and host_trace.count("\n") == 101
 
 
 def test_pt100_sensor_on_the_pic18f4520_names_the_missing_second_uart(tmp_path):
