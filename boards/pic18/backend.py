@@ -181,7 +181,7 @@ class Pic18Board(BoardBase):
                    f"'static const' (program memory), one that changes can be the actor's state")
         elif measured.sections:  # the totals fit, their parts do not
             msg = (f"gplink could not place the program's sections in the {mcu.name}'s memory, though "
-                   f"in all they fit (each RAM section must fit within a 256-byte bank)")
+                   f"in all they fit (each RAM section must fit within a {linkfail.BANK_BYTES}-byte bank)")
         else:
             memories = " and its ".join(m for m, o in (("program memory", flash_over), ("RAM", ram_over)) if o)
             msg = f"the program does not fit the {mcu.name}'s {memories or 'memory'}"
