@@ -30,7 +30,7 @@ from easylab.core.errors import BuildError
 from easylab.core.paths import runtime_dir
 from easylab.ir.program import Program
 
-from . import devices, linkmap, sdcc, sdcc_quirks, simulator
+from . import devices, linkfail, linkmap, sdcc, sdcc_quirks, simulator
 from .parts import read_mcus
 
 
@@ -42,6 +42,7 @@ class Pic18Board(BoardBase):
         self.all_mcus = read_mcus(description.table("mcu"))
         self.drivers: dict[str, dict] = description.table("drivers")
         self.clock_hz = int(description.raw.get("clock_hz", 40_000_000))
+        self.persist_bytes = int(description.raw.get("persist_program_bytes", 0))  # what persist params cost
 
     @property
     def fcy(self) -> int:
@@ -51,14 +52,9 @@ class Pic18Board(BoardBase):
     # ---------------------------------------------------------------- code
 
     def check(self, program: Program) -> resources.Resolved:
-        res = resources.resolve(program, self.name, self.part.part(), self.drivers)
-        if not res.problems:
-            res.problems += devices.analog_problems(program, self.part)
-        if res.problems:
-            count = len(res.problems)
-            raise BuildError(f"the model does not fit the {self.name} board with the {self.part.name} "
-                             f"({count} problem{'s' if count != 1 else ''}):\n" + "\n".join(res.problems))
-        return res
+        # the part's own rule once the claims are right
+        return resources.check(program, self.name, self.part.part(), self.drivers,
+                               lambda prog, res: [] if res.problems else devices.analog_problems(prog, self.part))
 
     def produce(self, program: Program, checked: resources.Resolved, release: bool) -> dict[str, str]:
         return devices.files(program, self, checked, release)
@@ -112,11 +108,12 @@ class Pic18Board(BoardBase):
         try:
             lmap = linkmap.read_map(build.link_checked(objects, hexfile, lkr))
         except BuildError as err:
-            if "No target memory available" not in str(err):
+            unplaced = linkfail.unplaced_sections(str(err), objects)
+            if not unplaced:
                 raise
             self._remove(hexfile)
-            raise BuildError(self._not_fit(program, self._measure(build, objects, big_start, out_dir), options)) \
-                from None
+            measured = self._measure(build, objects, big_start, out_dir)
+            raise BuildError(self._not_fit(program, measured, options, unplaced)) from None
         report = self.size_report(lmap)
         return Compiled(hexfile, portable + self._hardware(), report, image=hexfile, notes=list(build.notes))
 
@@ -151,39 +148,74 @@ class Pic18Board(BoardBase):
                 f"{lmap.stack}-byte stack)")
         return SizeReport(lmap.flash, lmap.ram, mcu.flash, mcu.ram, [line])
 
-    def _not_fit(self, program: Program, measured: linkmap.LinkMap, options: CompileOptions) -> str:
+    def _not_fit(self, program: Program, measured: linkmap.LinkMap, options: CompileOptions,
+                 unplaced: list[linkfail.Unplaced]) -> str:
         """The error of a program gplink could not place: its measured size
-        and by how much each memory overflows, with what would help."""
+        and by how much each memory overflows (when the program links into
+        the whole address space), gplink's own message with the section it
+        names, and what would help."""
         mcu = self.part
         lines = []
-        if not measured.sections:
-            msg = f"the program does not fit the {mcu.name}'s {mcu.flash} bytes of program memory or {mcu.ram} of RAM"
-        else:
+        over = []
+        if measured.sections:
             lines.append(f"{mcu.name}: program memory {measured.flash} of {mcu.flash} bytes, RAM {measured.ram} "
                          f"of {mcu.ram} bytes (static data and the {mcu.stack}-byte stack)")
-            over = []
             if measured.flash > mcu.flash:
                 over.append(f"{mcu.flash} bytes of program memory ({measured.flash - mcu.flash} bytes too many)")
             if measured.ram > mcu.ram:
                 over.append(f"{mcu.ram} bytes of RAM ({measured.ram - mcu.ram} bytes too many: static data plus "
                             f"the {mcu.stack}-byte stack)")
-            if over:
-                msg = f"error: the program does not fit the {mcu.name}'s " + ", nor its ".join(over)
-            else:  # the totals fit, their parts do not
-                msg = (f"error: gplink could not place the program's sections in the {mcu.name}'s memory, though "
-                       f"in all they fit (each RAM section must fit within a 256-byte bank)")
-        if not options.release and any(i.kind == "debug" for i in program.interfaces):
+            flash_over, ram_over = measured.flash > mcu.flash, measured.ram > mcu.ram
+        else:  # not even the whole address space holds it: what gplink named is all there is
+            flash_over = any(u.memory == "program memory" for u in unplaced)
+            ram_over = any(u.memory == "RAM" and not u.larger_than_a_bank for u in unplaced)
+        too_wide = [u for u in unplaced if u.larger_than_a_bank]
+        if over:
+            msg = f"the program does not fit the {mcu.name}'s " + ", nor its ".join(over)
+        elif too_wide:
+            # a local array without an initializer is placed as a big object (sdcc_quirks._hoist_big_locals)
+            msg = (f"the program does not fit the {mcu.name}'s RAM banks: gplink could not place a "
+                   f"{too_wide[0].size}-byte RAM section, and a RAM section must fit within one "
+                   f"{linkfail.BANK_BYTES}-byte bank (sdcc gives each function's local array a section of its "
+                   f"own); a local array with an initializer stays there: a table that is only read can be "
+                   f"'static const' (program memory), one that changes can be the actor's state")
+        elif measured.sections:  # the totals fit, their parts do not
+            msg = (f"gplink could not place the program's sections in the {mcu.name}'s memory, though "
+                   f"in all they fit (each RAM section must fit within a {linkfail.BANK_BYTES}-byte bank)")
+        else:
+            memories = " and its ".join(m for m, o in (("program memory", flash_over), ("RAM", ram_over)) if o)
+            msg = f"the program does not fit the {mcu.name}'s {memories or 'memory'}"
+        if flash_over and not options.release and any(i.kind == "debug" for i in program.interfaces):
             msg += "; the debug server takes about 9 KB of program memory: a --release build has none"
-        if measured.ram > mcu.ram and options.schedule != "min-buffer" and any(df.buffers for df in program.dataflows):
+        if ram_over and options.schedule != "min-buffer" and any(df.buffers for df in program.dataflows):
             msg += "; dataflow buffers shrink with --schedule min-buffer"
-        bigger = [m for m in self.all_mcus.values() if m.flash > mcu.flash]
+        if flash_over:
+            msg += self._persist_hint(program, measured)
+        bigger = [m for m in self.all_mcus.values()
+                  if (flash_over and m.flash > mcu.flash) or (ram_over and m.ram > mcu.ram)]
         if bigger:
             msg += f"; or build for --mcu {bigger[0].name}"
-        lines.append(msg)
-        if measured.sections and (measured.ram > mcu.ram or not over):
+        lines.append(("error: " if lines else "") + msg)
+        lines += [u.describe() for u in unplaced]
+        if measured.sections and (ram_over or not over):
             lines.append("largest in RAM: " + ", ".join(f"{name} {size} B ({src}.c)"
                                                         for size, name, src in measured.largest_ram()))
         return "\n".join(lines)
+
+    def _persist_hint(self, program: Program, measured: linkmap.LinkMap) -> str:
+        """What the program's persist params cost of program memory (board.toml
+        ``persist_program_bytes``), for a program that overflows it; '' when
+        it has none."""
+        persist = [it.name for it in program.items if it.persist]
+        if not persist or not self.persist_bytes:
+            return ""
+        n, mcu = self.persist_bytes, self.part
+        fits = bool(measured.sections) and measured.flash - n <= mcu.flash
+        return (f"; its {len(persist)} persist param{'s' if len(persist) != 1 else ''} ({', '.join(persist)}) "
+                f"cost about {n / 1024:.1f} KB of program memory on the {mcu.name} ({n} bytes: the EEPROM records, "
+                f"their checks and the service layer they are written through"
+                f"{'; without persist the program would fit' if fits else ''}): drop persist from the params "
+                f"that need not survive a reset")
 
     # ---------------------------------------------------------------- running, flashing
 

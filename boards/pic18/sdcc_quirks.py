@@ -11,6 +11,8 @@ runtime and the generated tables, and each is checked by the board's tests
   constant element). sdcc reserves a `static` object with `__at` twice
   (its own section and the fixed one: gpasm refuses the duplicate label),
   so such an object loses `static` and takes a name unique to its unit.
+  A function's local array of that size (without an initializer) gets a
+  section of its own too: it becomes a static object of its file first.
 - A generic pointer initialised with the address of a struct member in RAM
   (`(void *)&s.count` in the debugger's tables) gets the tag of program
   memory (sdcc: "initialized generic pointer with unknown storage class
@@ -62,6 +64,7 @@ def place_big_objects(units: dict[str, c_ast.FileAST], target: Target, ram_end: 
     top = ram_end + 1
     placed: list[tuple[str, int]] = []
     for unit, ast in units.items():
+        _hoist_big_locals(ast, target)
         big: dict[str, int] = {}
         used = _used_names(ast)
         dead = set()
@@ -86,6 +89,81 @@ def place_big_objects(units: dict[str, c_ast.FileAST], target: Target, ram_end: 
     if top < FIRST_BANK:
         raise BigObjectsDoNotFit(ram_end + 1 - FIRST_BANK, sorted(placed, key=lambda p: -p[1]))
     return top
+
+
+def _hoist_big_locals(ast: c_ast.FileAST, target: Target) -> None:
+    """A function's local array larger than a bank, without an initializer,
+    becomes a static object of the file, declared before the function and
+    named ``NAME__FUNCTION_N``: sdcc keeps a local of these functions in
+    static RAM anyway (none is reentrant), but in a section of its own that
+    no bank holds; at file scope it is placed like the other big objects
+    (a min-buffer schedule's tokens copied out of a ring for one firing)."""
+    env = TypeEnv(target)
+    out = []
+    for ext in ast.ext:
+        if isinstance(ext, c_ast.Typedef):
+            env.typedef(ext)
+        elif isinstance(ext, c_ast.Decl) and not isinstance(ext.type, c_ast.FuncDecl):
+            env.of_decl(ext.type)  # its struct's members, for the sizes of locals
+        elif isinstance(ext, c_ast.FuncDef):
+            hoister = _BigLocals(env, ext.decl.name)
+            hoister.visit(ext.body)
+            out += hoister.hoisted
+        out.append(ext)
+    ast.ext = out
+
+
+class _BigLocals(c_ast.NodeVisitor):
+    """The big local arrays of one function's body, taken out of their
+    blocks (``hoisted``) with their uses renamed."""
+
+    def __init__(self, env: TypeEnv, function: str):
+        self.env, self.function = env, function
+        self.hoisted: list[c_ast.Decl] = []
+
+    def _big(self, item: c_ast.Node) -> bool:
+        if not isinstance(item, c_ast.Decl) or item.init is not None or item.storage \
+                or not isinstance(item.type, c_ast.ArrayDecl):
+            return False
+        try:
+            size = self.env.size(self.env.of_decl(item.type))
+        except LowerError:
+            return False
+        return size is not None and size > BANK_BYTES
+
+    def visit_Compound(self, node: c_ast.Compound) -> None:
+        items = node.block_items or []
+        kept = []
+        for i, item in enumerate(items):
+            if self._big(item):
+                new = f"{item.name}__{self.function}_{len(self.hoisted)}"
+                for later in items[i + 1:]:
+                    _LocalRenamer(item.name, new).visit(later)
+                _rename(c_ast.FileAST([item]), item.name, new)
+                item.storage = ["static"]
+                self.hoisted.append(item)
+                continue
+            kept.append(item)
+            self.visit(item)
+        node.block_items = kept
+
+
+class _LocalRenamer(c_ast.NodeVisitor):
+    """The uses of a block's local in the statements after its declaration,
+    up to a declaration of the same name in an inner block."""
+
+    def __init__(self, old: str, new: str):
+        self.old, self.new = old, new
+
+    def visit_ID(self, node: c_ast.ID) -> None:
+        if node.name == self.old:
+            node.name = self.new
+
+    def visit_Compound(self, node: c_ast.Compound) -> None:
+        for item in node.block_items or []:
+            if isinstance(item, c_ast.Decl) and item.name == self.old:
+                return  # shadowed from here on
+            self.visit(item)
 
 
 def _used_names(ast: c_ast.FileAST) -> set[str]:

@@ -13,6 +13,7 @@ from . import handlers
 from .cbuild import defined_symbols
 from .contract import BoardCannotRun, Compiled, CompileOptions, Simulator
 from .description import BoardDescription
+from .resources import by_position
 
 
 class BoardBase:
@@ -106,7 +107,7 @@ class BoardBase:
         board, and every such file can be read."""
         problems = [p for p in (handlers.lacking(d, self.name) for d in program.devices) if p]
         if problems:
-            raise BuildError(f"the model does not fit the {self.name} board:\n" + "\n".join(problems))
+            raise BuildError(f"the model does not fit the {self.name} board:\n" + "\n".join(by_position(problems)))
         handlers.check_files(program, self.name)
         return None
 

@@ -319,7 +319,30 @@ def check(program: Program, board: str, part: Part, drivers: dict[str, dict],
     if more is not None:
         res.problems += more(program, res)
     if res.problems:
-        count = len(res.problems)
-        raise BuildError(f"the model does not fit the {board} board with the {part.name} "
-                         f"({count} problem{'s' if count != 1 else ''}):\n" + "\n".join(res.problems))
+        raise problems_error(f"the {board} board with the {part.name}", res.problems)
     return res
+
+
+_POSITION = re.compile(r"^(?P<file>.+?):(?P<line>\d+)(?::(?P<column>\d+))?: ")
+
+
+def by_position(problems: list[str]) -> list[str]:
+    """Problems sorted by the position they begin with (``file:line[:col]:``),
+    as every error of a run is (docs/language.md, "Errors"); those without a
+    position come last, in their order."""
+    def key(problem: str) -> tuple:
+        """(no position?, file, line, column) of a problem."""
+        m = _POSITION.match(problem)
+        if m is None:
+            return (1, "", 0, 0)
+        return (0, m.group("file"), int(m.group("line")), int(m.group("column") or 0))
+
+    return sorted(problems, key=key)
+
+
+def problems_error(what: str, problems: list[str]) -> BuildError:
+    """The error of a model that does not fit ``what`` (a board, with its
+    part): the count, then every problem sorted by position."""
+    count = len(problems)
+    return BuildError(f"the model does not fit {what} ({count} problem{'s' if count != 1 else ''}):\n"
+                      + "\n".join(by_position(problems)))

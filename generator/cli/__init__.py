@@ -57,7 +57,8 @@ def build_parser() -> argparse.ArgumentParser:
                                    "node by node, each on its own board, into build/<model>/<node>/, with "
                                    "its round tables in build/<model>/rounds.json.")
     p.add_argument("file", metavar="FILE", help="model file (.elab)")
-    add_board_options(p, "the board's MCU (default: the board's own; `easylab boards` lists them)")
+    add_board_options(p, "the board's MCU (default: the board's own; `easylab boards` lists them; a model of nodes "
+                         "names its own)", board_default=None, board_help="; a model of nodes names its own")
     p.add_argument("--release", action="store_true", help="a release build: no debug interface")
     p.add_argument("--schedule", choices=SCHEDULE_KINDS,
                    help="schedule kind of every dataflow (default: each dataflow's own, else sas)")

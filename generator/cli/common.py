@@ -53,10 +53,17 @@ def default_out_dir(program, board: str) -> Path:
     return Path("build") / program.name / board
 
 
+DEFAULT_BOARD = "host"
+
+
 def add_board_options(p: argparse.ArgumentParser,
-                      mcu_help: str = "the board's MCU (default: the board's own)") -> None:
-    """--board, --mcu and --board-path, as build, flash and sim take them."""
-    p.add_argument("--board", default="host", help="target board (default: host; `easylab boards` lists them)")
+                      mcu_help: str = "the board's MCU (default: the board's own)",
+                      board_default: str | None = DEFAULT_BOARD, board_help: str = "") -> None:
+    """--board, --mcu and --board-path, as build, flash and sim take them.
+    With ``board_default`` None a command tells an absent --board (None)
+    from ``--board host`` and takes DEFAULT_BOARD itself."""
+    p.add_argument("--board", default=board_default,
+                   help=f"target board (default: {DEFAULT_BOARD}{board_help}; `easylab boards` lists them)")
     p.add_argument("--mcu", metavar="MCU", help=mcu_help)
     p.add_argument("--board-path", metavar="DIR", action="append", default=[],
                    help="a folder of further boards (searched before EASYLAB_BOARD_PATH and the installed "

@@ -7,7 +7,8 @@ import sys
 from pathlib import Path
 
 from ..analysis import sdf
-from .common import EXIT_MODEL_ERROR, EXIT_OK, CliError, check_model, default_out_dir, lower_model, report_built
+from .common import (DEFAULT_BOARD, EXIT_MODEL_ERROR, EXIT_OK, CliError, check_model, default_out_dir, lower_model,
+                     report_built)
 
 
 def cmd_check(args) -> int:
@@ -140,6 +141,7 @@ def _analyze(args) -> int:
 
 
 def cmd_build(args) -> int:
+    """``easylab build FILE``: one board's program, or a model of nodes node by node."""
     import shlex
 
     from ..build import BuildError, build
@@ -147,9 +149,10 @@ def cmd_build(args) -> int:
     program = lower_model(args.file, args.schedule)
     if program.deployment is not None:
         return _build_nodes(program, args)
-    out = Path(args.output) if args.output else default_out_dir(program, args.board)
+    board = args.board or DEFAULT_BOARD
+    out = Path(args.output) if args.output else default_out_dir(program, board)
     try:
-        built = build(program, args.board, out, extra_cflags=shlex.split(args.cflags or ""), cc=args.cc,
+        built = build(program, board, out, extra_cflags=shlex.split(args.cflags or ""), cc=args.cc,
                       release=args.release, mcu=args.mcu, sim=args.sim, schedule=args.schedule,
                       board_path=args.board_path, check=args.check)
     except BuildError as err:
@@ -158,13 +161,23 @@ def cmd_build(args) -> int:
 
 
 def _build_nodes(program, args) -> int:
-    """A model of nodes: every node on its own board (--board and --mcu are
-    the model's), into build/<model>/<node>/, and the round tables of its
-    Modbus links in rounds.json beside them."""
+    """A model of nodes: every node on its own board, into
+    build/<model>/<node>/, and the round tables of its Modbus links in
+    rounds.json beside them. Its nodes name their boards, MCUs and
+    compilers: --board, --mcu and --cc are refused."""
     import shlex
 
     from ..analysis.distribution import round_summary
     from ..build import BuildError, build_nodes
+
+    given = [f"{option} {value}" for option, value in (("--board", args.board), ("--mcu", args.mcu), ("--cc", args.cc))
+             if value is not None]
+    if given:
+        nodes = ", ".join(f"{n.name} on {n.board}{f' ({n.mcu})' if n.mcu else ''}" for n in program.deployment.nodes)
+        raise CliError(f"{args.file}: model '{program.name}' has nodes, and each node names its board and MCU in the "
+                       f"model ({nodes}); {' and '.join(given)} would choose for all of them: build without "
+                       f"{'it' if len(given) == 1 else 'them'}, or change a node's declaration "
+                       f"(`node NAME board B mcu M`, docs/distribution.md)")
 
     out = Path(args.output) if args.output else Path("build") / program.name
     try:

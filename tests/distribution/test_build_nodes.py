@@ -80,6 +80,23 @@ def test_a_model_without_nodes_is_not_built_node_by_node(tmp_path):
         build_nodes(program, tmp_path / "b")
 
 
+def test_a_model_of_nodes_refuses_a_board_an_mcu_or_a_compiler_of_the_command_line(tmp_path):
+    """Its nodes name their boards and MCUs (docs/distribution.md): --board,
+    --mcu (and --cc) would be ignored, so the build refuses them, naming
+    the nodes' own, before building anything."""
+    for options in (["--board", "avr"], ["--board", "host"], ["--mcu", "atmega2560"],
+                    ["--board", "avr", "--mcu", "atmega2560"], ["--cc", "clang"]):
+        run = easylab("build", str(ROBOT), *options, "-o", str(tmp_path / "b"))
+        assert run.returncode == 1 and run.stdout == "", (options, run.stdout, run.stderr)
+        given = " and ".join(f"{options[i]} {options[i + 1]}" for i in range(0, len(options), 2))
+        assert run.stderr == (
+            f"easylab: error: {ROBOT}: model 'robot' has nodes, and each node names its board and MCU in the model "
+            f"(planner on host, joint1 on avr (atmega328p), joint2 on avr (atmega328p)); {given} would choose for "
+            f"all of them: build without {'it' if len(options) == 2 else 'them'}, or change a node's declaration "
+            f"(`node NAME board B mcu M`, docs/distribution.md)\n"), options
+        assert not (tmp_path / "b").exists()
+
+
 def test_every_node_on_the_link_gets_the_round(tmp_path):
     run = easylab("build", str(ROBOT), "-o", str(tmp_path / "b"))
     assert run.returncode == 0, run.stdout + run.stderr

@@ -73,6 +73,46 @@ def test_a_debug_build_too_big_for_the_pic18f4520_says_by_how_much(tmp_path):
     assert not (tmp_path / "b" / "pneumatic_cylinder.hex").exists()
 
 
+def test_a_program_too_big_with_persist_params_says_what_persist_costs(tmp_path):
+    """pneumatic_cylinder's debug build for the PIC18F4520 overflows its
+    program memory; its three persist params cost board.toml's
+    persist_program_bytes, and without them it would fit."""
+    import tomllib
+
+    from firmware_builds import board_model
+
+    cost = tomllib.loads((BOARD / "board.toml").read_text(encoding="utf-8"))["persist_program_bytes"]
+    model = board_model("pic18", ROOT / "examples" / "pneumatic_cylinder.elab", "debug", tmp_path / "model")
+    err = pic18_build(model, tmp_path / "b", ok=False).proc.stderr
+    flash = int(re.search(r"pic18f4520: program memory (\d+) of 32768 bytes", err).group(1))
+    assert flash - cost <= 32768 < flash, err
+    assert (f"; its 3 persist params (target, kp, ki) cost about {cost / 1024:.1f} KB of program memory on the "
+            f"pic18f4520 ({cost} bytes: the EEPROM records, their checks and the service layer they are written "
+            f"through; without persist the program would fit): drop persist from the params that need not "
+            f"survive a reset; or build for --mcu pic18f4620") in err, err
+    m = re.search(r'^gplink: error: No target memory available for section "(\S+)"\.$', err, re.M)
+    assert m, err
+    assert re.search(rf'^section "{re.escape(m.group(1))}": program memory, \d+ bytes, \w+ in \w+\.c$', err, re.M), err
+
+
+def test_what_persist_costs_on_the_pic18f4520_is_measured(tmp_path):
+    """board.toml's persist_program_bytes against two release builds of the
+    board's pneumatic_cylinder for the PIC18F4520, with and without its
+    persist params (within 3 %: the runtime may move a little)."""
+    import tomllib
+
+    cost = tomllib.loads((BOARD / "board.toml").read_text(encoding="utf-8"))["persist_program_bytes"]
+    text = (BOARD / "conformance" / "pneumatic_cylinder.elab").read_text(encoding="utf-8")
+    assert text.count(" persist") == 3
+    flash = {}
+    for name, body in (("with", text), ("without", text.replace(" persist", ""))):
+        (tmp_path / name).mkdir()
+        model = tmp_path / name / "pneumatic_cylinder.elab"
+        model.write_text(body, encoding="utf-8")
+        flash[name] = sizes(pic18_build(model, tmp_path / name / "b", "--release"))["flash"]
+    assert abs(flash["with"] - flash["without"] - cost) <= 0.03 * cost, (flash, cost)
+
+
 def test_a_program_too_big_for_the_ram_names_the_largest_objects(tmp_path):
     """Objects larger than a 256-byte bank sit between the banks and the
     stack (sdcc_quirks.place_big_objects): too many are refused before
@@ -86,6 +126,46 @@ def test_a_program_too_big_for_the_ram_names_the_largest_objects(tmp_path):
             "take 1804 bytes, more than the 1023 bytes of RAM between the access bank and the stack: el_t1 604 B, "
             "el_ch0_ring 600 B, el_df1_b0 600 B; dataflow buffers shrink with --schedule min-buffer; or build for "
             "--mcu pic18f4620") in err, err
+
+
+def test_a_section_gplink_cannot_place_is_named_with_gplinks_message_and_its_size(tmp_path):
+    """An actor's initialised local array of 300 bytes: sdcc gives it a RAM
+    section of its own, and no 256-byte bank holds it. The error quotes
+    gplink, names the section, its memory, size and symbol, and guesses
+    nothing about program memory or the debug server."""
+    model = write_model(tmp_path, "table", "actor type Lookup<T: integer>(k: T = 1) {\n    in  x: T\n    out y: T\n"
+                                           "    step {{ uint8_t t[300] = {1, 2, 3}; y = (T)(k * t[(uint16_t)x % 300u]); }}\n"
+                                           "}\nvar v: uint8\n"
+                                           + LOOP % "s = Const<uint8>(value = 7)  a = Lookup<uint8>()  s.y -> a.x  a.y -> v")
+    err = pic18_build(model, tmp_path / "b", "--mcu", "pic18f4620", ok=False).proc.stderr
+    assert err.startswith("easylab: error: the program does not fit the pic18f4620's RAM banks: gplink could not "
+                          "place a 300-byte RAM section, and a RAM section must fit within one 256-byte bank"), err
+    assert "a table that is only read can be 'static const' (program memory)" in err, err
+    m = re.search(r'^gplink: error: No target memory available for section "(\w+)"\.$', err, re.M)
+    assert m, err
+    assert re.search(rf'^section "{m.group(1)}": RAM, 300 bytes, el_df0_D_t_\w+ in model\.c$', err, re.M), err
+    assert "debug server" not in err and "program memory of" not in err, err
+    assert not (tmp_path / "b" / "table.hex").exists()
+
+
+def test_cd_to_dat_with_the_min_buffer_schedule_gives_the_host_trace_on_the_pic18f4620(tmp_path):
+    """The min-buffer schedule copies the checksum's 160 tokens out of their
+    ring into a local array of 640 bytes, larger than a bank: it is placed
+    with the other big objects (sdcc_quirks), the build fits the PIC18F4620
+    (debug too) and runs as the host board's."""
+    from firmware_builds import build
+
+    model = ROOT / "examples" / "cd_to_dat.elab"
+    debug = sizes(pic18_build(model, tmp_path / "d", "--mcu", "pic18f4620", "--schedule", "min-buffer"))
+    assert debug["flash"] <= 65536 and debug["ram"] <= 3968, debug
+    pic = pic18_build(model, tmp_path / "p", "--mcu", "pic18f4620", "--schedule", "min-buffer", "--sim", "--release")
+    assert "el_in_x__el_df0_" in (tmp_path / "p" / "obj" / "model_gen.sdcc.c").read_text()
+    host = build(model, "host", tmp_path / "h", "--schedule", "min-buffer")
+    args = ["--fast", "--duration", "2s"]
+    run(host.executable, *args, "--trace", tmp_path / "host.csv")
+    assert run(pic.simulator, *args, "--trace", tmp_path / "pic18.csv").stderr == ""
+    host_trace = (tmp_path / "host.csv").read_text()
+    assert (tmp_path / "pic18.csv").read_text() == host_trace and host_trace.count("\n") == 101
 
 
 def test_pt100_sensor_on_the_pic18f4520_names_the_missing_second_uart(tmp_path):
@@ -144,6 +224,22 @@ def test_resources_the_part_lacks_are_refused_with_the_claim_and_its_line(tmp_pa
     err = pic18_build(model, tmp_path / "o", ok=False).proc.stderr
     assert message in err, err
     assert re.search(rf"{re.escape(str(model))}:\d+: error: ", err), err
+
+
+def test_the_boards_problems_are_reported_sorted_by_position(tmp_path):
+    """docs/language.md: every error of a run is sorted by position. The
+    claims are checked devices first, then interfaces, then the part's own
+    rules: an interface declared above two devices with pins the part lacks
+    is reported first, and the devices in line order."""
+    model = write_model(tmp_path, "order", 'var x: uint8 service ro\nmodbus rtu on uart1 baud 19200\n'
+                                           'device b: DigitalOut(pin = "RQ1")\ndevice a: DigitalOut(pin = "RZ9")\n'
+                                           + LOOP % "w = SquareWave(half_period = 5)  w.y -> a.level  w.y -> b.level")
+    err = pic18_build(model, tmp_path / "o", ok=False).proc.stderr
+    assert err.startswith("easylab: error: the model does not fit the pic18 board with the pic18f4520 "
+                          "(3 problems):\n"), err
+    lines = [int(m.group(1)) for m in re.finditer(rf"^{re.escape(str(model))}:(\d+): error: ", err, re.M)]
+    assert lines == [5, 6, 7], err
+    assert "uart[1]" in err.splitlines()[1] and "RQ1" in err.splitlines()[2] and "RZ9" in err.splitlines()[3], err
 
 
 def test_unknown_mcu(tmp_path):
