@@ -300,6 +300,11 @@ void el_remote_boot(void)
     el_port_resync(); /* tick 0 is due now, not when the board started (an MCU's timer runs from boot) */
 }
 
+uint16_t el_remote_overruns(uint8_t task)
+{
+    return task < EL_RMT_TASKS ? task_overruns[task] : 0u;
+}
+
 /* Real time: no valid frame for the watchdog time means the host is gone.
  * (In lock-step the proxy's clock waits for the host instead.) */
 static void watchdog(void)
@@ -386,12 +391,9 @@ void el_remote_publish(uint8_t task)
     if (!drives_devices(task)) {
         return; /* no values come for it: never late, and no break in a row of overruns */
     }
-    if (!got) { /* an overrun: the previous values stay */
+    if (!got) { /* an overrun: the host's values came late, the previous values stay */
         count(EL_RMT_COUNTER_OVERRUNS);
-        if (el_overruns[task] < UINT16_MAX) {
-            el_overruns[task]++;
-        }
-        if (task_overruns[task] < UINT16_MAX) { /* late values only, not the dispatcher's lateness */
+        if (task_overruns[task] < UINT16_MAX) { /* not el_overruns: the proxy's own lateness is another thing */
             task_overruns[task]++;
         }
         if (++overruns_in_a_row >= el_rmt_overrun_limit) {

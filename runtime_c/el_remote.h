@@ -51,6 +51,10 @@ void el_remote_body(uint8_t task);       /* after the reads: UP, and in lock-ste
 void el_remote_publish(uint8_t task);    /* the task's deadline: apply what arrived */
 void el_remote_poll(void);               /* take received bytes (from el_idle) */
 void el_remote_shutdown(void);           /* safe values */
+/* A proxy task's overruns: its deadlines at which the host's values had
+ * not come (the previous values held). The dispatcher's el_overruns of a
+ * proxy count the proxy's own lateness, behind its clock, instead. */
+uint16_t el_remote_overruns(uint8_t task);
 
 /* ---- provided by the board (the host board: boards/host/host_remote.c) ---- */
 uint16_t el_remote_port_read(uint8_t *buf, uint16_t max); /* received bytes, without waiting */

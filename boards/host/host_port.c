@@ -15,6 +15,9 @@
 
 #include "host_internal.h"
 #include "el_dispatch.h"
+#if defined(EL_REMOTE_PROXY) && EL_REMOTE_PROXY
+#include "el_remote.h"
+#endif
 
 #include <errno.h>
 #include <poll.h>
@@ -185,6 +188,33 @@ bool el_port_init(int argc, char **argv)
     return true;
 }
 
+#if defined(EL_REMOTE_PROXY) && EL_REMOTE_PROXY
+/* A proxy's tasks run on the host (easylab remote): an overrun is a
+ * deadline at which the host's values had not come, as `easylab remote`
+ * reports it; the dispatcher's count is the proxy's own lateness. */
+#define OWN_LATENESS "behind its clock (instants processed after their deadlines):"
+static void report_remote_overruns(void)
+{
+    uint8_t i;
+    bool any = false;
+    for (i = 0; i < el_task_count; i++)
+        if (el_remote_overruns(i) != 0u)
+            any = true;
+    if (!any)
+        return;
+    fprintf(stderr, "%s: overruns:", el_host_prog);
+    for (i = 0; i < el_task_count; i++)
+        if (el_remote_overruns(i) != 0u)
+            fprintf(stderr, " %s %u", el_task_names[i] ? el_task_names[i] : "?", (unsigned)el_remote_overruns(i));
+    fputs(" (the host's values came late; the previous values held)\n", stderr);
+}
+#else
+#define OWN_LATENESS "overruns:"
+static void report_remote_overruns(void)
+{
+}
+#endif
+
 void el_port_shutdown(void)
 {
     uint8_t i;
@@ -198,12 +228,13 @@ void el_port_shutdown(void)
         if (el_overruns[i] != 0u)
             any = true;
     if (any) {
-        fprintf(stderr, "%s: overruns:", el_host_prog);
+        fprintf(stderr, "%s: %s", el_host_prog, OWN_LATENESS);
         for (i = 0; i < el_task_count; i++)
             if (el_overruns[i] != 0u)
                 fprintf(stderr, " %s %u", el_task_names[i] ? el_task_names[i] : "?", (unsigned)el_overruns[i]);
         fputc('\n', stderr);
     }
+    report_remote_overruns();
     el_host_bus_report();
     fflush(stderr);
 }

@@ -103,6 +103,16 @@ def _say_budget(program, baud: int) -> None:
              f"this proxy serves lock-step runs (easylab remote --fast) only")
 
 
+def _overruns_said(program, model, counters: dict) -> str:
+    """The proxy's counts at the end of a run, in the words the proxy uses
+    for them (docs/remote.md): an overrun is a proxy task's deadline at
+    which the host's values had not come."""
+    per_task = ", ".join(f"{program.tasks[model.tasks[k].task].name} {n}"
+                         for k, n in enumerate(counters["tasks"]) if n)
+    return (f"the proxy counted {counters['overruns']} overruns{f' ({per_task})' if per_task else ''}: the host's "
+            f"values came late and the previous values held; {counters['watchdog']} watchdog expiries")
+
+
 def cmd_remote(args) -> int:
     """Run the application against a proxy until the duration or a signal."""
     from ..interp.clock import Clock
@@ -167,8 +177,7 @@ def cmd_remote(args) -> int:
         counters = link.counters()
         engine.take_counters(counters, engine.last_time_us or 0)  # the last counts: status items and trace
         if counters["overruns"] or counters["watchdog"]:
-            _say(f"easylab remote: the proxy counted {counters['overruns']} overruns (values held) and "
-                 f"{counters['watchdog']} watchdog expiries")
+            _say(f"easylab remote: {_overruns_said(program, model, counters)}")
     except (RemoteError, OSError, ValueError) as err:  # the link, the trace, a frame not of this model
         _say(f"easylab remote: {err}")
         status = EXIT_ERROR
