@@ -22,7 +22,7 @@ import shlex
 import subprocess
 from pathlib import Path
 
-from easylab.board import resources
+from easylab.board import handlers, resources
 from easylab.board.base import BoardBase
 from easylab.board.cbuild import mode_flags, require_tool, runtime_sources, write_files
 from easylab.board.contract import Compiled, CompileOptions, SizeReport, Simulator
@@ -54,7 +54,8 @@ class Pic18Board(BoardBase):
     def check(self, program: Program) -> resources.Resolved:
         # the part's own rule once the claims are right
         return resources.check(program, self.name, self.part.part(), self.drivers,
-                               lambda prog, res: [] if res.problems else devices.analog_problems(prog, self.part))
+                               lambda prog, res: handlers.not_built(prog, self.name, self.drivers)
+                               + ([] if res.problems else devices.analog_problems(prog, self.part)))
 
     def produce(self, program: Program, checked: resources.Resolved, release: bool) -> dict[str, str]:
         return devices.files(program, self, checked, release)

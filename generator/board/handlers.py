@@ -23,8 +23,8 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Callable
 
-from ..codegen.c_syntax import c_comment, c_literal
-from ..codegen.impl_files import DEVICE_BLOCKS, split_impl
+from ..codegen.c_syntax import c_comment, c_literal, c_string
+from ..core.impl_files import DEVICE_BLOCKS, split_impl
 from ..core import types as T
 from ..core.errors import BuildError
 from ..ir.program import Device, Item, Program
@@ -33,6 +33,9 @@ from .simtables import item_symbol
 
 HANDLERS = DEVICE_BLOCKS  # open, start, read, write, stop, close
 SOURCE_FILE = "el_handlers.c"
+# After a block's body: a #line back into the generated file, whose number
+# only the whole file knows (resolve_lines).
+LINE_BACK = "#line @generated@"
 
 
 @dataclass
@@ -42,13 +45,15 @@ class HandlerCode:
     file: str
     prelude: str
     bodies: dict[str, str]
+    lines: dict[str, int]  # the line of the file each body starts on
 
 
 @functools.lru_cache(maxsize=64)
 def _split_cached(file: str, mtime_ns: int, size: int) -> HandlerCode:
     text = Path(file).read_text(encoding="utf-8")
-    prelude, bodies = split_impl(text, file, HANDLERS)
-    return HandlerCode(file, prelude, bodies)
+    spans: dict[str, tuple[int, int, int]] = {}
+    prelude, bodies = split_impl(text, file, HANDLERS, spans)
+    return HandlerCode(file, prelude, bodies, {k: text.count("\n", 0, v[1]) + 1 for k, v in spans.items()})
 
 
 def read_handlers(file: str) -> HandlerCode:
@@ -100,6 +105,17 @@ def lacking(device: Device, board: str) -> str | None:
             f"only; write a C file with its EL_OPEN ... EL_CLOSE blocks for the {board} board and name it after "
             f"the driver: driver \"{device.driver}\" impl {board} \"FILE.c\" (docs/boards.md, 'Writing a device "
             f"driver')")
+
+
+def not_built(program: Program, board: str, drivers: dict) -> list[str]:
+    """The problems of devices whose types bring handler files for a board
+    that does not build handler files (its own drivers only), at their
+    source lines."""
+    return [f"{dev.location}: error: device '{dev.path}' ({dev.type_name}) brings its own handlers for the {board} "
+            f"board ({Path(handler_file(dev, board)).name}), but the {board} board builds its own drivers only "
+            f"({', '.join(sorted(drivers))}); the host and avr boards build handler files (docs/boards.md, "
+            "'Writing a device driver')"
+            for dev in program.devices if handler_file(dev, board) is not None]
 
 
 def check_files(program: Program, board: str) -> None:
@@ -179,7 +195,11 @@ def device_block(program: Program, device: Device, code: HandlerCode, binding: B
         lines.append(f"{storage}void {fn}(void)")
         lines.append("{")
         if handler in code.bodies:
-            lines += ["    {", code.bodies[handler].strip("\n"), "    }"]
+            # the compiler names the user's file and line in the body
+            lines += ["    {", f"#line {code.lines[handler]} {c_string(code.file)}", code.bodies[handler].rstrip(" \t"),
+                      LINE_BACK, "    }"]
+        if handler == "close" and firmware and device.states:
+            lines.append(f"    (void)&{binding.state}; /* a state its file does not use is no error */")
         lines.append("}")
     lines += [f"#undef {name}" for name, _v in defines]
     return lines
@@ -216,4 +236,14 @@ def source(program: Program, board: str, includes: tuple[str, ...] = (),
             done.add(code.file)
             lines += prelude_block(code) + [""]
         lines += device_block(program, dev, code, firmware_binding(program, dev), chip_select=chip_select) + [""]
-    return {SOURCE_FILE: "\n".join(lines) + "\n"}
+    return {SOURCE_FILE: resolve_lines("\n".join(lines) + "\n", SOURCE_FILE)}
+
+
+def resolve_lines(text: str, name: str) -> str:
+    """``text`` with each LINE_BACK made the ``#line`` that numbers the
+    lines after it as ``name``'s own."""
+    out = text.split("\n")
+    for k, line in enumerate(out):
+        if line == LINE_BACK:
+            out[k] = f"#line {k + 2} {c_string(name)}"
+    return "\n".join(out)

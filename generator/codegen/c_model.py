@@ -23,7 +23,7 @@ from ..core import expr as I
 from ..core import types as T
 from ..ir.program import ActorSpec, Buffer, Chart, Dataflow, Fire, Item, Loop, Program, Task
 from .c_syntax import C_KIND_ENUM, C_TYPE_ENUM, ExprWriter, c_comment, c_literal, ident, type_param_macros
-from .impl_files import split_impl
+from ..core.impl_files import split_impl
 from .status_view import StatusView, status_views
 from .token_moves import copy_tokens, ring_get, ring_put
 

@@ -57,7 +57,7 @@ def plugin_source(program: Program, device: Device) -> str:
     state_type = f"el_mdev{device.id}_state_t"
     binding = H.Binding(datum, f"*({state_type} *)el_state")
     calls = "\n".join(f"    case {k}u: {H.function_name(device, h)}(); break;" for h, k in _HANDLER.items())
-    return "\n".join([
+    return H.resolve_lines("\n".join([
         f"/* EasyLab device plug-in: {device.path} ({device.type_name}), its host handlers for local execution",
         " * (docs/local.md). Generated from the same rendering as firmware; do not edit. */",
         *(f'#include "{h}"' for h in RUNTIME_HEADERS), "#include <stddef.h>", "",
@@ -73,7 +73,7 @@ def plugin_source(program: Program, device: Device) -> str:
         f"size_t el_device_state_size(void) {{ return sizeof({state_type}); }}",
         "void el_device_call(uint8_t handler, void *state, void *const *data)", "{",
         "    el_state = state;", "    el_data = data;", "    switch (handler) {", calls,
-        "    default: break;", "    }", "}", ""])
+        "    default: break;", "    }", "}", ""]), f"plug-in of device {device.path} (generated)")
 
 
 @dataclass

@@ -9,7 +9,7 @@ from textwrap import dedent
 
 import pytest
 
-from handlers_testlib import build, run, trace_rows, write_model
+from handlers_testlib import build, cli, run, trace_rows, write_model
 
 TYPE = dedent("""\
     model m
@@ -62,7 +62,8 @@ def test_the_generated_handlers_see_the_devices_names_and_keep_their_own_state(t
         assert f"static el_mdev{dev}_state_t el_mdev{dev}_state; /* zero at boot */" in text
         assert f"#define scale ((int16_t){scale})" in text
         assert f"#define reads ((el_mdev{dev}_state).reads)" in text
-        assert f"void el_mdev{dev}_read(void)\n{{\n    {{\n    reads++;" in text
+        assert re.search(rf"void el_mdev{dev}_read\(void\)\n{{\n    {{\n#line 3 \"[^\"]*gauge_host\.c\"\n\n    reads\+\+;",
+                         text), text
     assert "#define level (el_i2_a_level)" in text and "#define level (el_i3_b_level)" in text
     model_c = (tmp_path / "out" / "model.c").read_text()
     assert "el_sim_sample(0u); { void el_mdev0_read(void); el_mdev0_read(); } /* a */" in model_c
@@ -117,16 +118,43 @@ def test_the_host_simulates_a_device_whose_type_brings_no_host_handlers(tmp_path
     assert (rows[0]["a.level"], rows[0]["b.level"]) == ("4", "5")
 
 
-@pytest.mark.parametrize("content, message", [
-    ("EL_READ { }\nEL_STEP { }\n", r"gauge_host\.c:2: EL_STEP is not a block of this file; its blocks are EL_OPEN, "
-                                   r"EL_START, EL_READ, EL_WRITE, EL_STOP, EL_CLOSE"),
-    ("EL_READ { }\nEL_READ { }\n", r"gauge_host\.c:2: EL_READ is given twice"),
-    ("EL_WRITE x;\n", r"gauge_host\.c: EL_WRITE must be followed by a block \{ \.\.\. \}"),
+@pytest.mark.parametrize("content, place, message", [
+    ("EL_READ { }\n  EL_STEP { }\n", "2:3", r"EL_STEP is not a block of this file; its blocks are EL_OPEN, "
+                                           r"EL_START, EL_READ, EL_WRITE, EL_STOP, EL_CLOSE"),
+    ("EL_READ { }\nEL_READ { }\n", "2:1", r"EL_READ is given twice"),
+    ("EL_WRITE x;\n", "1:1", r"EL_WRITE must be followed by a block \{ \.\.\. \}"),
+    ("\n\nEL_OPEN {\n", "3:9", r"the block of EL_OPEN is never closed"),
 ])
-def test_a_malformed_handler_file_is_a_build_error_naming_it(tmp_path, content, message):
+def test_a_malformed_handler_file_is_refused_by_the_checker_at_its_place(tmp_path, content, place, message):
+    """What can be seen without compiling a handler file is an error of
+    `easylab check` (and so of every build) at the file's line and column,
+    with a note at the model's line that names the file."""
     path = model(tmp_path, 'impl host "gauge_host.c"', {"gauge_host.c": content})
+    proc = cli("check", path)
+    assert proc.returncode == 1 and re.search(rf"gauge_host\.c:{place}: error: {message}\n.*model\.elab:7:20: note: the handler file "
+                     rf"'gauge_host\.c' is named here", proc.stderr, re.S), proc.stderr
     err = build(path, "host", tmp_path / "out", ok=False).proc.stderr
-    assert re.search(r"easylab: error: handler file .*" + message, err), err
+    assert re.search(rf"gauge_host\.c:{place}: error: {message}", err), err
+
+
+def test_a_compiler_error_in_a_handler_names_the_users_file_and_line(tmp_path):
+    path = model(tmp_path, 'impl host "gauge_host.c"',
+                 {"gauge_host.c": "/* one */\nEL_READ {\n    reads++;\n    level = not_declared;\n}\n"})
+    err = build(path, "host", tmp_path / "out", ok=False).proc.stderr
+    assert re.search(r"gauge_host\.c:4:\d+: error: .not_declared. undeclared", err), err
+    assert "el_handlers.c:" not in err
+
+
+def test_a_state_its_handler_file_does_not_use_builds_on_every_board(tmp_path):
+    """A failure counter only the real driver counts: the host's handler
+    file never names it, and the build is no error."""
+    path = model(tmp_path, 'impl host "gauge_host.c" impl avr "gauge_avr.c"',
+                 {"gauge_host.c": "EL_READ { level = 4; }\n", "gauge_avr.c": GAUGE_AVR})
+    built = build(path, "host", tmp_path / "host")
+    build(path, "avr", tmp_path / "avr", "--mcu", "atmega328p")
+    run(built.executable, "--fast", "--duration", "20ms", "--trace", tmp_path / "t.csv")
+    _, rows = trace_rows(tmp_path / "t.csv")
+    assert rows[-1]["a.level"] == "4"
 
 
 @pytest.mark.parametrize("use, problem", [
@@ -183,3 +211,14 @@ def test_the_avr_board_checks_chip_selects(tmp_path, cs, problem):
         """)
     err = build(write_model(tmp_path, text), "avr", tmp_path / "out", ok=False).proc.stderr
     assert problem in err, err
+
+
+def test_a_board_that_builds_its_own_drivers_only_refuses_handler_files_at_their_line(tmp_path):
+    """The PIC18 board builds no handler files: a device that brings one
+    for it is a problem at the device's line, not a traceback."""
+    path = write_model(tmp_path, TYPE.replace("IMPLS", 'impl pic18 "gauge_host.c"').replace(
+        "    claims i2c[bus] addr address\n", "") + USE, {"gauge_host.c": GAUGE_HOST})
+    err = build(path, "pic18", tmp_path / "out", ok=False).proc.stderr
+    assert re.search(r"model\.elab:8: error: device 'a' \(Gauge\) brings its own handlers for the pic18 board "
+                     r"\(gauge_host\.c\), but the pic18 board builds its own drivers only", err), err
+    assert "Traceback" not in err

@@ -137,6 +137,7 @@ def test_a_bus_owned_whole_is_shared_with_nobody(tmp_path):
 @pytest.mark.parametrize("claim, message", [
     ('i2c[0] addr "x"', "a bus address is a non-negative integer, as in addr 0x48"),
     ('spi[0] cs 2 > 1', 'a chip select is a pin: its name as a string, as in cs "PB2"'),
+    ('spi[0] cs 2', 'a chip select is a pin: its name as a string, as in cs "PB2"'),  # once a build error
 ])
 def test_a_place_on_a_bus_has_a_type(tmp_path, claim, message):
     path = write_model(tmp_path, SENSOR.replace("claims i2c[bus] addr address", f"claims {claim}"), FILES)

@@ -7,6 +7,7 @@ from __future__ import annotations
 from fractions import Fraction
 from pathlib import Path as FsPath
 
+from ...core.impl_files import ImplFileError, split_impl
 from ...core.source import Diagnostics, Span, did_you_mean, note
 from ...core import types as T
 from .. import ast
@@ -135,6 +136,19 @@ class CheckerBase:
 
     def error(self, span: Span, message: str, hint: str | None = None, notes=()) -> None:
         self.diags.error(span, message, hint, tuple(notes))
+
+    def report_c_file(self, path: FsPath, blocks: tuple[str, ...], named_at: Span, what: str) -> None:
+        """An error for what :func:`c_file_problem` finds in a C file the
+        model names at ``named_at``: at its place in the file, with a note
+        at the name."""
+        found = c_file_problem(path, blocks)
+        if found is None:
+            return
+        span, message = found
+        if span is None:
+            self.error(named_at, f"{what} {message}")
+        else:
+            self.error(span, message, notes=[note(named_at, f"the {what} is named here")])
 
     # ================================================================ names
 
@@ -298,6 +312,26 @@ def in_library(span: Span) -> bool:
 def short_name(text: str, limit: int = 60) -> str:
     """``text`` cut to ``limit`` characters for a message."""
     return text if len(text) <= limit else text[:limit - 3] + "..."
+
+
+def c_file_problem(path: FsPath, blocks: tuple[str, ...]) -> tuple[Span | None, str] | None:
+    """What is wrong with a C file from the model's folder (an actor's
+    ``impl`` file, a device's handler file) that can be seen without
+    compiling it: not UTF-8, a block of the other kind of file (an
+    ``EL_STEP`` among a device's handlers), a block given twice or never
+    closed. (its place in the file, or None for the whole file; the
+    message), or None."""
+    try:
+        text = path.read_text(encoding="utf-8")
+    except UnicodeDecodeError:
+        return None, "is not UTF-8 text"
+    except (OSError, ValueError):
+        return None  # missing_file says why
+    try:
+        split_impl(text, str(path), blocks)
+    except ImplFileError as err:
+        return Span(str(path), err.line, err.column, err.line, err.column + 1), err.message
+    return None
 
 
 def missing_file(path: FsPath) -> str | None:

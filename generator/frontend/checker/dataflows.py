@@ -5,6 +5,7 @@ from __future__ import annotations
 
 from pathlib import Path as FsPath
 
+from ...core.impl_files import ACTOR_BLOCKS
 from ...core.source import Span, closest, did_you_mean, note
 from ...core import types as T
 from .. import ast
@@ -66,6 +67,9 @@ class DataflowRules:
             if problem:
                 self.error(decl.impl_span, f"implementation file '{short_name(decl.impl)}' {problem} "
                                            f"(looked at {short_name(str(impl_path), 200)})")
+            else:
+                self.report_c_file(impl_path, ACTOR_BLOCKS, decl.impl_span,
+                                   f"implementation file '{short_name(decl.impl)}'")
         elif "step" not in kinds:
             self.error(decl.name_span, f"actor type '{decl.name}' has no 'step' block and no 'impl' file",
                        "add step {{ ... }} with the C code of one firing")

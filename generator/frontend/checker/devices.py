@@ -12,6 +12,7 @@ from .. import ast
 from ..expressions import ERROR, ExprTyper, Symbol
 from ..loader import module_dir
 from ..model import Claim, DeviceDatum, DevicePort, PrimitiveDevice, RemoteInfo
+from ...core.impl_files import DEVICE_BLOCKS
 from .base import C_RESERVED, MAX_RATE, in_library, missing_file, short_name, show_value, whole_ms, whole_us
 
 # `remote overruns K`: the proxy counts them in a byte (docs/remote.md).
@@ -58,6 +59,8 @@ class DeviceRules:
             if problem:
                 self.error(impl.span, f"handler file '{short_name(impl.file)}' {problem} "
                                       f"(looked at {short_name(str(path), 200)})")
+            else:
+                self.report_c_file(path, DEVICE_BLOCKS, impl.span, f"handler file '{short_name(impl.file)}'")
         for st in decl.states:
             self.resolve_type(st.type)
         if decl.states and not decl.impls:
@@ -284,7 +287,7 @@ class DeviceRules:
             if r.select_kind == "addr" and not _whole(v):
                 self.error(r.select.span, "a bus address is a non-negative integer, as in addr 0x48")
                 return None
-            if r.select_kind == "cs" and not (v.type is T.STRING or _whole(v)):
+            if r.select_kind == "cs" and v.type is not T.STRING:
                 self.error(r.select.span, "a chip select is a pin: its name as a string, as in cs \"PB2\"")
                 return None
             select = (r.select_kind, v.const)

@@ -13,27 +13,40 @@ DEVICE_BLOCKS = ("open", "start", "read", "write", "stop", "close")
 _ANY_BLOCK = re.compile(r"\bEL_(" + "|".join(b.upper() for b in dict.fromkeys(ACTOR_BLOCKS + DEVICE_BLOCKS)) + r")\b")
 
 
-def split_impl(text: str, file: str, blocks: tuple[str, ...] = ACTOR_BLOCKS) -> tuple[str, dict[str, str]]:
+class ImplFileError(ValueError):
+    """A C file from the model's folder that cannot be split, at its line
+    and column (1-based)."""
+
+    def __init__(self, file: str, line: int, column: int, message: str):
+        super().__init__(f"{file}:{line}:{column}: {message}")
+        self.file, self.line, self.column, self.message = file, line, column, message
+
+
+def split_impl(text: str, file: str, blocks: tuple[str, ...] = ACTOR_BLOCKS,
+               spans: dict[str, tuple[int, int, int]] | None = None) -> tuple[str, dict[str, str]]:
     """Split a C file into its file-scope code and the bodies of its blocks
     (``blocks``, lower case; comments and strings skipped). A block macro of
-    the other kind of file, or a block given twice, is a ValueError naming
-    the file."""
+    the other kind of file, or a block given twice, is an ImplFileError at
+    its place. ``spans``, when given, receives each block's offsets in
+    ``text``: (its macro, its body's first character, its closing brace)."""
     masked = _mask_c(text)
+
+    def where(offset: int) -> tuple[int, int]:
+        return masked.count("\n", 0, offset) + 1, offset - (masked.rfind("\n", 0, offset) + 1) + 1
+
     bodies: dict[str, str] = {}
     prelude = []
     pos = 0
     for m in _ANY_BLOCK.finditer(masked):
         kind = m.group(1).lower()
         if kind not in blocks:
-            line = masked.count("\n", 0, m.start()) + 1
-            raise ValueError(f"{file}:{line}: EL_{m.group(1)} is not a block of this file; its blocks are "
-                             + ", ".join(f"EL_{b.upper()}" for b in blocks))
+            raise ImplFileError(file, *where(m.start()), f"EL_{m.group(1)} is not a block of this file; its blocks "
+                                "are " + ", ".join(f"EL_{b.upper()}" for b in blocks))
         if kind in bodies:
-            line = masked.count("\n", 0, m.start()) + 1
-            raise ValueError(f"{file}:{line}: EL_{m.group(1)} is given twice")
+            raise ImplFileError(file, *where(m.start()), f"EL_{m.group(1)} is given twice")
         open_at = masked.find("{", m.end())
         if open_at < 0 or masked[m.end():open_at].strip():
-            raise ValueError(f"{file}: EL_{m.group(1)} must be followed by a block {{ ... }}")
+            raise ImplFileError(file, *where(m.start()), f"EL_{m.group(1)} must be followed by a block {{ ... }}")
         depth, k = 0, open_at
         while k < len(masked):
             if masked[k] == "{":
@@ -44,9 +57,11 @@ def split_impl(text: str, file: str, blocks: tuple[str, ...] = ACTOR_BLOCKS) -> 
                     break
             k += 1
         if k >= len(masked):
-            raise ValueError(f"{file}: the block of EL_{m.group(1)} is never closed")
+            raise ImplFileError(file, *where(open_at), f"the block of EL_{m.group(1)} is never closed")
         prelude.append(text[pos:m.start()])
         bodies[kind] = text[open_at + 1:k]
+        if spans is not None:
+            spans[kind] = (m.start(), open_at + 1, k)
         pos = k + 1
     prelude.append(text[pos:])
     return "".join(prelude), bodies
