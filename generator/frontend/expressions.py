@@ -80,10 +80,14 @@ class ExprTyper:
     """
 
     def __init__(self, diags: Diagnostics, resolve: Resolver, *, runtime: bool = True,
-                 symbols_used: list | None = None):
+                 symbols_used: list | None = None,
+                 conversion_hint: Callable[[T.ValueType, T.ValueType], str] | None = None):
         self.diags = diags
         self.resolve = resolve
         self.runtime = runtime
+        # How to convert a value of one type for another where it stands
+        # (a Cast actor on an edge, by default).
+        self.conversion_hint = conversion_hint or (lambda got, want: f"convert explicitly with a Cast<{got}, {want}> actor")
         self.symbols_used = symbols_used if symbols_used is not None else []
 
     # ------------------------------------------------------------- entry points
@@ -138,7 +142,7 @@ class ExprTyper:
             return True
         hint = None
         if v.type is not None and target.is_numeric and v.type.is_numeric:
-            hint = f"convert explicitly with a Cast<{v.type}, {target}> actor"
+            hint = self.conversion_hint(v.type, target)
         self.diags.error(span, f"{what} expects '{target}' but the value is {_describe(v)}", hint)
         return False
 

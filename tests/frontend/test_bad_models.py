@@ -212,6 +212,18 @@ CASES = [
         }
         """),
          E(5, 5, "type mismatch: 'c.y' is 'int16' but 'small' is 'int8'", hint='convert with Cast<int16, int8>()')),
+    case('type-actor-argument', dedent("""\
+        import std
+        param th: uint16 = 100
+        var b: bool
+        dataflow D {
+            cmp = Compare<int16>(op = ">", threshold = th)
+            cmp.y -> b
+        }
+        """),
+         E(5, 48, "parameter 'threshold' of 'cmp' expects 'int16' but the value is 'uint16'",
+           hint="an argument is not converted: declare the param or const it names as 'int16', or give the actor "
+                "the type argument that takes 'uint16'")),
     case('type-edge-bool-to-int', dedent("""\
         import std
         var v: int16

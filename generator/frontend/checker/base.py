@@ -235,8 +235,8 @@ class CheckerBase:
             return Symbol("device_data", datum.type, None, datum, path.text)
         return (f"'{head}' is {with_article(kind_name(decl))}, not a value", None)
 
-    def typer(self, resolve, runtime=True, used=None) -> ExprTyper:
-        return ExprTyper(self.diags, resolve, runtime=runtime, symbols_used=used)
+    def typer(self, resolve, runtime=True, used=None, conversion_hint=None) -> ExprTyper:
+        return ExprTyper(self.diags, resolve, runtime=runtime, symbols_used=used, conversion_hint=conversion_hint)
 
     def const_typer(self) -> ExprTyper:
         return self.typer(lambda p: self.global_symbol(p, allow=("const",)), runtime=False)

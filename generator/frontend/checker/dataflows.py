@@ -284,7 +284,8 @@ class DataflowRules:
                 ok = False
                 continue
             used: list = []
-            typer = self.typer(lambda p: self.global_symbol(p, allow=("const", "param")), used=used)
+            typer = self.typer(lambda p: self.global_symbol(p, allow=("const", "param")), used=used,
+                               conversion_hint=_argument_conversion)
             what = f"parameter '{a.name}' of '{inst.name}'"
             v = typer.expect_const(a.value, t, what) if (a.name in sizing or t is T.STRING) else typer.expect(a.value, t, what)
             if v.type is None:
@@ -405,3 +406,9 @@ class DataflowRules:
                                        "params, channels and device data")
         return None
 
+
+def _argument_conversion(got: T.ValueType, want: T.ValueType) -> str:
+    """The hint for an actor argument of the wrong type: an argument is
+    not an edge, so no Cast actor can stand there."""
+    return (f"an argument is not converted: declare the param or const it names as '{want}', or give the actor the "
+            f"type argument that takes '{got}'")
