@@ -36,7 +36,12 @@ typedef struct {
     uint8_t last[EL_BUS_FRAME_MAX]; /* the last frame sent, for the first contact */
     uint16_t last_len;
     int64_t quiet_from_us; /* the end of the line's last frame, monotonic */
+    bool settling;         /* the line is new: its first wait is the settle time */
+    int64_t gap_us;        /* time this program's loop slept for the line's silences */
+    int64_t answer_us;     /* time it waited for the slave's answers */
 } bus_line_t;
+
+static int64_t first_frame_us = -1; /* the first frame after the settle: the blocked time's base */
 
 static bus_line_t lines[BUS_LINES];
 static uint8_t line_count;
@@ -76,6 +81,16 @@ static void keep_gap(bus_line_t *line)
         while (nanosleep(&ts, &ts) != 0 && errno == EINTR) {
         }
     }
+    if (line->settling) {
+        /* The slave's start-up is not the run's time: the clock resumes
+         * from here rather than owing the settle time to every instant. */
+        line->settling = false;
+        el_port_resync();
+    } else if (left > 0) {
+        line->gap_us += left;
+    }
+    if (first_frame_us < 0)
+        first_frame_us = now_us();
 }
 
 static bus_line_t *line_of(const char *node)
@@ -124,6 +139,9 @@ static bus_line_t *line_of(const char *node)
     /* a slave started with the line (a simulator waiting for its client)
      * gets the time to come up before the first frame */
     line->quiet_from_us = now_us() + settle_us();
+    line->settling = true;
+    line->gap_us = 0;
+    line->answer_us = 0;
     return line;
 }
 
@@ -187,6 +205,7 @@ uint16_t el_port_bus_receive(const char *node, uint8_t *buf, uint16_t want)
 {
     bus_line_t *line = line_of(node);
     int64_t end = now_ms() + timeout_ms();
+    int64_t began = now_us();
     uint16_t got = 0u;
     if (line == NULL || line->fd < 0)
         return 0u;
@@ -218,11 +237,38 @@ uint16_t el_port_bus_receive(const char *node, uint8_t *buf, uint16_t want)
         got = (uint16_t)(got + (uint16_t)n);
     }
     line->quiet_from_us = now_us();
+    line->answer_us += line->quiet_from_us - began;
     if (got < want)
         missed(line);
     else
         line->answered = true;
     return got;
+}
+
+/* Why a master's tasks were late, when they were: the share of the run
+ * its loop spent blocked by the round (its silences, each slave's
+ * answers), slave by slave. */
+static void report_blocking(void)
+{
+    int64_t run_us = first_frame_us < 0 ? 0 : now_us() - first_frame_us;
+    int64_t gaps = 0, blocked = 0;
+    uint8_t i;
+    bool late = false;
+    for (i = 0u; i < el_task_count; i++)
+        if (el_overruns[i] != 0u)
+            late = true;
+    if (!late || run_us <= 0 || el_host_settings.fast)
+        return;
+    for (i = 0u; i < line_count; i++) {
+        gaps += lines[i].gap_us;
+        blocked += lines[i].gap_us + lines[i].answer_us;
+    }
+    fprintf(stderr, "%s: bus: the round blocked this program's loop %lld ms of the %lld ms run (%lld %%): "
+                    "%lld ms of silence before frames (EASYLAB_BUS_GAP_US)", el_host_prog, (long long)(blocked / 1000),
+            (long long)(run_us / 1000), (long long)(100 * blocked / run_us), (long long)(gaps / 1000));
+    for (i = 0u; i < line_count; i++)
+        fprintf(stderr, ", %lld ms waiting for node '%s'", (long long)(lines[i].answer_us / 1000), lines[i].node);
+    fputs("; a task whose deadline falls in that time is late (docs/distribution.md, \"Real time\")\n", stderr);
 }
 
 void el_host_bus_report(void)
@@ -233,4 +279,5 @@ void el_host_bus_report(void)
             fprintf(stderr, "%s: bus: node '%s' left %lu frame(s) unanswered\n", el_host_prog, lines[i].node,
                     (unsigned long)lines[i].unanswered);
     }
+    report_blocking();
 }

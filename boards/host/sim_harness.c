@@ -638,7 +638,9 @@ void sim_pin_record(uint16_t k, int value, uint64_t cycle)
 static uint64_t start_ns;
 #define PACE_AHEAD_NS 200000u
 #define PACE_BEHIND_NS 1000000u
+#define PACE_REPORT_NS 50000000u /* behind by more than 50 ms in all: said at the end */
 static uint64_t next_service;
+static uint64_t behind_ns;    /* how far the simulation fell behind the wall clock, in all */
 
 static void on_signal(int sig)
 {
@@ -705,8 +707,10 @@ bool sim_service(uint64_t cycle)
          * of a few ms) never sees simulated time pass faster than its own. */
         uint64_t due = start_ns + cycle * 1000000000u / sim_clock_hz;
         uint64_t now = wall_ns();
-        if (now > due + PACE_BEHIND_NS)
+        if (now > due + PACE_BEHIND_NS) {
+            behind_ns += now - due;
             start_ns += now - due;
+        }
         else if (due > now + PACE_AHEAD_NS) {
             struct timespec ts;
             ts.tv_sec = (time_t)((due - now) / 1000000000u);
@@ -726,6 +730,16 @@ int sim_finish(uint64_t cycles, uint64_t asleep, const uint8_t *eeprom)
         sim_exit_status = SIM_EXIT_RUN;
     if (eeprom != NULL && !sim_nvram_save(eeprom))
         sim_exit_status = SIM_EXIT_RUN;
+    if (!sim_opt.fast && behind_ns > PACE_REPORT_NS) {
+        /* In real time a peer (a master's round, a remote host) sees this
+         * simulator's answers late: say so, with its pace. */
+        uint64_t sim_ns = el_sim_now_us * 1000u;
+        fprintf(stderr, "%s: the simulation fell %llu ms behind the wall clock in %llu ms of simulated time: this "
+                        "machine ran it at %.2fx real time where it had to catch up, and its answers to its peers "
+                        "came late by as much\n", el_host_prog, (unsigned long long)(behind_ns / 1000000u),
+                (unsigned long long)(el_sim_now_us / 1000u),
+                (double)sim_ns / (double)(sim_ns + behind_ns));
+    }
     if (sim_opt.report)
         fprintf(stderr, "%s: cycles %llu (asleep %llu), instants %llu, time %llu us\n", el_host_prog,
                 (unsigned long long)cycles, (unsigned long long)asleep, (unsigned long long)sim_instants,
