@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import re
 import shutil
+import socket
 import subprocess
 
 import pytest
@@ -45,3 +46,12 @@ def skip_unless_deadlines_hold(prefix: list[str], baseline_stderr) -> None:
     if overruns(baseline_stderr()):
         pytest.skip("this machine misses 5 ms deadlines with no peer at all, and real-time "
                     "scheduling (chrt -f) is not allowed here")
+
+
+def non_reading_client(port: int) -> socket.socket:
+    """A client with the smallest receive buffer, which never reads."""
+    s = socket.socket()
+    s.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, 4096)
+    s.connect(("127.0.0.1", port))
+    s.setblocking(False)
+    return s

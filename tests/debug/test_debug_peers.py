@@ -9,7 +9,6 @@ from __future__ import annotations
 
 import os
 import re
-import socket
 import subprocess
 import time
 import tty
@@ -20,7 +19,7 @@ import pytest
 import realtime_peers
 from debug_testlib import built
 from easylab.host_tools.debug_protocol import DebugClient, K, encode_frame
-from realtime_peers import overruns, real_time_prefix
+from realtime_peers import non_reading_client, overruns, real_time_prefix
 
 # Long enough to fill the kernel's buffers and then some; the task runs 800
 # activations meanwhile, each of which must keep its deadline.
@@ -104,15 +103,6 @@ def test_a_debugger_that_never_reads_the_pty_costs_a_5ms_task_no_activation(tmp_
     assert overruns(err) == 0, err
     assert dropped > 0, err
     assert err.count(PTY_DROPPING) == 1, err
-
-
-def non_reading_client(port: int) -> socket.socket:
-    """A client with the smallest receive buffer, which never reads."""
-    s = socket.socket()
-    s.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, 4096)
-    s.connect(("127.0.0.1", port))
-    s.setblocking(False)
-    return s
 
 
 @pytest.mark.realtime

@@ -15,7 +15,7 @@ from pathlib import Path
 import pytest
 
 import realtime_peers
-from realtime_peers import overruns, real_time_prefix
+from realtime_peers import non_reading_client, overruns, real_time_prefix
 from svc_testlib import RawPty, RawTcp, free_port, host_only, mbap, read_regs_pdu, rtu_frame
 
 GAIN = read_regs_pdu(0x03, 0, 1)  # holding 0 = gain, 3 at boot (tests/service/data/service_peers.elab)
@@ -54,15 +54,6 @@ def skip_unless_deadlines_hold(exe, prefix: list[str]) -> None:
     """Skip when this machine misses 5 ms deadlines with no client at all."""
     realtime_peers.skip_unless_deadlines_hold(
         prefix, lambda: start_firmware(exe, free_port(), []).communicate(timeout=RUN_SECONDS + 30)[1])
-
-
-def non_reading_client(port: int) -> socket.socket:
-    """A client with the smallest receive buffer, which never reads."""
-    s = socket.socket()
-    s.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, 4096)
-    s.connect(("127.0.0.1", port))
-    s.setblocking(False)
-    return s
 
 
 @pytest.mark.realtime
