@@ -245,3 +245,18 @@ def test_the_spi_bus_carries_an_eeprom_log_and_a_devices_own_handlers(tmp_path):
     stored = eeprom_log((tmp_path / "spi0-PB1.bin").read_bytes(), values=2, slot=8)
     # Records at the deadlines 10 .. 50 ms (the last one goes out at the instant the run ends).
     assert stored == [(0, [100, 100]), (1, [100, 100]), (2, [100, 100]), (3, [-200, -200]), (4, [-200, -200])]
+
+
+def test_a_chip_select_nothing_answers_reads_0xff_without_any_chip_modelled(tmp_path):
+    """The idle MISO line reads 0xFF whatever else the model has: here no
+    chip at all that the harness models (it read 0x00 then)."""
+    text = SPI
+    for line in ('device log: SpiEepromLog(cs = "PB1", values = 2)\n', "device room: I2cTemperature()\n",
+                 "    u = Upsample<int16>(factor = 2)\n", "    room.temperature -> u.x\n", "    u.y -> log.record\n"):
+        assert line in text
+        text = text.replace(line, "")
+    path = write_model(tmp_path, text, {"spi_status.c": SPI_STATUS_C})
+    avr = build(path, "avr", tmp_path / "avr", "--sim")
+    run(avr.simulator, "--fast", "--duration", "30ms", "--trace", tmp_path / "avr.csv")
+    _, rows = trace_rows(tmp_path / "avr.csv")
+    assert rows[-1]["s"] == "255"

@@ -285,6 +285,9 @@ bool sim_chips_init(avr_t *avr, const char *dir)
     uint16_t i;
     mcu = avr;
     chip_dir = dir;
+    /* The SPI bus answers 0xFF (an idle MISO, pulled up) at a chip select
+     * nothing answers, with chips or without (docs/boards.md). */
+    avr_irq_register_notify(avr_io_getirq(avr, AVR_IOCTL_SPI_GETIRQ(0), SPI_IRQ_OUTPUT), on_spi, NULL);
     if (sim_chip_count == 0u)
         return true;
     chips = calloc(sim_chip_count, sizeof *chips);
@@ -292,7 +295,6 @@ bool sim_chips_init(avr_t *avr, const char *dir)
         return false;
     twi_in = avr_io_getirq(avr, AVR_IOCTL_TWI_GETIRQ(0), TWI_IRQ_INPUT);
     avr_irq_register_notify(avr_io_getirq(avr, AVR_IOCTL_TWI_GETIRQ(0), TWI_IRQ_OUTPUT), on_bus, NULL);
-    avr_irq_register_notify(avr_io_getirq(avr, AVR_IOCTL_SPI_GETIRQ(0), SPI_IRQ_OUTPUT), on_spi, NULL);
     for (i = 0; i < sim_chip_count; i++) {
         chip_t *c = &chips[i];
         c->spec = &sim_chips[i];
