@@ -146,12 +146,16 @@ def read_ledger(path: Path) -> list[dict]:
     return [json.loads(line) for line in path.read_text().splitlines() if line.strip()]
 
 
-def ledger_tally(entries: list[dict]) -> dict[str, Counter]:
-    """mode -> verdict counts, the latest result of each seed counting once
-    (a finding run again after its fix counts as what it gives now)."""
+def ledger_tally(entries: list[dict], generator: str | None = None) -> dict[str, Counter]:
+    """mode -> verdict counts of one generator's models (this one's by
+    default: another generator's seed is another model), the latest result
+    of each seed counting once (a finding run again after its fix counts as
+    what it gives now)."""
+    generator = generator or generator_digest()
     latest: dict[tuple, str] = {}
     for e in entries:
-        latest[(e["generator"], e["seed"], e["part"], e["mode"])] = e["verdict"]
+        if e["generator"] == generator:
+            latest[(e["generator"], e["seed"], e["part"], e["mode"])] = e["verdict"]
     tally: dict[str, Counter] = defaultdict(Counter)
     for (_, _, _, mode), verdict in latest.items():
         tally[mode][verdict] += 1
@@ -209,8 +213,12 @@ def main(argv: list[str] | None = None) -> int:
     if args.tally:
         if not args.tally.is_file():
             ap.error(f"{args.tally}: no such ledger")
-        for mode, counts in sorted(ledger_tally(read_ledger(args.tally)).items()):
+        entries = read_ledger(args.tally)
+        for mode, counts in sorted(ledger_tally(entries).items()):
             print(f"{mode:12s} " + ", ".join(f"{k} {v}" for k, v in sorted(counts.items())))
+        for other, count in sorted(Counter(e["generator"] for e in entries
+                                           if e["generator"] != generator_digest()).items()):
+            print(f"(and {count} results of an earlier generator, {other}: other models, not counted)")
         return 0
     modes = [m.strip() for m in args.boards.split(",") if m.strip()]
     unknown = [m for m in modes if m not in MODES]
