@@ -113,8 +113,8 @@ def not_built(program: Program, board: str, drivers: dict) -> list[str]:
     source lines."""
     return [f"{dev.location}: error: device '{dev.path}' ({dev.type_name}) brings its own handlers for the {board} "
             f"board ({Path(handler_file(dev, board)).name}), but the {board} board builds its own drivers only "
-            f"({', '.join(sorted(drivers))}); the host and avr boards build handler files (docs/boards.md, "
-            "'Writing a device driver')"
+            f"({', '.join(sorted(drivers))}); docs/boards.md, 'Writing a device driver', names the boards that build "
+            "handler files"
             for dev in program.devices if handler_file(dev, board) is not None]
 
 
