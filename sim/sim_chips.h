@@ -1,0 +1,77 @@
+/* EasyLab simulator harnesses: the chips of one build on the simulated
+ * buses (the chip-model API is el_chip.h; this is the harness's side).
+ *
+ * The build's table (sim_model.c, generated) names one entry per chip: the
+ * std chips and the chip files a model brings (`sim "x_chip.c"`), each at
+ * the bus address, chip select, UART or pins its device claims. A board's
+ * harness turns what its simulator sees on the MCU's buses into calls of
+ * the functions below (the AVR's from simavr's TWI and SPI messages, the
+ * PIC18's from gpsim's MSSP registers), the same for every board:
+ *
+ * - I2C: sim_chips_i2c_start at each START (and repeated START) with the
+ *   address byte; the chip at that address (if any, and if it acknowledges)
+ *   takes the bytes written and gives the bytes read until the STOP. An
+ *   address nobody acknowledges is a NACK the firmware sees.
+ * - SPI: sim_chips_spi_select when a chip select pin changes level;
+ *   sim_chips_spi_byte for each byte the master clocks: the selected
+ *   chip's answer, or 0xFF (an idle MISO, pulled up) when no chip is
+ *   selected or the selected one has no model.
+ */
+#ifndef SIM_CHIPS_H
+#define SIM_CHIPS_H
+
+#include "el_chip.h"
+
+#include <stdbool.h>
+#include <stdint.h>
+
+enum { SIM_CHIP_I2C = 1, SIM_CHIP_SPI = 2, SIM_CHIP_UART = 3, SIM_CHIP_PINS = 4 };
+
+/* One chip of the build (sim_model.c). */
+typedef struct {
+    const el_chip_ops_t *ops;
+    uint8_t kind;                   /* SIM_CHIP_... */
+    uint8_t bus;                    /* i2c[bus], spi[bus], the UART */
+    uint8_t address;                /* I2C */
+    uint16_t cs;                    /* SPI: the chip select (the board's pin numbering) */
+    const char *cs_name;            /* SPI: "PB2" */
+    const char *device;             /* the device's path */
+    uint8_t value_count;            /* the device's `out` data */
+    const char *const *value_names;
+} sim_chip_entry_t;
+
+extern const sim_chip_entry_t sim_chip_table[];
+extern const uint16_t sim_chip_table_count;
+
+/* Give every chip its zeroed state and call its reset; `dir` is --chips
+ * (NULL: memories erased each run). False after a message. */
+bool sim_chips_start(const char *dir);
+/* Call every chip's finish and save the memories (--chips). False after a
+ * message. */
+bool sim_chips_finish(void);
+
+/* The stimulus set value `k` of chip `index` (the build's table names the
+ * stimulus columns that reach a chip). False after the chip's message. */
+bool sim_chips_value(uint16_t index, uint8_t k, const el_chip_value_t *value);
+
+bool sim_chips_i2c_start(uint8_t bus, uint8_t address, bool read); /* acknowledged? */
+bool sim_chips_i2c_write(uint8_t bus, uint8_t byte);               /* acknowledged? */
+uint8_t sim_chips_i2c_read(uint8_t bus);
+void sim_chips_i2c_stop(uint8_t bus);
+
+void sim_chips_spi_select(uint8_t bus, uint16_t cs, bool selected);
+uint8_t sim_chips_spi_byte(uint8_t bus, uint8_t mosi);
+
+void sim_chips_uart_byte(uint8_t uart, uint8_t byte);
+void sim_chips_pin_edge(uint16_t pin, bool level);
+
+/* ---- what a board's harness provides the chips ---- */
+
+/* The simulated time in microseconds. */
+uint64_t sim_board_now_us(void);
+/* A byte into the MCU's UART `uart` (as if on its RX line). */
+void sim_board_uart_receive(uint8_t uart, uint8_t byte);
+/* Drive an input pin of the MCU. */
+void sim_board_pin_drive(uint16_t pin, bool level);
+
+#endif /* SIM_CHIPS_H */
