@@ -68,9 +68,11 @@ class FrameTransport:
         return cls(open_port(url, baudrate), url)
 
     def send(self, data: bytes) -> None:
+        """Hand ``data`` to the operating system whole (not waiting for it
+        to leave: tcdrain on a pty may wait a kernel tick, 4 ms, which is a
+        1 ms deadline missed)."""
         try:
             self.port.write(data)
-            self.port.flush()
             self.bytes_out += len(data)
         except _PORT_ERRORS as err:
             raise TransportError(f"lost the connection to {self.url}: {_reason(err)}") from None
