@@ -8,6 +8,7 @@
 #include <errno.h>
 #include <fcntl.h>
 #include <netinet/in.h>
+#include <netinet/tcp.h>
 #include <poll.h>
 #include <pty.h>
 #include <stdlib.h>
@@ -270,7 +271,11 @@ void sim_link_service(sim_link_t *u)
     if (u->mode == SIM_LINK_TCP && u->fd < 0 && u->listen_fd >= 0) {
         int c = accept(u->listen_fd, NULL, NULL);
         if (c >= 0) {
+            int one = 1;
             set_nonblocking(c);
+            /* each byte the MCU sends goes at once: Nagle's algorithm would
+             * hold a frame's bytes for the peer's delayed acknowledgement */
+            (void)setsockopt(c, IPPROTO_TCP, TCP_NODELAY, &one, sizeof one);
             u->fd = c;
         }
     }
