@@ -30,6 +30,9 @@ def _hardware_rows(program: Program, views: dict) -> list[str]:
     for it in program.items:
         if it.device is None:
             continue
+        if it.device not in views:  # a device that runs handlers from the model's folder
+            rows.append(f"    {{ {it.id}u, SIM_HW_NONE, 0u, 0u, 0UL }}, /* {it.name} (handlers of the model) */")
+            continue
         v = views[it.device]
         h = v.hw
         kind, a, b = "SIM_HW_NONE", 0, 0
