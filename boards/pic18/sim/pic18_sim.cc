@@ -28,7 +28,11 @@
  *   harness completes them (map_eeadrh, eeprom_read_fix).
  * - LATA..LATE, TRISA..TRISE, CCPR1L, CCP1CON, CCPR2L, CCP2CON, PR2: the
  *   traced pins' levels and PWM duties (--pins), stamped with the cycle
- *   (a duty PWM_SETTLE_CYCLES after a CCP write: it spans two registers).
+ *   (a duty PWM_SETTLE_CYCLES after a CCP write: it spans two registers);
+ *   the chip selects of the SPI's chips.
+ * - SSPCON1, SSPCON2, SSPSTAT, SSPADD, SSPBUF are not gpsim's at all: the
+ *   harness plays the MSSP and the chips on its buses (sim/sim_chips.h;
+ *   "the MSSP" below).
  * Bytes from the link enter the EUSART's receive FIFO one frame time apart
  * (the baud rate the firmware set), when reception is on, and only into an
  * empty FIFO: with two bytes queued gpsim 0.31 hands the firmware a wrong
