@@ -275,3 +275,116 @@ def test_an_i2c_chip_model_answers_and_a_transfer_longer_than_the_bound_is_aband
         assert (r["short.status"], r["short.errors"], r["short.value"]) == ("0", "0", str(0x0102)), r
         assert (r["writes.status"], r["writes.errors"]) == ("0", "0"), r
         assert (r["absent.status"], r["absent.errors"]) == ("2", str(k + 1)), r  # EL_BUS_NACK
+
+
+BUSY_CHIP_C = dedent("""\
+    #define EL_CHIP test_busy_chip
+    #include "el_chip.h"
+
+    /* An EEPROM-like chip: after each transaction it went through (and at
+     * start) it does not acknowledge its address once (a write cycle);
+     * its bytes are 0xA0, 0xA1, ... */
+    typedef struct { uint8_t refuse; bool acked; uint8_t next; } busy_chip_t;
+
+    static void on_reset(el_chip_t *chip) { ((busy_chip_t *)chip->state)->refuse = 1u; }
+
+    static bool on_start(el_chip_t *chip, bool read)
+    {
+        busy_chip_t *s = chip->state;
+        (void)read;
+        if (s->refuse != 0u) {
+            s->refuse--;
+            return false;
+        }
+        s->acked = true;
+        return true;
+    }
+
+    static bool on_write(el_chip_t *chip, uint8_t byte)
+    {
+        (void)chip;
+        (void)byte;
+        return true;
+    }
+
+    static uint8_t on_read(el_chip_t *chip)
+    {
+        busy_chip_t *s = chip->state;
+        return (uint8_t)(0xA0u + s->next++);
+    }
+
+    static void on_stop(el_chip_t *chip)
+    {
+        busy_chip_t *s = chip->state;
+        if (s->acked) {
+            s->refuse = 1u;
+            s->next = 0u;
+        }
+        s->acked = false;
+    }
+
+    const el_chip_ops_t EL_CHIP = {
+        .name = "busy_chip", .state_size = sizeof(busy_chip_t), .reset = on_reset, .i2c_start = on_start,
+        .i2c_write = on_write, .i2c_read = on_read, .i2c_stop = on_stop,
+    };
+    """)
+BUSY_TABLE_C = dedent("""\
+    #include "sim_chips.h"
+    extern const el_chip_ops_t test_busy_chip;
+    const sim_chip_entry_t sim_chip_table[2] = {
+        { &test_busy_chip, SIM_CHIP_I2C, 0u, 0x50u, 0u, "", "patient", 0u, 0 },
+        { &test_busy_chip, SIM_CHIP_I2C, 0u, 0x51u, 0u, "", "hasty", 0u, 0 },
+    };
+    const uint16_t sim_chip_table_count = 2u;
+    """)
+BUSY_MODEL = dedent("""\
+    model busy
+    import std
+    // A read that may find its chip busy: with `retry` its job says so
+    // (EL_I2C_RETRY_BUSY) and is tried again; without, the NACK is the end.
+    device type Memory(at: uint8, retry: bool) {
+        claims i2c[0] addr at
+        out value: uint16
+        out status: uint8
+        driver "memory" impl pic18 "memory.c"
+    }
+    device patient: Memory(at = 0x50, retry = true)
+    device hasty: Memory(at = 0x51, retry = false)
+    var s1: uint8
+    var s2: uint8
+    dataflow D { patient.status -> s1  hasty.status -> s2 }
+    task t period 5 ms { run D }
+    """)
+MEMORY_C = dedent("""\
+    EL_READ {
+        static const uint8_t pointer = 0u;
+        static uint8_t reg[2];
+        static el_i2c_job_t job; /* zero at boot: EL_BUS_DONE */
+        job.bus = 0u;
+        job.address = at; /* a parameter named `address` would be a macro here */
+        job.flags = retry ? EL_I2C_RETRY_BUSY : 0u;
+        job.tx = &pointer;
+        job.tx_len = 1u;
+        job.rx = reg;
+        job.rx_len = 2u;
+        (void)el_i2c_submit(&job);
+        status = el_i2c_wait(&job);
+        value = status == EL_BUS_DONE ? (uint16_t)((uint16_t)reg[0] << 8 | reg[1]) : 0u;
+    }
+    """)
+
+
+def test_a_job_that_finds_its_chip_busy_is_tried_again_when_it_says_so(tmp_path):
+    """Each chip refuses its address once after every transaction: the
+    job flagged EL_I2C_RETRY_BUSY waits parked (the bus idle) and gets
+    through at a later Timer2 interrupt, within the instant; the other one
+    ends in EL_BUS_NACK, and gets through at every second read."""
+    path = write_model(tmp_path, BUSY_MODEL, {"memory.c": MEMORY_C})
+    build(path, "pic18", tmp_path / "pic18", "--sim")
+    harness = _harness_with_chips(tmp_path / "pic18", {"busy_chip.c": BUSY_CHIP_C, "busy_table.c": BUSY_TABLE_C})
+    trace = tmp_path / "t.csv"
+    run(harness, "--fast", "--duration", "20ms", "--trace", trace)
+    rows = _rows(trace.read_text())
+    assert len(rows) == 4
+    assert all((r["patient.status"], r["patient.value"]) == ("0", str(0xA0A1)) for r in rows), rows
+    assert [(r["hasty.status"], r["hasty.value"]) for r in rows] == [("2", "0"), ("0", str(0xA0A1))] * 2
