@@ -8,7 +8,8 @@ itself. Each claim of the model (devices' ``claims``, interfaces' ``on
 uartN``) stands for physical pins; a bus's lines are shared by the devices
 on it (``i2c[0] addr 0x48``, ``spi[0] cs "PB2"``), a chip select is its
 device's own. A resource the part lacks, a pin claimed twice through
-different resources, a bus address I2C does not allow, or a device whose
+different resources, a bus address I2C does not allow, a bus whose module
+(one peripheral serving I2C and SPI) another bus of the model uses, or a device whose
 driver the board lacks or drives differently (and whose type brings no
 handler file for the board) is a problem, and all problems are reported
 together, each at its source line.
