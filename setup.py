@@ -19,6 +19,7 @@ ROOTS = {
     "easylab.runtime_c": "runtime_c",
     "easylab.boards": "boards",
     "easylab.host_tools": "host_tools",
+    "easylab.sim": "sim",
 }
 SKIPPED = {"__pycache__"}
 

@@ -13,7 +13,7 @@ from easylab.board.cbuild import require_tool, run, write_files
 from easylab.board.registry import load_board
 from easylab.board.simtables import c_string, no_model_tables, ram_tables, sim_table, trace_tables
 from easylab.core.errors import BuildError
-from easylab.core.paths import runtime_dir
+from easylab.core.paths import data_dir, runtime_dir
 from easylab.ir.program import Program
 
 from . import buildcache, linkmap
@@ -29,6 +29,9 @@ def _hardware_rows(program: Program, views: dict) -> list[str]:
     rows = []
     for it in program.items:
         if it.device is None:
+            continue
+        if it.device not in views:  # a device that runs handlers from the model's folder
+            rows.append(f"    {{ {it.id}u, SIM_HW_NONE, 0u, 0u, 0UL }}, /* {it.name} (handlers of the model) */")
             continue
         v = views[it.device]
         h = v.hw
@@ -88,9 +91,20 @@ def sim_model_source(program: Program, board, hexfile: Path, lmap: linkmap.LinkM
     lines += sim_table("sim_pin_t", "sim_pins", "sim_pin_count", _pin_rows(views),
                        "{ 0u, SIM_PIN_LEVEL, 0u, \"\", \"\" }")
     parity = {"none": 0, "even": 1, "odd": 2}[str(uarts.get(0, {}).get("parity", "none"))]
+    lines += chip_table(program, board)
     lines += _hooks(lmap, str(hexfile)) + harness_constants(board, hexfile)
     lines.append(f"const uint8_t sim_uart_parity = {parity}u;")
     return "\n".join(lines) + "\n"
+
+
+def chip_table(program: Program | None, board) -> list[str]:
+    """sim_chip_table (sim/sim_chips.h): the chips the harness plays on the
+    MSSP's buses, at the places their devices claim (a chip select by the
+    hardware layer's pin number, port << 3 | bit). None yet: this board's
+    devices bring no chip models, so every I2C address is unacknowledged
+    and every chip select reads 0xFF."""
+    return ["const sim_chip_entry_t sim_chip_table[1] = { { 0, 0u, 0u, 0u, 0u, \"\", \"\", 0u, 0 } };",
+            "const uint16_t sim_chip_table_count = 0u;"]
 
 
 def harness_constants(board, hexfile: Path) -> list[str]:
@@ -106,10 +120,11 @@ def harness_constants(board, hexfile: Path) -> list[str]:
             f"const uint16_t sim_stack_size = {mcu.stack}u;"]
 
 
-def build_harness(board, out_dir: Path, model_source: str, exe: Path) -> Path:
+def build_harness(board, out_dir: Path, model_source: str, exe: Path, chips: tuple[Path, ...] = ()) -> Path:
     """Compile the harness of sim/ (and the host board's trace and stimulus
-    code) with one build's tables (``model_source``, written as sim_model.c
-    in ``out_dir``) into ``exe``."""
+    code, the chips' dispatch of the installation's sim/) with one build's
+    tables (``model_source``, written as sim_model.c in ``out_dir``) into
+    ``exe``; ``chips``: C files of chip models (sim/el_chip.h) to link in."""
     spec = board.description.table("simulator")
     cc, cxx = spec.get("cc", "gcc"), spec.get("cxx", "g++")
     packages = spec.get("debian_packages", "gpsim-dev g++")
@@ -123,13 +138,16 @@ def build_harness(board, out_dir: Path, model_source: str, exe: Path) -> Path:
     [model_c] = write_files(out_dir, {"sim_model.c": model_source})
     folder = board.description.folder
     host = load_board("host").description.folder
-    includes = [f"-I{folder / 'sim'}", f"-I{host}", f"-I{runtime_dir()}"]
+    shared = data_dir("sim")  # the harnesses' chip dispatch and the chip-model API
+    includes = [f"-I{folder / 'sim'}", f"-I{shared}", f"-I{host}", f"-I{runtime_dir()}"]
     obj_dir = out_dir / "sim-obj"
     obj_dir.mkdir(parents=True, exist_ok=True)
     cflags = [*spec.get("cflags", []), *includes]
     cxxflags = [*spec.get("cxxflags", []), *includes, "-I/usr/include/gpsim", *pc.stdout.split()]
     objects = [_object(cc, cflags, host / s, obj_dir) for s in spec.get("host_sources", [])]
     objects += [_object(cc, cflags, runtime_dir() / s, obj_dir) for s in spec.get("runtime_sources", [])]
+    objects += [_object(cc, cflags, shared / s, obj_dir) for s in spec.get("shared_sources", [])]
+    objects += [_object(cc, cflags, Path(c), obj_dir, cache=False) for c in chips]
     objects += [_object(cxx, cxxflags, folder / s, obj_dir) for s in spec.get("cxx_sources", [])]
     objects.append(_object(cc, cflags, model_c, obj_dir, cache=False))
     run([cxx, "-o", str(exe), *map(str, objects), *spec.get("ldflags", [])], "building the simulator")
@@ -161,4 +179,4 @@ def port_program_tables(board, hexfile: Path, lmap: linkmap.LinkMap) -> str:
                       "const uint16_t sim_busy_addr = 0xffffu;",
                       f"const uint16_t sim_kept_addr = 0x{lmap.ram_symbols().get('el_pic18_kept', 0xFFFF):03X}u;",
                       "const uint8_t sim_uart_parity = 0u;",
-                      *harness_constants(board, hexfile), ""])
+                      *chip_table(None, board), *harness_constants(board, hexfile), ""])
