@@ -3,6 +3,7 @@
 #include "sim_harness.h"
 
 #include "el_crc16.h"
+#include "sim_chips.h"
 
 #include <arpa/inet.h>
 #include <errno.h>
@@ -484,6 +485,25 @@ uint64_t sim_tick_extend(uint32_t tick)
     return sim_tick_extend_bits(tick, 32u);
 }
 
+/* The value the stimulus gave device datum sim_hw[k], to its chip model. */
+static bool chip_value(uint16_t k)
+{
+    const el_item_t *it = &el_items[sim_hw[k].item];
+    el_chip_value_t v;
+    memset(&v, 0, sizeof v);
+    switch (it->type) {
+    case EL_T_BOOL: { uint8_t x; memcpy(&x, it->addr, 1); v.i = x; break; }
+    case EL_T_I8: { int8_t x; memcpy(&x, it->addr, 1); v.i = x; break; }
+    case EL_T_U8: { uint8_t x; memcpy(&x, it->addr, 1); v.i = x; break; }
+    case EL_T_I16: { int16_t x; memcpy(&x, it->addr, 2); v.i = x; break; }
+    case EL_T_U16: { uint16_t x; memcpy(&x, it->addr, 2); v.i = x; break; }
+    case EL_T_I32: { int32_t x; memcpy(&x, it->addr, 4); v.i = x; break; }
+    case EL_T_F32: { float x; memcpy(&x, it->addr, 4); v.is_float = true; v.f = x; break; }
+    default: { uint32_t x; memcpy(&x, it->addr, 4); v.i = x; break; }
+    }
+    return sim_chips_value(sim_hw[k].a, (uint8_t)sim_hw[k].b, &v);
+}
+
 void sim_instant_inputs(uint64_t tick)
 {
     static unsigned char *before;
@@ -540,7 +560,7 @@ void sim_instant_inputs(uint64_t tick)
             continue;
         if (sim_hw[k].kind != SIM_HW_CAMERA)
             memcpy(sim_hw_state[k].value, it->addr, sim_item_addr[sim_hw[k].item].size);
-        if (!sim_drive_hardware(k)) {
+        if (sim_hw[k].kind == SIM_HW_CHIP ? !chip_value(k) : !sim_drive_hardware(k)) {
             sim_exit_status = SIM_EXIT_RUN;
             sim_stop = true;
             return;

@@ -31,7 +31,7 @@ typedef struct {
     const char *what;  /* the device */
 } sim_pin_t;
 
-/* A chip on a bus (sim_chips.h): one per address a device claims on an
+/* A chip on a bus (avr_chips.h): one per address a device claims on an
  * I2C bus where a chip of a kind the harness models answers, one per chip
  * select of a device whose chip it models on an SPI bus. */
 enum { SIM_CHIP_TEMPERATURE = 1, SIM_CHIP_EEPROM = 2, SIM_CHIP_SPI_EEPROM = 3 };
