@@ -193,7 +193,8 @@ def chip_table(program: Program | None, pin_number) -> list[str]:
         rows.append(f"    {{ &{chip_symbol(k)}, {kind}, {bus}u, 0x{address:02x}u, {cs}u, {c_string(cs_name)}, "
                     f"{c_string(dev.path)}, {len(outs)}u, sim_chip_values_{k} }},")
     if not rows:
-        return ["const sim_chip_entry_t sim_chip_table[1] = { { 0, 0u, 0u, 0u, 0u, \"\", \"\", 0u, 0 } };",
+        return ["#include \"sim_chips.h\"",
+                "const sim_chip_entry_t sim_chip_table[1] = { { 0, 0u, 0u, 0u, 0u, \"\", \"\", 0u, 0 } };",
                 "const uint16_t sim_chip_table_count = 0u;"]
     return ["#include \"sim_chips.h\"", *lines,
             f"const sim_chip_entry_t sim_chip_table[{len(rows)}] = {{", *rows, "};",

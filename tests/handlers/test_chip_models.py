@@ -82,3 +82,35 @@ def test_a_missing_or_second_chip_model_is_an_error_at_its_place(tmp_path):
                                                     'sim "drivers/hygro_chip.c" sim "drivers/hygro_chip.c"'))
     proc = cli("check", folder / "twice.elab")
     assert proc.returncode == 1 and "has two chip models" in proc.stdout + proc.stderr
+
+
+def test_the_spi_example_of_docs_boards_md_is_this_model():
+    docs = (Path(__file__).resolve().parents[2] / "docs" / "boards.md").read_text()
+    elab = (SOURCE / "own_spi.elab").read_text()
+    start = elab.index("device type Mcp3201")
+    assert elab[start:elab.index("}\n", start) + 2] in docs
+    for name in ("mcp3201_mcu.c", "mcp3201_chip.c"):
+        assert (SOURCE / "drivers" / name).read_text() in docs, name
+
+
+@pytest.mark.parametrize("board", ["avr", "pic18"])
+def test_a_column_nothing_in_the_simulation_reads_is_an_error(tmp_path, board):
+    """Without its chip model the device's datum has nothing behind it in
+    the simulator: its stimulus column is refused, naming it and the
+    columns that exist, where it used to be dropped without a word."""
+    folder = tmp_path / "m"
+    shutil.copytree(SOURCE, folder)
+    model = folder / "nochip.elab"
+    model.write_text((folder / "own_spi.elab").read_text().replace(' sim "drivers/mcp3201_chip.c"', "")
+                     .replace("var level: uint16", "var level: uint16\nparam gain: uint8 = 1"))
+    stimulus = tmp_path / "s.csv"
+    stimulus.write_text("time_us,adc.value\n0,100\n")
+    built = build(model, board, tmp_path / "b", "--sim")
+    proc = run_program(built.simulator, "--fast", "--duration", DURATION, "--stimulus", stimulus, ok=False)
+    assert proc.returncode != 0
+    assert "column 'adc.value': nothing in this program reads it: its device runs the model's own handlers" \
+        in proc.stderr, proc.stderr
+    assert "valid columns: time_us, gain, level\n" in proc.stderr, proc.stderr
+    fine = tmp_path / "fine.csv"
+    fine.write_text("time_us,gain\n0,2\n")
+    run_program(built.simulator, "--fast", "--duration", DURATION, "--stimulus", fine)
