@@ -119,7 +119,7 @@ def kept_symbols(program: Program) -> list[str]:
 
 
 def no_model_tables(simulator: str, empty_pin: str) -> list[str]:
-    """The tables of boards/host/sim_harness.h for a program without a
+    """The tables of sim/sim_harness.h for a program without a
     model (a board's port contract program): one item to name, nothing to
     trace, no devices, no pins (``empty_pin``: the board's sim_pin_t
     initializer of its one unused row)."""

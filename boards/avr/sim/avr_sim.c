@@ -4,7 +4,7 @@
  * (Debian's libsimavr) with the host board's command line where it makes
  * sense, so that one stimulus gives one trace on every board (what every
  * harness shares, options, links, instants, pins and pace, is
- * boards/host/sim_harness.c; this file is simavr's side):
+ * sim/sim_harness.c; this file is simavr's side):
  *
  *   NAME-sim [--fast] [--duration T] [--cycles N] [--stimulus S.csv]
  *            [--trace T.csv|T.vcd] [--pins P.csv|P.vcd] [--nvram FILE]

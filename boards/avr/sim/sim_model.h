@@ -10,7 +10,7 @@
  * reaches the hardware (an ADC channel, a pin, a UART, encoder pins): on
  * the AVR a pin is its port letter (a) and bit (b), an encoder's pins are
  * port letter << 8 | bit each. The tables every harness reads are declared
- * in boards/host/sim_harness.h; the pin table is the AVR's own.
+ * in sim/sim_harness.h; the pin table is the AVR's own.
  */
 #ifndef SIM_MODEL_H
 #define SIM_MODEL_H
