@@ -77,4 +77,5 @@ def model_files(path: Path, program: Program | None) -> list[Path]:
     if program is not None:
         files += [Path(s.impl) for s in program.specs if s.impl]
         files += [Path(f) for d in program.devices for f in d.handlers.values()]
+        files += [Path(d.chip) for d in program.devices if d.chip]
     return list(dict.fromkeys(files))

@@ -13,9 +13,10 @@ from easylab.board import handlers
 from easylab.board.cbuild import require_tool, run, write_files
 from easylab.board.registry import load_board
 from easylab.board.resources import parse_claim, parse_select
-from easylab.board.simtables import c_string, no_model_tables, ram_tables, sim_table, trace_tables
+from easylab.board.simtables import (c_string, chip_files, chip_hardware_row, chip_table, no_model_tables,
+                                     ram_tables, sim_table, trace_tables)
 from easylab.core.errors import BuildError
-from easylab.core.paths import runtime_dir
+from easylab.core.paths import data_dir, runtime_dir
 from easylab.ir.program import Program
 
 from .devices import device_views
@@ -49,7 +50,7 @@ def ram_symbols(nm: str, elf: Path) -> dict[str, tuple[int, int]]:
 
 
 # The chips the harness models on an I2C bus, by the addresses their kind
-# takes (sim/sim_chips.h): LM75 / TMP102-class sensors and 24LC256-class EEPROMs.
+# takes (sim/avr_chips.h): LM75 / TMP102-class sensors and 24LC256-class EEPROMs.
 TEMPERATURE_ADDRESSES = range(0x48, 0x50)
 EEPROM_ADDRESSES = range(0x50, 0x58)
 _SENSOR_TYPES = ("int8", "uint8", "int16", "uint16", "int32", "uint32")
@@ -114,7 +115,8 @@ def _hardware_rows(program: Program, views: dict) -> list[str]:
             rows.append(f"    {{ {it.id}u, SIM_HW_I2C_TEMP, {bus}u, 0x{addr:02x}u, 0UL }}, /* {it.name} */")
             continue
         if it.device not in views:  # a device that runs handlers from the model's folder
-            rows.append(f"    {{ {it.id}u, SIM_HW_NONE, 0u, 0u, 0UL }}, /* {it.name} (handlers of the model) */")
+            rows.append(chip_hardware_row(program, it)
+                        or f"    {{ {it.id}u, SIM_HW_NONE, 0u, 0u, 0UL }}, /* {it.name} (handlers of the model) */")
             continue
         v = views[it.device]
         h = v.hw
@@ -180,8 +182,15 @@ def sim_model_source(program: Program, board, elf: Path) -> str:
                        "{ 0u, 0u, 0u, 0UL, 0u, 0 }")
     lines += sim_table("sim_pin_t", "sim_pins", "sim_pin_count", _pin_rows(mcu, views),
                        "{ 0, 0u, SIM_PIN_LEVEL, 0u, 0u, 0u, \"\", \"\" }")
+    lines += chip_table(program, pin_number)
     lines += harness_constants(board, elf)
     return "\n".join(lines) + "\n"
+
+
+def pin_number(pin: str) -> int:
+    """The harness's number of a pin ("PB2": port << 3 | bit), as chip
+    models see their chip selects (sim/sim_chips.h)."""
+    return (ord(pin[1]) - ord("A")) << 3 | int(pin[2:])
 
 
 def harness_constants(board, elf: Path) -> list[str]:
@@ -208,9 +217,11 @@ def simulation_warnings(program: Program, board) -> list[str]:
     return notes
 
 
-def build_harness(board, out_dir: Path, model_source: str, exe: Path) -> Path:
+def build_harness(board, out_dir: Path, model_source: str, exe: Path,
+                  chips: list[tuple[str, str]] = ()) -> Path:
     """Compile the harness of sim/ with one build's tables (``model_source``,
-    written as sim_model.c in ``out_dir``) into ``exe``."""
+    written as sim_model.c in ``out_dir``) into ``exe``; ``chips``: the
+    model's chip models, (file, the EL_CHIP symbol it defines)."""
     spec = board.description.table("simulator")
     cc = spec.get("cc", "gcc")
     require_tool(cc, board.name, "gcc", "simulator's C compiler")
@@ -222,10 +233,17 @@ def build_harness(board, out_dir: Path, model_source: str, exe: Path) -> Path:
     [model_c] = write_files(out_dir, {"sim_model.c": model_source})
     folder = board.description.folder
     host = load_board("host").description.folder
+    shared = data_dir("sim")  # the harnesses' chip dispatch and the chip-model API
     sources = [folder / s for s in spec.get("sources", [])] + [host / s for s in spec.get("host_sources", [])] \
-        + [runtime_dir() / s for s in spec.get("runtime_sources", [])] + [model_c]
-    run([cc, *spec.get("cflags", []), f"-I{folder / 'sim'}", f"-I{host}", f"-I{runtime_dir()}", "-o", str(exe),
-         *map(str, sources), *pc.stdout.split(), *spec.get("ldflags", [])], "building the simulator")
+        + [runtime_dir() / s for s in spec.get("runtime_sources", [])] \
+        + [shared / s for s in spec.get("shared_sources", [])] + [model_c]
+    flags = [*spec.get("cflags", []), f"-I{folder / 'sim'}", f"-I{shared}", f"-I{host}", f"-I{runtime_dir()}"]
+    objects = []
+    for k, (chip, symbol) in enumerate(chips):  # each with its own EL_CHIP
+        objects.append(out_dir / f"chip{k}.o")
+        run([cc, *flags, f"-DEL_CHIP={symbol}", "-c", "-o", str(objects[-1]), str(chip)], "building the simulator")
+    run([cc, *flags, "-o", str(exe), *map(str, sources + objects), *pc.stdout.split(), *spec.get("ldflags", [])],
+        "building the simulator")
     return exe
 
 
@@ -236,5 +254,6 @@ def port_program_tables(board, elf: Path) -> str:
     return "\n".join([*no_model_tables("simavr", '{ 0, 0u, SIM_PIN_LEVEL, 0u, 0u, 0u, "", "" }'),
                       "const sim_chip_t sim_chips[1] = { { 0u, 0u, 0u, 0UL, 0u, 0 } };",
                       "const uint16_t sim_chip_count = 0u;",
+                      *chip_table(None, pin_number),
                       "const uint8_t sim_tick_size = 4u;",
                       *harness_constants(board, elf), ""])

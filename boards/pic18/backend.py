@@ -26,6 +26,7 @@ from easylab.board import handlers, resources
 from easylab.board.base import BoardBase
 from easylab.board.cbuild import mode_flags, require_tool, runtime_sources, write_files
 from easylab.board.contract import Compiled, CompileOptions, SizeReport, Simulator
+from easylab.board.simtables import chip_files
 from easylab.core.errors import BuildError
 from easylab.core.paths import runtime_dir
 from easylab.ir.program import Program
@@ -240,7 +241,7 @@ class Pic18Board(BoardBase):
     def build_simulator(self, program: Program, checked: object, out_dir: Path, compiled: Compiled) -> Simulator:
         lmap = linkmap.read_map(compiled.executable.with_suffix(".map"))
         model = simulator.sim_model_source(program, self, compiled.executable, lmap, checked.uarts)
-        exe = simulator.build_harness(self, out_dir, model, out_dir / f"{program.name}-sim")
+        exe = simulator.build_harness(self, out_dir, model, out_dir / f"{program.name}-sim", chip_files(program))
         return Simulator(exe, [])
 
     def simulator_command(self, out_dir: Path, program: Program) -> list[str]:

@@ -11,7 +11,8 @@ from pathlib import Path
 
 from easylab.board.cbuild import require_tool, run, write_files
 from easylab.board.registry import load_board
-from easylab.board.simtables import c_string, no_model_tables, ram_tables, sim_table, trace_tables
+from easylab.board.simtables import (c_string, chip_hardware_row, chip_table, no_model_tables, ram_tables,
+                                     sim_table, trace_tables)
 from easylab.core.errors import BuildError
 from easylab.core.paths import data_dir, runtime_dir
 from easylab.ir.program import Program
@@ -31,7 +32,8 @@ def _hardware_rows(program: Program, views: dict) -> list[str]:
         if it.device is None:
             continue
         if it.device not in views:  # a device that runs handlers from the model's folder
-            rows.append(f"    {{ {it.id}u, SIM_HW_NONE, 0u, 0u, 0UL }}, /* {it.name} (handlers of the model) */")
+            rows.append(chip_hardware_row(program, it)
+                        or f"    {{ {it.id}u, SIM_HW_NONE, 0u, 0u, 0UL }}, /* {it.name} (handlers of the model) */")
             continue
         v = views[it.device]
         h = v.hw
@@ -91,20 +93,10 @@ def sim_model_source(program: Program, board, hexfile: Path, lmap: linkmap.LinkM
     lines += sim_table("sim_pin_t", "sim_pins", "sim_pin_count", _pin_rows(views),
                        "{ 0u, SIM_PIN_LEVEL, 0u, \"\", \"\" }")
     parity = {"none": 0, "even": 1, "odd": 2}[str(uarts.get(0, {}).get("parity", "none"))]
-    lines += chip_table(program, board)
+    lines += chip_table(program, pin_code)
     lines += _hooks(lmap, str(hexfile)) + harness_constants(board, hexfile)
     lines.append(f"const uint8_t sim_uart_parity = {parity}u;")
     return "\n".join(lines) + "\n"
-
-
-def chip_table(program: Program | None, board) -> list[str]:
-    """sim_chip_table (sim/sim_chips.h): the chips the harness plays on the
-    MSSP's buses, at the places their devices claim (a chip select by the
-    hardware layer's pin number, port << 3 | bit). None yet: this board's
-    devices bring no chip models, so every I2C address is unacknowledged
-    and every chip select reads 0xFF."""
-    return ["const sim_chip_entry_t sim_chip_table[1] = { { 0, 0u, 0u, 0u, 0u, \"\", \"\", 0u, 0 } };",
-            "const uint16_t sim_chip_table_count = 0u;"]
 
 
 def harness_constants(board, hexfile: Path) -> list[str]:
@@ -147,17 +139,22 @@ def build_harness(board, out_dir: Path, model_source: str, exe: Path, chips: tup
     objects = [_object(cc, cflags, host / s, obj_dir) for s in spec.get("host_sources", [])]
     objects += [_object(cc, cflags, runtime_dir() / s, obj_dir) for s in spec.get("runtime_sources", [])]
     objects += [_object(cc, cflags, shared / s, obj_dir) for s in spec.get("shared_sources", [])]
-    objects += [_object(cc, cflags, Path(c), obj_dir, cache=False) for c in chips]
+    for k, chip in enumerate(chips):  # (file, its EL_CHIP symbol), or a file that defines EL_CHIP itself
+        file, symbol = (chip, None) if isinstance(chip, (str, Path)) else chip
+        objects.append(_object(cc, cflags + ([f"-DEL_CHIP={symbol}"] if symbol else []), Path(file), obj_dir,
+                               cache=False, name=f"chip{k}"))
     objects += [_object(cxx, cxxflags, folder / s, obj_dir) for s in spec.get("cxx_sources", [])]
     objects.append(_object(cc, cflags, model_c, obj_dir, cache=False))
     run([cxx, "-o", str(exe), *map(str, objects), *spec.get("ldflags", [])], "building the simulator")
     return exe
 
 
-def _object(compiler: str, flags: list[str], src: Path, obj_dir: Path, cache: bool = True) -> Path:
-    """One of the harness's objects; the same preprocessed source with the
-    same flags comes from the build cache."""
-    obj = obj_dir / (src.stem + ".o")
+def _object(compiler: str, flags: list[str], src: Path, obj_dir: Path, cache: bool = True,
+            name: str | None = None) -> Path:
+    """One of the harness's objects (``name``.o, by default the source's
+    name); the same preprocessed source with the same flags comes from the
+    build cache."""
+    obj = obj_dir / ((name or src.stem) + ".o")
     digest = None
     if cache:
         text = run([compiler, *flags, "-E", str(src)], "building the simulator").stdout
@@ -179,4 +176,4 @@ def port_program_tables(board, hexfile: Path, lmap: linkmap.LinkMap) -> str:
                       "const uint16_t sim_busy_addr = 0xffffu;",
                       f"const uint16_t sim_kept_addr = 0x{lmap.ram_symbols().get('el_pic18_kept', 0xFFFF):03X}u;",
                       "const uint8_t sim_uart_parity = 0u;",
-                      *chip_table(None, board), *harness_constants(board, hexfile), ""])
+                      *chip_table(None, pin_code), *harness_constants(board, hexfile), ""])

@@ -119,7 +119,7 @@ def kept_symbols(program: Program) -> list[str]:
 
 
 def no_model_tables(simulator: str, empty_pin: str) -> list[str]:
-    """The tables of boards/host/sim_harness.h for a program without a
+    """The tables of sim/sim_harness.h for a program without a
     model (a board's port contract program): one item to name, nothing to
     trace, no devices, no pins (``empty_pin``: the board's sim_pin_t
     initializer of its one unused row)."""
@@ -144,3 +144,70 @@ def no_model_tables(simulator: str, empty_pin: str) -> list[str]:
         "const uint16_t sim_hw_count = 0u;",
         f"const sim_pin_t sim_pins[1] = {{ {empty_pin} }};",
         "const uint16_t sim_pin_count = 0u;"]
+
+
+# ---------------------------------------------------------------- chip models
+
+
+def chip_devices(program: Program | None) -> list:
+    """The devices whose types bring a chip model (`sim "FILE.c"`), in
+    device order: index k is sim_chip_table[k] and the symbol el_chip_<k>
+    (none for a program without a model)."""
+    return [] if program is None else [dev for dev in program.devices if dev.chip]
+
+
+def chip_symbol(index: int) -> str:
+    """The descriptor a chip file defines under the name EL_CHIP (sim/el_chip.h)."""
+    return f"el_chip_{index}"
+
+
+def chip_files(program: Program | None) -> list[tuple[str, str]]:
+    """(chip model file, its EL_CHIP symbol) of every chip device: the
+    harness compiles each file once per device, with -DEL_CHIP=symbol."""
+    return [(dev.chip, chip_symbol(k)) for k, dev in enumerate(chip_devices(program))]
+
+
+def chip_table(program: Program | None, pin_number) -> list[str]:
+    """sim_chip_table (sim/sim_chips.h): one entry per chip device, at the
+    I2C address or chip select it claims (``pin_number(name)``: the
+    harness's number of a pin), with the names of its `out` data (the
+    stimulus columns whose values reach the chip)."""
+    from .claims import parse_claim, parse_select
+
+    lines, rows = [], []
+    for k, dev in enumerate(chip_devices(program)):
+        kind, bus, address, cs, cs_name = "0", 0, 0, 0, ""
+        for text in dev.claims:
+            claim, select = parse_claim(text), parse_select(text)
+            if claim and claim[0] == "i2c" and select and select[0] == "addr":
+                kind, bus, address = "SIM_CHIP_I2C", int(claim[1]), int(select[1])
+            elif claim and claim[0] == "spi" and select and select[0] == "cs":
+                kind, bus, cs_name = "SIM_CHIP_SPI", int(claim[1]), str(select[1])
+                cs = pin_number(cs_name)
+            elif claim and claim[0] == "uart":
+                kind, bus = "SIM_CHIP_UART", int(claim[1])
+        outs = [program.items[i] for i in dev.items if program.items[i].kind == "dev_out"]
+        names = ", ".join(c_string(it.name.rsplit(".", 1)[-1]) for it in outs) or "\"\""
+        lines.append(f"extern const el_chip_ops_t {chip_symbol(k)};")
+        lines.append(f"static const char *const sim_chip_values_{k}[] = {{ {names} }};")
+        rows.append(f"    {{ &{chip_symbol(k)}, {kind}, {bus}u, 0x{address:02x}u, {cs}u, {c_string(cs_name)}, "
+                    f"{c_string(dev.path)}, {len(outs)}u, sim_chip_values_{k} }},")
+    if not rows:
+        return ["#include \"sim_chips.h\"",
+                "const sim_chip_entry_t sim_chip_table[1] = { { 0, 0u, 0u, 0u, 0u, \"\", \"\", 0u, 0 } };",
+                "const uint16_t sim_chip_table_count = 0u;"]
+    return ["#include \"sim_chips.h\"", *lines,
+            f"const sim_chip_entry_t sim_chip_table[{len(rows)}] = {{", *rows, "};",
+            f"const uint16_t sim_chip_table_count = {len(rows)}u;"]
+
+
+def chip_hardware_row(program: Program, item) -> str | None:
+    """The sim_hw row of a device `out` datum whose value the stimulus gives
+    the device's chip model (SIM_HW_CHIP: a the chip, b the value), else None."""
+    devices = chip_devices(program)
+    dev = program.devices[item.device]
+    if not dev.chip or item.kind != "dev_out":
+        return None
+    outs = [i for i in dev.items if program.items[i].kind == "dev_out"]
+    return (f"    {{ {item.id}u, SIM_HW_CHIP, {devices.index(dev)}u, {outs.index(item.id)}u, 0UL }}, "
+            f"/* {item.name} (its chip model) */")

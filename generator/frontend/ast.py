@@ -211,6 +211,14 @@ class DriverImpl(Node):
 
 
 @dataclass(frozen=True)
+class ChipModel(Node):
+    """``sim "file.c"`` after a driver: the model of the device's chip that
+    the simulator harnesses run (sim/el_chip.h), beside the declaring file."""
+
+    file: str
+
+
+@dataclass(frozen=True)
 class DeviceType(Named):
     params: tuple[FormalParam, ...]
     claims: tuple[Resource, ...]
@@ -221,6 +229,7 @@ class DeviceType(Named):
     driver_span: Span | None
     impls: tuple[DriverImpl, ...] = ()
     states: tuple["StateVar", ...] = ()
+    chips: tuple[ChipModel, ...] = ()  # at most one (the checker says so)
 
 
 @dataclass(frozen=True)

@@ -96,6 +96,7 @@ class Device:
     params: dict[str, tuple[T.ValueType, object]] = field(default_factory=dict)
     states: list[tuple[str, T.ValueType, int | None]] = field(default_factory=list)
     array_ports: list[str] = field(default_factory=list)  # data declared with a rate (arrays in C)
+    chip: str | None = None  # the model of its chip the simulator harnesses run (absolute; sim/el_chip.h)
 
 
 # ====================================================================== actors

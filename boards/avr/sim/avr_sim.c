@@ -4,7 +4,7 @@
  * (Debian's libsimavr) with the host board's command line where it makes
  * sense, so that one stimulus gives one trace on every board (what every
  * harness shares, options, links, instants, pins and pace, is
- * boards/host/sim_harness.c; this file is simavr's side):
+ * sim/sim_harness.c; this file is simavr's side):
  *
  *   NAME-sim [--fast] [--duration T] [--cycles N] [--stimulus S.csv]
  *            [--trace T.csv|T.vcd] [--pins P.csv|P.vcd] [--nvram FILE]
@@ -18,7 +18,7 @@
  * params and vars are written into the MCU's RAM, device `out` data are put
  * on the hardware the build maps them to (an ADC channel's voltage, an input
  * pin's level, line camera frames on a UART, quadrature edges on encoder
- * pins, the temperature of a sensor on the I2C bus: sim_chips.c), and the
+ * pins, the temperature of a sensor on the I2C bus: avr_chips.c), and the
  * firmware's own drivers read them. While UART frames or
  * encoder edges are still on their way it keeps GPIOR1 nonzero, and the
  * firmware waits. At the instant marker it copies every item and chart
@@ -45,6 +45,7 @@
  * `tx` when the firmware writes it (its transmission starts then).
  */
 #include "sim_model.h"
+#include "avr_chips.h"
 #include "sim_chips.h"
 
 const char sim_chips_help[] =
@@ -447,6 +448,22 @@ static void sim_sleep(avr_t *a, avr_cycle_count_t how_long)
     slept_cycles += how_long + 1u;
 }
 
+/* What the chip models a model brings may do (sim/sim_chips.h). */
+uint64_t sim_board_now_us(void)
+{
+    return avr->cycle / (sim_clock_hz / 1000000u);
+}
+
+void sim_board_uart_receive(uint8_t uart, uint8_t byte)
+{
+    avr_raise_irq(avr_io_getirq(avr, AVR_IOCTL_UART_GETIRQ((uint32_t)('0' + uart)), UART_IRQ_INPUT), byte);
+}
+
+void sim_board_pin_drive(uint16_t pin, bool level)
+{
+    avr_raise_irq(avr_io_getirq(avr, AVR_IOCTL_IOPORT_GETIRQ('A' + (pin >> 3)), pin & 7u), level ? 1u : 0u);
+}
+
 static void logger(avr_t *a, const int level, const char *format, va_list ap)
 {
     if (level > LOG_WARNING || (a != NULL && level > a->log))
@@ -509,7 +526,7 @@ int main(int argc, char **argv)
     uart_log_open();
     /* Inputs first (the chips' memories, then sim_start's): a failed start
      * creates no trace file. */
-    if (!sim_chips_init(avr, sim_opt.chips) || !sim_start(eeprom))
+    if (!sim_chips_start(sim_opt.chips) || !sim_chips_init(avr, sim_opt.chips) || !sim_start(eeprom))
         return SIM_EXIT_USAGE;
     watch_pins();
     avr_register_io_write(avr, GPIOR0_ADDR, gpior0_write, NULL);
@@ -535,7 +552,7 @@ int main(int argc, char **argv)
                       (unsigned)avr->pc);
         sim_exit_status = SIM_EXIT_RUN;
     }
-    if (!sim_chips_save())
+    if (!sim_chips_save() || !sim_chips_finish())
         sim_exit_status = SIM_EXIT_RUN;
     if (uart_log != NULL && fclose(uart_log) != 0)
         el_host_error("EASYLAB_UART_LOG: writing the log failed");

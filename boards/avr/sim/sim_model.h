@@ -10,7 +10,7 @@
  * reaches the hardware (an ADC channel, a pin, a UART, encoder pins): on
  * the AVR a pin is its port letter (a) and bit (b), an encoder's pins are
  * port letter << 8 | bit each. The tables every harness reads are declared
- * in boards/host/sim_harness.h; the pin table is the AVR's own.
+ * in sim/sim_harness.h; the pin table is the AVR's own.
  */
 #ifndef SIM_MODEL_H
 #define SIM_MODEL_H
@@ -31,7 +31,7 @@ typedef struct {
     const char *what;  /* the device */
 } sim_pin_t;
 
-/* A chip on a bus (sim_chips.h): one per address a device claims on an
+/* A chip on a bus (avr_chips.h): one per address a device claims on an
  * I2C bus where a chip of a kind the harness models answers, one per chip
  * select of a device whose chip it models on an SPI bus. */
 enum { SIM_CHIP_TEMPERATURE = 1, SIM_CHIP_EEPROM = 2, SIM_CHIP_SPI_EEPROM = 3 };

@@ -61,6 +61,16 @@ class DeviceRules:
                                       f"(looked at {short_name(str(path), 200)})")
             else:
                 self.report_c_file(path, DEVICE_BLOCKS, impl.span, f"handler file '{short_name(impl.file)}'")
+        for k, chip in enumerate(decl.chips):
+            if k:
+                self.error(chip.span, f"device type '{decl.name}' has two chip models (sim \"FILE.c\")",
+                           notes=[note(decl.chips[0].span, "the first is here")])
+                continue
+            path = module_dir(FsPath(self.declaration_files[id(decl)])) / chip.file
+            problem = missing_file(path)
+            if problem:
+                self.error(chip.span, f"chip model '{short_name(chip.file)}' {problem} "
+                                      f"(looked at {short_name(str(path), 200)})")
         for st in decl.states:
             self.resolve_type(st.type)
         if decl.states and not decl.impls:
@@ -237,7 +247,9 @@ class DeviceRules:
                 if t is not None:
                     states.append((st.name, t, size))
             handlers = {i.board: str(self.handler_path(dtype, i)) for i in dtype.impls}
-            device = PrimitiveDevice(path, dtype, dtype.driver, args, ports, claims, span, handlers, states)
+            chip = (str(module_dir(FsPath(self.declaration_files[id(dtype)])) / dtype.chips[0].file)
+                    if dtype.chips else None)
+            device = PrimitiveDevice(path, dtype, dtype.driver, args, ports, claims, span, handlers, states, chip)
             self.devices.append(device)
             for port in ports.values():
                 self.device_data.setdefault(f"{path}.{port.name}", DeviceDatum(device, port, f"{path}.{port.name}"))

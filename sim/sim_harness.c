@@ -3,6 +3,7 @@
 #include "sim_harness.h"
 
 #include "el_crc16.h"
+#include "sim_chips.h"
 
 #include <arpa/inet.h>
 #include <errno.h>
@@ -484,6 +485,25 @@ uint64_t sim_tick_extend(uint32_t tick)
     return sim_tick_extend_bits(tick, 32u);
 }
 
+/* The value the stimulus gave device datum sim_hw[k], to its chip model. */
+static bool chip_value(uint16_t k)
+{
+    const el_item_t *it = &el_items[sim_hw[k].item];
+    el_chip_value_t v;
+    memset(&v, 0, sizeof v);
+    switch (it->type) {
+    case EL_T_BOOL: { uint8_t x; memcpy(&x, it->addr, 1); v.i = x; break; }
+    case EL_T_I8: { int8_t x; memcpy(&x, it->addr, 1); v.i = x; break; }
+    case EL_T_U8: { uint8_t x; memcpy(&x, it->addr, 1); v.i = x; break; }
+    case EL_T_I16: { int16_t x; memcpy(&x, it->addr, 2); v.i = x; break; }
+    case EL_T_U16: { uint16_t x; memcpy(&x, it->addr, 2); v.i = x; break; }
+    case EL_T_I32: { int32_t x; memcpy(&x, it->addr, 4); v.i = x; break; }
+    case EL_T_F32: { float x; memcpy(&x, it->addr, 4); v.is_float = true; v.f = x; break; }
+    default: { uint32_t x; memcpy(&x, it->addr, 4); v.i = x; break; }
+    }
+    return sim_chips_value(sim_hw[k].a, (uint8_t)sim_hw[k].b, &v);
+}
+
 void sim_instant_inputs(uint64_t tick)
 {
     static unsigned char *before;
@@ -540,7 +560,7 @@ void sim_instant_inputs(uint64_t tick)
             continue;
         if (sim_hw[k].kind != SIM_HW_CAMERA)
             memcpy(sim_hw_state[k].value, it->addr, sim_item_addr[sim_hw[k].item].size);
-        if (!sim_drive_hardware(k)) {
+        if (sim_hw[k].kind == SIM_HW_CHIP ? !chip_value(k) : !sim_drive_hardware(k)) {
             sim_exit_status = SIM_EXIT_RUN;
             sim_stop = true;
             return;
@@ -672,9 +692,27 @@ static uint64_t wall_ns(void)
     return (uint64_t)ts.tv_sec * 1000000000u + (uint64_t)ts.tv_nsec;
 }
 
+/* A device datum reads its stimulus when the harness drives something
+ * behind it (a pin, the ADC, an encoder, a chip model); params and vars
+ * always do. */
+static bool harness_reads(uint16_t item)
+{
+    uint16_t k;
+    if (el_items[item].kind != EL_K_DEV_OUT)
+        return true;
+    for (k = 0; k < sim_hw_count; k++)
+        if (sim_hw[k].item == item && sim_hw[k].kind != SIM_HW_NONE)
+            return true;
+    return false;
+}
+
 bool sim_start(uint8_t *eeprom)
 {
     struct sigaction sa;
+    el_host_stimulus_reads = harness_reads;
+    el_host_stimulus_unread_why = "its device runs the model's own handlers and the simulator has nothing behind "
+                                  "it; name the model of its chip after the driver, sim \"FILE.c\" (docs/boards.md, "
+                                  "\"Chip models\"), or leave the column out";
     sim_hw_state = calloc(sim_hw_count ? sim_hw_count : 1u, sizeof *sim_hw_state);
     if (sim_hw_state == NULL)
         return false;

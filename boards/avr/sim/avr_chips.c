@@ -1,5 +1,5 @@
 /* EasyLab AVR board, simulator harness: the chips on the I2C and SPI buses
- * (sim_chips.h).
+ * (avr_chips.h).
  *
  * simavr 1.6's TWI talks to the chips through IRQ messages: at each
  * address byte the master raises a START message carrying the address and
@@ -12,6 +12,7 @@
  * shifts out meanwhile. A chip select is the pin's level as the port drives
  * it.
  */
+#include "avr_chips.h"
 #include "sim_chips.h"
 #include "sim_model.h"
 #include "host_internal.h"
@@ -220,13 +221,56 @@ static void on_spi(struct avr_irq_t *irq, uint32_t value, void *param)
     uint8_t out = 0xFFu; /* nothing selected: the line stays high */
     (void)irq;
     (void)param;
+    bool std_selected = false;
+    uint8_t user;
     for (i = 0; i < sim_chip_count; i++)
-        if (chips[i].spec->kind == SIM_CHIP_SPI_EEPROM && chips[i].selected)
+        if (chips[i].spec->kind == SIM_CHIP_SPI_EEPROM && chips[i].selected) {
             out = spi_exchange(&chips[i], (uint8_t)value);
+            std_selected = true;
+        }
+    /* The chip models a model brings (sim/sim_chips.c): 0xFF when none is selected. */
+    user = sim_chips_spi_byte(0u, (uint8_t)value);
+    if (!std_selected)
+        out = user;
     avr_raise_irq(avr_io_getirq(mcu, AVR_IOCTL_SPI_GETIRQ(0), SPI_IRQ_INPUT), out);
 }
 
 /* ---- the bus ---- */
+
+/* The chip models a model brings (sim/sim_chips.c) on the same messages:
+ * the one addressed since the last START, if it acknowledged. */
+static bool user_addressed;
+
+static void user_chips_on_bus(avr_twi_msg_irq_t m)
+{
+    if (m.u.twi.msg & TWI_COND_STOP) {
+        if (user_addressed)
+            sim_chips_i2c_stop(0u);
+        user_addressed = false;
+    }
+    if (m.u.twi.msg & TWI_COND_START) {
+        user_addressed = sim_chips_i2c_start(0u, (uint8_t)(m.u.twi.addr >> 1), (m.u.twi.addr & 1u) != 0u);
+        if (user_addressed)
+            answer(TWI_COND_ACK, m.u.twi.addr, 1u);
+        return;
+    }
+    if (!user_addressed)
+        return;
+    if (m.u.twi.msg & TWI_COND_WRITE) {
+        if (sim_chips_i2c_write(0u, m.u.twi.data))
+            answer(TWI_COND_ACK, m.u.twi.addr, 1u);
+    } else if (m.u.twi.msg & TWI_COND_READ) {
+        answer(TWI_COND_READ, m.u.twi.addr, sim_chips_i2c_read(0u));
+    }
+}
+
+/* A chip select of a chip model: its level as the port drives it. */
+static void user_chip_select(struct avr_irq_t *irq, uint32_t value, void *param)
+{
+    const sim_chip_entry_t *e = (const sim_chip_entry_t *)param;
+    (void)irq;
+    sim_chips_spi_select(e->bus, e->cs, value == 0u);
+}
 
 static void on_bus(struct avr_irq_t *irq, uint32_t value, void *param)
 {
@@ -235,6 +279,7 @@ static void on_bus(struct avr_irq_t *irq, uint32_t value, void *param)
     (void)irq;
     (void)param;
     m.u.v = value;
+    user_chips_on_bus(m);
     for (i = 0; i < sim_chip_count; i++) {
         chip_t *c = &chips[i];
         bool eeprom = c->spec->kind == SIM_CHIP_EEPROM;
@@ -288,9 +333,14 @@ bool sim_chips_init(avr_t *avr, const char *dir)
     /* The SPI bus answers 0xFF (an idle MISO, pulled up) at a chip select
      * nothing answers, with chips or without (docs/boards.md). */
     avr_irq_register_notify(avr_io_getirq(avr, AVR_IOCTL_SPI_GETIRQ(0), SPI_IRQ_OUTPUT), on_spi, NULL);
-    if (sim_chip_count == 0u)
+    for (i = 0; i < sim_chip_table_count; i++)
+        if (sim_chip_table[i].kind == SIM_CHIP_SPI)
+            avr_irq_register_notify(avr_io_getirq(avr, AVR_IOCTL_IOPORT_GETIRQ('A' + (sim_chip_table[i].cs >> 3)),
+                                                  sim_chip_table[i].cs & 7u),
+                                    user_chip_select, (void *)&sim_chip_table[i]);
+    if (sim_chip_count == 0u && sim_chip_table_count == 0u)
         return true;
-    chips = calloc(sim_chip_count, sizeof *chips);
+    chips = calloc(sim_chip_count ? sim_chip_count : 1u, sizeof *chips);
     if (chips == NULL)
         return false;
     twi_in = avr_io_getirq(avr, AVR_IOCTL_TWI_GETIRQ(0), TWI_IRQ_INPUT);

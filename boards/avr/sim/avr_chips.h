@@ -27,8 +27,8 @@
  * Any other I2C address has no chip: nothing acknowledges it; any other
  * chip select selects nothing: the SPI reads 0xFF.
  */
-#ifndef SIM_CHIPS_H
-#define SIM_CHIPS_H
+#ifndef AVR_CHIPS_H
+#define AVR_CHIPS_H
 
 #include "sim_avr.h"
 
@@ -49,4 +49,4 @@ bool sim_chips_temperature(uint8_t bus, uint8_t address, int32_t sixteenths, con
  * any). False after reporting an error. */
 bool sim_chips_save(void);
 
-#endif /* SIM_CHIPS_H */
+#endif /* AVR_CHIPS_H */
