@@ -42,6 +42,26 @@ extern const uint16_t el_host_range_count
 #endif
     ;
 
+/* The items a stimulus may name (device `out` data, params, vars) that
+ * nothing reads in this program, each with the reason (the board's rule,
+ * generator/board/stimulus_columns.py, emitted into host_ranges.c or a
+ * harness's tables): a column of one is refused. Weak: a program built
+ * without that table (a hand-written stand-in) refuses none. */
+typedef struct {
+    uint16_t item;   /* index into el_items */
+    const char *why; /* "no task reads device sensor" */
+} el_host_unread_t;
+extern const el_host_unread_t el_host_unread[]
+#if defined(__GNUC__)
+    __attribute__((weak))
+#endif
+    ;
+extern const uint16_t el_host_unread_count
+#if defined(__GNUC__)
+    __attribute__((weak))
+#endif
+    ;
+
 /* Most descriptors (listening sockets, connections, ptys) served at once. */
 #define EL_HOST_MAX_WATCHED 32u
 
