@@ -62,6 +62,23 @@ extern const uint16_t el_host_unread_count
 #endif
     ;
 
+/* The `state` fields of the devices running the model's handlers, as
+ * items (name DEVICE.FIELD, kind EL_K_DEV_STATE) for the trace of
+ * --trace-state (host_ranges.c, written by the host board's backend).
+ * Weak: a program without that table traces none. */
+extern const el_item_t el_host_state_items[]
+#if defined(__GNUC__)
+    __attribute__((weak))
+#endif
+    ;
+extern const uint16_t el_host_state_item_count
+#if defined(__GNUC__)
+    __attribute__((weak))
+#endif
+    ;
+/* --trace-state: the trace records el_host_state_items too (host_trace.c). */
+extern bool el_host_trace_state;
+
 /* Most descriptors (listening sockets, connections, ptys) served at once. */
 #define EL_HOST_MAX_WATCHED 32u
 
