@@ -550,6 +550,8 @@ class Session:
 def _why_read_only(it: Item) -> str:
     if it.kind == "dev_in":
         return "a device `in` datum: the application writes it at every publication"
+    if it.kind == "dev_state":
+        return "a device's state: only its handlers change it"
     return "the firmware does not let the debugger write it"
 
 

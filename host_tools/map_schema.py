@@ -41,7 +41,7 @@ DEBUG_MAP_SCHEMA = {
             "required": ["id", "name", "kind", "type", "count", "flags"],
             "properties": {
                 "id": _ID, "name": _NAME,
-                "kind": {"enum": ["param", "var", "dev_out", "dev_in", "state", "status"]},
+                "kind": {"enum": ["param", "var", "dev_out", "dev_in", "state", "status", "dev_state"]},
                 "type": {"enum": _TYPES},
                 "count": {"type": "integer", "minimum": 1, "maximum": 65535},
                 "flags": {"type": "array", "items": {"enum": ["read", "write", "range"]}},

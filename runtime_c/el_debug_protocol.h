@@ -83,14 +83,16 @@
 #define EL_DBG_BP_MAX 8u         /* breakpoints */
 #define EL_DBG_VALUE_MAX 4u      /* bytes of one element of any type */
 
-/* ---- item kinds (EL_K_... of el_model.h, plus actor state and the links'
- * read-only fault counters, docs/ir.md "Status items") ------------------- */
+/* ---- item kinds (EL_K_... of el_model.h, plus actor state, the links'
+ * read-only fault counters, docs/ir.md "Status items", and the read-only
+ * state of devices running the model's handlers) ------------------------ */
 #define EL_DBG_K_PARAM 0u
 #define EL_DBG_K_VAR 1u
 #define EL_DBG_K_DEV_OUT 2u
 #define EL_DBG_K_DEV_IN 3u
 #define EL_DBG_K_STATE 4u
 #define EL_DBG_K_STATUS 5u
+#define EL_DBG_K_DEV_STATE 6u
 
 /* ---- item types (EL_T_... of el_model.h) ------------------------------- */
 #define EL_DBG_T_BOOL 0u

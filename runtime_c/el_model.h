@@ -27,7 +27,8 @@ enum {
     EL_K_PARAM = 0,   /* a param: written through the interfaces only */
     EL_K_VAR = 1,     /* a var */
     EL_K_DEV_OUT = 2, /* device -> application datum: produced by read() */
-    EL_K_DEV_IN = 3   /* application -> device datum: consumed by write() */
+    EL_K_DEV_IN = 3,  /* application -> device datum: consumed by write() */
+    EL_K_DEV_STATE = 4 /* a device's `state` field (the host board's traced state, never in el_items) */
 };
 
 #define EL_NO_DEVICE 0xFFu

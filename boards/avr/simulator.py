@@ -13,8 +13,9 @@ from easylab.board import handlers
 from easylab.board.cbuild import require_tool, run, write_files
 from easylab.board.registry import load_board
 from easylab.board.resources import parse_claim, parse_select
-from easylab.board.simtables import (c_string, chip_files, chip_hardware_row, chip_table, no_model_tables,
-                                     ram_tables, sim_table, trace_tables)
+from easylab.board.simtables import (c_string, chip_hardware_row, chip_table, no_model_tables, ram_tables,
+                                     sim_table, trace_tables)
+from easylab.board.stimulus_columns import driven_items, unread_table
 from easylab.core.errors import BuildError
 from easylab.core.paths import data_dir, runtime_dir
 from easylab.ir.program import Program
@@ -102,8 +103,10 @@ def _sensor_item(program: Program, device) -> int | None:
                  and program.items[i].type.name in _SENSOR_TYPES and program.items[i].count == 1), None)
 
 
-def _hardware_rows(program: Program, views: dict) -> list[str]:
-    """sim_hw: how each device datum reaches the hardware the harness drives."""
+def _hardware(program: Program, views: dict) -> list[tuple[str, int, str]]:
+    """sim_hw: how each device datum reaches the hardware the harness
+    drives; each row with its item id and kind (which data the harness
+    drives: stimulus_columns.driven_items)."""
     rows = []
     for it in program.items:
         if it.device is None:
@@ -112,11 +115,14 @@ def _hardware_rows(program: Program, views: dict) -> list[str]:
         if _sensor_item(program, dev) == it.id:  # a sensor on the I2C bus, whatever drives it
             bus, addr = next((b, a) for d, b, a in _i2c_places(program)
                              if d is dev and a in TEMPERATURE_ADDRESSES)
-            rows.append(f"    {{ {it.id}u, SIM_HW_I2C_TEMP, {bus}u, 0x{addr:02x}u, 0UL }}, /* {it.name} */")
+            rows.append((f"    {{ {it.id}u, SIM_HW_I2C_TEMP, {bus}u, 0x{addr:02x}u, 0UL }}, /* {it.name} */", it.id,
+                         "SIM_HW_I2C_TEMP"))
             continue
         if it.device not in views:  # a device that runs handlers from the model's folder
-            rows.append(chip_hardware_row(program, it)
-                        or f"    {{ {it.id}u, SIM_HW_NONE, 0u, 0u, 0UL }}, /* {it.name} (handlers of the model) */")
+            chip = chip_hardware_row(program, it)
+            rows.append((chip, it.id, "SIM_HW_CHIP") if chip else
+                        (f"    {{ {it.id}u, SIM_HW_NONE, 0u, 0u, 0UL }}, /* {it.name} (handlers of the model) */",
+                         it.id, "SIM_HW_NONE"))
             continue
         v = views[it.device]
         h = v.hw
@@ -134,7 +140,7 @@ def _hardware_rows(program: Program, views: dict) -> list[str]:
             b = ord(h["pin_b"][1]) << 8 | int(h["pin_b"][2])
         elif v.driver in ("pwm_out", "motor"):
             kind = "SIM_HW_PWM"
-        rows.append(f"    {{ {it.id}u, {kind}, {a}u, {b}u, {c}UL }}, /* {it.name} ({v.driver}) */")
+        rows.append((f"    {{ {it.id}u, {kind}, {a}u, {b}u, {c}UL }}, /* {it.name} ({v.driver}) */", it.id, kind))
     return rows
 
 
@@ -176,8 +182,11 @@ def sim_model_source(program: Program, board, elf: Path) -> str:
     symbols = ram_symbols(board.description.toolchain.tool("nm", "avr-nm"), elf)
     lines += ram_tables(program, symbols, TICK_SYMBOL, str(elf))
     lines.append(f"const uint8_t sim_tick_size = {symbols.get(TICK_SYMBOL, (0, 4))[1]}u;")
-    lines += sim_table("sim_hw_t", "sim_hw", "sim_hw_count", _hardware_rows(program, views),
+    hardware = _hardware(program, views)
+    lines += sim_table("sim_hw_t", "sim_hw", "sim_hw_count", [row for row, _item, _kind in hardware],
                        "{ 0xffffu, SIM_HW_NONE, 0u, 0u, 0UL }")
+    lines += unread_table(program, driven_items([(item, kind) for _row, item, kind in hardware]), "simavr",
+                          board.name)
     lines += sim_table("sim_chip_t", "sim_chips", "sim_chip_count", _chip_rows(program, board),
                        "{ 0u, 0u, 0u, 0UL, 0u, 0 }")
     lines += sim_table("sim_pin_t", "sim_pins", "sim_pin_count", _pin_rows(mcu, views),

@@ -42,6 +42,43 @@ extern const uint16_t el_host_range_count
 #endif
     ;
 
+/* The items a stimulus may name (device `out` data, params, vars) that
+ * nothing reads in this program, each with the reason (the board's rule,
+ * generator/board/stimulus_columns.py, emitted into host_ranges.c or a
+ * harness's tables): a column of one is refused. Weak: a program built
+ * without that table (a hand-written stand-in) refuses none. */
+typedef struct {
+    uint16_t item;   /* index into el_items */
+    const char *why; /* "no task reads device sensor" */
+} el_host_unread_t;
+extern const el_host_unread_t el_host_unread[]
+#if defined(__GNUC__)
+    __attribute__((weak))
+#endif
+    ;
+extern const uint16_t el_host_unread_count
+#if defined(__GNUC__)
+    __attribute__((weak))
+#endif
+    ;
+
+/* The `state` fields of the devices running the model's handlers, as
+ * items (name DEVICE.FIELD, kind EL_K_DEV_STATE) for the trace of
+ * --trace-state (host_ranges.c, written by the host board's backend).
+ * Weak: a program without that table traces none. */
+extern const el_item_t el_host_state_items[]
+#if defined(__GNUC__)
+    __attribute__((weak))
+#endif
+    ;
+extern const uint16_t el_host_state_item_count
+#if defined(__GNUC__)
+    __attribute__((weak))
+#endif
+    ;
+/* --trace-state: the trace records el_host_state_items too (host_trace.c). */
+extern bool el_host_trace_state;
+
 /* Most descriptors (listening sockets, connections, ptys) served at once. */
 #define EL_HOST_MAX_WATCHED 32u
 

@@ -50,6 +50,13 @@ static bool opt_trace(const char *arg)
     return true;
 }
 
+static bool opt_trace_state(const char *arg)
+{
+    (void)arg;
+    el_host_trace_state = true;
+    return true;
+}
+
 static bool opt_nvram(const char *arg)
 {
     el_host_settings.nvram_path = arg;
@@ -65,6 +72,8 @@ const el_host_option_t el_host_options[] = {
     {"--stimulus", "FILE.csv", "device `out` data from a CSV file: time_us, then data paths", false, opt_stimulus},
     {"--trace", "FILE.csv|FILE.vcd", "record every item and chart at each instant (CSV or VCD by extension)", false,
      opt_trace},
+    {"--trace-state", NULL, "the trace also records the devices' `state` fields (DEVICE.FIELD, after the items)",
+     false, opt_trace_state},
     {"--nvram", "FILE", "non-volatile storage in FILE (4096 bytes; default: in memory)", false, opt_nvram},
     {"--debug", "pty:LINK|tcp:PORT[,halt]", "serve the debug interface on a new pty (symlink LINK) or 127.0.0.1:PORT",
      false, el_host_opt_debug},

@@ -25,6 +25,9 @@
  * - A param's or var's value is written once, like a debug or service
  *   write, at the first instant at or after its row's time (el_port_inputs:
  *   after the outputs due then are published, before inputs are latched).
+ * - A column of an item nothing reads in this program (el_host_unread: a
+ *   device no task reads, a datum a simulator has no hardware behind) is
+ *   refused with the reason; an unknown name gets a "did you mean".
  *
  * Errors are reported as FILE:LINE: message and nothing is loaded.
  */
@@ -179,8 +182,23 @@ static size_t count_cells(const char *s)
 
 /* ---- the header ---- */
 
-bool (*el_host_stimulus_reads)(uint16_t item);
-const char *el_host_stimulus_unread_why = "";
+/* Why nothing reads a column of `item` (el_host_unread), or NULL. */
+static const char *unread_reason(uint16_t item)
+{
+    uint16_t k;
+    if (&el_host_unread_count == NULL || el_host_unread == NULL)
+        return NULL;
+    for (k = 0; k < el_host_unread_count; k++)
+        if (el_host_unread[k].item == item)
+            return el_host_unread[k].why;
+    return NULL;
+}
+
+/* Whether a stimulus may name item `i`: not a device `in` datum, and read. */
+static bool is_column(uint16_t i)
+{
+    return el_items[i].kind != EL_K_DEV_IN && unread_reason(i) == NULL;
+}
 
 static void list_valid_columns(void)
 {
@@ -189,7 +207,7 @@ static void list_valid_columns(void)
     fprintf(stderr, "  valid columns: time_us");
     for (i = 0; i < el_item_count; i++) {
         const el_item_t *it = &el_items[i];
-        if (it->kind == EL_K_DEV_IN || (el_host_stimulus_reads != NULL && !el_host_stimulus_reads(i)))
+        if (!is_column(i))
             continue;
         if (it->count == 1u)
             fprintf(stderr, ", %s", it->name);
@@ -198,8 +216,68 @@ static void list_valid_columns(void)
         first = false;
     }
     if (first)
-        fprintf(stderr, " (the model has no device `out` data, params or vars)");
+        fprintf(stderr, " (the model has no device `out` data, params or vars that something reads)");
     fputc('\n', stderr);
+}
+
+/* Names longer than this are not compared for "did you mean"
+ * (generator/board/stimulus_columns.py, SUGGEST_MAX). */
+#define SUGGEST_MAX 64u
+
+/* The optimal string alignment distance of a[0..n) and b[0..m), both at
+ * most SUGGEST_MAX bytes (stimulus_columns.edit_distance). */
+static unsigned edit_distance(const char *a, size_t n, const char *b, size_t m)
+{
+    unsigned rows[3][SUGGEST_MAX + 1u];
+    unsigned *prev2 = rows[0], *prev = rows[1], *row = rows[2];
+    size_t i, j;
+    for (j = 0; j <= m; j++)
+        prev[j] = (unsigned)j;
+    for (i = 1; i <= n; i++) {
+        unsigned *t;
+        row[0] = (unsigned)i;
+        for (j = 1; j <= m; j++) {
+            unsigned cost = a[i - 1] == b[j - 1] ? 0u : 1u;
+            unsigned d = prev[j] + 1u;
+            if (row[j - 1] + 1u < d)
+                d = row[j - 1] + 1u;
+            if (prev[j - 1] + cost < d)
+                d = prev[j - 1] + cost;
+            if (i > 1 && j > 1 && a[i - 1] == b[j - 2] && a[i - 2] == b[j - 1] && prev2[j - 2] + 1u < d)
+                d = prev2[j - 2] + 1u;
+            row[j] = d;
+        }
+        t = prev2;
+        prev2 = prev;
+        prev = row;
+        row = t;
+    }
+    return prev[m];
+}
+
+/* The valid column closest to `name` (the first of the closest) if at most
+ * a third of its length (at least 1) of edits away, else NULL. */
+static const char *suggestion(const char *name)
+{
+    size_t n = strlen(name);
+    unsigned best_d;
+    const char *best = NULL;
+    uint16_t i;
+    if (n == 0u || n > SUGGEST_MAX)
+        return NULL;
+    best_d = (unsigned)(n / 3u > 1u ? n / 3u : 1u) + 1u;
+    for (i = 0; i < el_item_count; i++) {
+        size_t m = strlen(el_items[i].name);
+        unsigned d;
+        if (!is_column(i) || m > SUGGEST_MAX)
+            continue;
+        d = edit_distance(name, n, el_items[i].name, m);
+        if (d < best_d) {
+            best = el_items[i].name;
+            best_d = d;
+        }
+    }
+    return best;
 }
 
 static const char *kind_name(uint8_t kind)
@@ -248,7 +326,11 @@ static bool resolve_column(const char *name, column_t *col)
         }
     }
     if (item < 0) {
-        stim_error("unknown column '%s'", name);
+        const char *near = suggestion(name);
+        if (near != NULL)
+            stim_error("unknown column '%s' (did you mean '%s'?)", name, near);
+        else
+            stim_error("unknown column '%s'", name);
         list_valid_columns();
         return false;
     }
@@ -258,14 +340,14 @@ static bool resolve_column(const char *name, column_t *col)
         list_valid_columns();
         return false;
     }
-    if (el_host_stimulus_reads != NULL && !el_host_stimulus_reads((uint16_t)item)) {
-        stim_error("column '%s': nothing in this program reads it: %s", name, el_host_stimulus_unread_why);
-        list_valid_columns();
-        return false;
-    }
     if (indexed && (el_items[item].count == 1u || index >= el_items[item].count)) {
         stim_error("column '%s': %s has %u element%s", name, el_items[item].name, (unsigned)el_items[item].count,
                    el_items[item].count == 1u ? " (no index)" : "s");
+        list_valid_columns();
+        return false;
+    }
+    if (unread_reason((uint16_t)item) != NULL) {
+        stim_error("column '%s': nothing reads it: %s", name, unread_reason((uint16_t)item));
         list_valid_columns();
         return false;
     }

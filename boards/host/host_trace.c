@@ -6,7 +6,9 @@
  *
  * CSV (`--trace F.csv`): a header `time_us,` then the item names in
  * el_items order (`name[0]` .. `name[n-1]` for count n > 1), then
- * `CHART.active` per chart; a row per instant at which any value differs
+ * `CHART.active` per chart (with --trace-state, the devices' state fields,
+ * `DEVICE.FIELD` of el_host_state_items, come between the items and the
+ * charts); a row per instant at which any value differs
  * from the previous row (the first instant always gives a row). Values:
  * bool 0/1, integers in decimal, float32 as %.9g (exact round trip; every
  * NaN as "nan": its sign depends on the compiler, not on the model),
@@ -39,7 +41,8 @@
 #define COL_CHART 0xFFu
 
 typedef struct {
-    uint16_t index;   /* into el_items, or el_charts for COL_CHART */
+    uint16_t index;   /* into el_items (el_host_state_items for `state`), or el_charts for COL_CHART */
+    bool state;       /* a device's state field (--trace-state) */
     uint16_t elem;    /* element of a count > 1 item */
     uint8_t type;     /* EL_T_..., or COL_CHART */
     bool indexed;     /* count > 1: the column of one element */
@@ -49,6 +52,8 @@ typedef struct {
 } tcol_t;
 
 enum { FMT_CSV, FMT_VCD };
+
+bool el_host_trace_state;
 
 static FILE *out;
 static int fmt;
@@ -89,26 +94,49 @@ static bool ends_with(const char *s, const char *suffix)
 
 /* ---- columns and snapshots ---- */
 
+/* The devices' state fields traced: none unless --trace-state (and the
+ * program has the table, host_ranges.c). */
+static uint16_t state_count(void)
+{
+    if (!el_host_trace_state || &el_host_state_item_count == NULL || el_host_state_items == NULL)
+        return 0u;
+    return el_host_state_item_count;
+}
+
+static const el_item_t *item_of(const tcol_t *t)
+{
+    return t->state ? &el_host_state_items[t->index] : &el_items[t->index];
+}
+
 static bool build_columns(void)
 {
     size_t n = el_chart_count, k = 0, off = 0;
-    uint16_t i, e;
+    uint16_t i, e, states = state_count();
     uint8_t c;
+    int pass;
 
     for (i = 0; i < el_item_count; i++)
         n += el_items[i].count;
+    for (i = 0; i < states; i++)
+        n += el_host_state_items[i].count;
     cols = calloc(n ? n : 1u, sizeof *cols);
     if (cols == NULL)
         return false;
-    for (i = 0; i < el_item_count; i++)
-        for (e = 0; e < el_items[i].count; e++) {
-            tcol_t *t = &cols[k++];
-            t->index = i;
-            t->elem = e;
-            t->type = el_items[i].type;
-            t->indexed = el_items[i].count > 1u;
-            t->width = t->type == EL_T_BOOL ? 1u : el_host_type_size(t->type);
-        }
+    /* The items, then the devices' state fields, then the charts. */
+    for (pass = 0; pass < 2; pass++) {
+        const el_item_t *table = pass == 0 ? el_items : el_host_state_items;
+        uint16_t count = pass == 0 ? el_item_count : states;
+        for (i = 0; i < count; i++)
+            for (e = 0; e < table[i].count; e++) {
+                tcol_t *t = &cols[k++];
+                t->index = i;
+                t->state = pass == 1;
+                t->elem = e;
+                t->type = table[i].type;
+                t->indexed = table[i].count > 1u;
+                t->width = t->type == EL_T_BOOL ? 1u : el_host_type_size(t->type);
+            }
+    }
     for (c = 0; c < el_chart_count; c++) {
         tcol_t *t = &cols[k++];
         t->index = c;
@@ -147,7 +175,7 @@ static void take_snapshot(void)
             for (s = 0; s < ch->step_count; s++)
                 dst[s] = ch->active[s] != 0u;
         } else {
-            const el_item_t *it = &el_items[t->index];
+            const el_item_t *it = item_of(t);
             size_t size = el_host_type_size(t->type);
             const unsigned char *src = (const unsigned char *)it->addr + (size_t)t->elem * size;
             if (t->type == EL_T_BOOL) {
@@ -213,9 +241,9 @@ static void csv_header(void)
         if (t->type == COL_CHART)
             fprintf(out, ",%s.active", el_charts[t->index].name);
         else if (t->indexed)
-            fprintf(out, ",%s[%u]", el_items[t->index].name, (unsigned)t->elem);
+            fprintf(out, ",%s[%u]", item_of(t)->name, (unsigned)t->elem);
         else
-            fprintf(out, ",%s", el_items[t->index].name);
+            fprintf(out, ",%s", item_of(t)->name);
     }
     fputc('\n', out);
 }
@@ -288,7 +316,7 @@ static void vcd_header(void)
                 fprintf(out, "$var real 64 %s ", t->id);
             else
                 fprintf(out, "$var wire %u %s ", bit_width(t->type), t->id);
-            vcd_name(el_items[t->index].name);
+            vcd_name(item_of(t)->name);
             if (t->indexed)
                 fprintf(out, "(%u)", (unsigned)t->elem);
         }

@@ -13,6 +13,7 @@ from easylab.board.cbuild import require_tool, run, write_files
 from easylab.board.registry import load_board
 from easylab.board.simtables import (c_string, chip_hardware_row, chip_table, no_model_tables, ram_tables,
                                      sim_table, trace_tables)
+from easylab.board.stimulus_columns import driven_items, unread_table
 from easylab.core.errors import BuildError
 from easylab.core.paths import data_dir, runtime_dir
 from easylab.ir.program import Program
@@ -25,15 +26,19 @@ TICK_SYMBOL = "el_pic18_sim_tick"
 _HOOKS = ("el_pic18_sim_mark", "el_pic18_sim_busy", "el_pic18_kept")
 
 
-def _hardware_rows(program: Program, views: dict) -> list[str]:
-    """sim_hw: how each device datum reaches the hardware the harness drives."""
+def _hardware(program: Program, views: dict) -> list[tuple[str, int, str]]:
+    """sim_hw: how each device datum reaches the hardware the harness
+    drives; each row with its item id and kind (which data the harness
+    drives: stimulus_columns.driven_items)."""
     rows = []
     for it in program.items:
         if it.device is None:
             continue
         if it.device not in views:  # a device that runs handlers from the model's folder
-            rows.append(chip_hardware_row(program, it)
-                        or f"    {{ {it.id}u, SIM_HW_NONE, 0u, 0u, 0UL }}, /* {it.name} (handlers of the model) */")
+            chip = chip_hardware_row(program, it)
+            rows.append((chip, it.id, "SIM_HW_CHIP") if chip else
+                        (f"    {{ {it.id}u, SIM_HW_NONE, 0u, 0u, 0UL }}, /* {it.name} (handlers of the model) */",
+                         it.id, "SIM_HW_NONE"))
             continue
         v = views[it.device]
         h = v.hw
@@ -47,7 +52,7 @@ def _hardware_rows(program: Program, views: dict) -> list[str]:
             kind, a, b = "SIM_HW_ENCODER", pin_code(h["pin_a"]), pin_code(h["pin_b"])
         elif v.driver in ("pwm_out", "motor"):
             kind = "SIM_HW_PWM"
-        rows.append(f"    {{ {it.id}u, {kind}, {a}u, {b}u, 0UL }}, /* {it.name} ({v.driver}) */")
+        rows.append((f"    {{ {it.id}u, {kind}, {a}u, {b}u, 0UL }}, /* {it.name} ({v.driver}) */", it.id, kind))
     return rows
 
 
@@ -88,8 +93,11 @@ def sim_model_source(program: Program, board, hexfile: Path, lmap: linkmap.LinkM
     lines += trace_tables(program)
     lines += ram_tables(program, {name: (addr, 0) for name, addr in lmap.ram_symbols().items()}, TICK_SYMBOL,
                         str(hexfile))
-    lines += sim_table("sim_hw_t", "sim_hw", "sim_hw_count", _hardware_rows(program, views),
+    hardware = _hardware(program, views)
+    lines += sim_table("sim_hw_t", "sim_hw", "sim_hw_count", [row for row, _item, _kind in hardware],
                        "{ 0xffffu, SIM_HW_NONE, 0u, 0u, 0UL }")
+    lines += unread_table(program, driven_items([(item, kind) for _row, item, kind in hardware]), "gpsim",
+                          board.name)
     lines += sim_table("sim_pin_t", "sim_pins", "sim_pin_count", _pin_rows(views),
                        "{ 0u, SIM_PIN_LEVEL, 0u, \"\", \"\" }")
     parity = {"none": 0, "even": 1, "odd": 2}[str(uarts.get(0, {}).get("parity", "none"))]

@@ -133,6 +133,34 @@ def firmware_binding(program: Program, device: Device) -> Binding:
     return Binding(lambda item: item_symbol(program, item.id), f"el_mdev{device.id}_state")
 
 
+def state_type_lines(device: Device) -> list[str]:
+    """The C type of a device's state, ``el_mdev<id>_state_t``: its
+    ``state`` fields in declaration order (the debug tables and the host
+    board's tables declare it again, the same, to reach the firmware's
+    ``el_mdev<id>_state``)."""
+    fields = [f"{t.c_name} {name}{f'[{size}]' if size else ''};" for name, t, size in device.states]
+    return (["typedef struct {"] + [f"    {f}" for f in fields or ["uint8_t el_unused; /* C99 wants a member */"]]
+            + [f"}} el_mdev{device.id}_state_t;"])
+
+
+def state_devices(program: Program, board: str) -> list[Device]:
+    """The devices that keep a state on ``board``: those running a handler
+    file of the model's there whose type declares ``state`` fields."""
+    return [d for d in program.devices if d.states and handler_file(d, board) is not None]
+
+
+def state_items(program: Program, board: str) -> list[tuple[Device, str, T.ValueType, int, str]]:
+    """(device, field, type, count, C address expression) of every device
+    state field on ``board``, named ``DEVICE.FIELD`` (``dev.reads``)
+    in the debug map and the trace."""
+    out = []
+    for dev in state_devices(program, board):
+        for name, t, size in dev.states:
+            where = f"el_mdev{dev.id}_state.{name}"
+            out.append((dev, name, t, size or 1, where if size else f"&{where}"))
+    return out
+
+
 def device_block(program: Program, device: Device, code: HandlerCode, binding: Binding,
                  firmware: bool = True, chip_select: Callable[[str], str] | None = None) -> list[str]:
     """The C of one device's handlers: its state type, the names its code
@@ -154,12 +182,11 @@ def device_block(program: Program, device: Device, code: HandlerCode, binding: B
         for item in items:
             dims = f"[{item.count}]" if item.count > 1 else ""
             lines.append(f"extern {item.type.c_name} {item_symbol(program, item.id)}{dims};")
-    fields = [f"{t.c_name} {name}{f'[{size}]' if size else ''};" for name, t, size in device.states]
-    lines.append("typedef struct {")
-    lines += [f"    {f}" for f in fields or ["uint8_t el_unused; /* C99 wants a member */"]]
-    lines.append(f"}} {state_type};")
+    lines += state_type_lines(device)
     if firmware and device.states:
-        lines.append(f"static {state_type} {binding.state}; /* zero at boot */")
+        # Global: the debug tables and the host board's trace reach it (docs/language.md, "Device handlers").
+        lines.append(f"extern {state_type} {binding.state};")
+        lines.append(f"{state_type} {binding.state}; /* zero at boot */")
     defines = [("EL_DEVICE", f"{device.id}u"), ("EL_DEVICE_PATH", c_literal(T.STRING, device.path))]
     cs = next((where for how, where in filter(None, map(parse_select, device.claims)) if how == "cs"), None)
     if cs is not None and chip_select is not None:

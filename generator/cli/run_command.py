@@ -71,6 +71,9 @@ def add_parser(sub) -> None:
     p.add_argument("--stimulus", metavar="FILE.csv", help="device `out` data, params and vars from a CSV file: "
                                                           "time_us, then their names (the host board's format)")
     p.add_argument("--trace", metavar="FILE", help="record every item and chart at each instant (.csv or .vcd)")
+    p.add_argument("--trace-state", action="store_true",
+                   help="the trace also records the devices' `state` fields (DEVICE.FIELD, after the items), as the "
+                        "host firmware's --trace-state")
     p.add_argument("--duration", metavar="T", help="stop before logical time T (10s, 1.5s, 500ms, 250us, 2m, 1h); "
                                                    "default: endless")
     timing = p.add_mutually_exclusive_group()
@@ -201,7 +204,7 @@ def cmd_run(args) -> int:
         cache = plugins_of(program)
         stimulus = stimulus_arg(args, program, "run")
         if args.trace is not None:
-            trace = TraceWriter(args.trace, program, columns_of(program))
+            trace = TraceWriter(args.trace, program, columns_of(program, args.trace_state))
     except SetupError as err:
         _say(str(err))
         return err.status

@@ -101,6 +101,7 @@ class CModel:
     interface_poll: list[str] = field(default_factory=list)  # C statements: serve them when idle
     status: list[StatusView] = field(default_factory=list)  # the links' fault counters
     probes: bool = False  # the debugger's probes: a debug build of a model with a debug interface
+    library: bool = False  # local execution's interfaces library, not a firmware
 
 
 class _Builder:
@@ -574,7 +575,7 @@ def build_view(program: Program, board, library: bool = False, probes: bool = Fa
     deadlines = [t.deadline for t in program.tasks]
     return CModel(program, __version__, board.name, b.items, specs, states, b.buffers, dataflows, charts, tasks,
                   channels, boot, shutdown, reads, instants, deadlines, status=status_views(program, library),
-                  probes=probes)
+                  probes=probes, library=library)
 
 
 def spec_view(spec: ActorSpec) -> SpecView:

@@ -17,7 +17,9 @@ never has one. For a debug build this writes:
 
 Debug item ids: the IR's items keep their ids (params, vars, device data);
 the state variables of actor instances follow, instance by instance, then
-the program's status items (the links' fault counters, read-only).
+the program's status items (the links' fault counters, read-only), then
+the `state` fields of the devices that run the model's handlers on the
+board (``DEVICE.FIELD``, read-only: the handlers own them).
 """
 
 from __future__ import annotations
@@ -32,6 +34,7 @@ from types import SimpleNamespace
 
 from ..core import types as T
 from ..core.paths import runtime_dir
+from ..board import handlers
 from ..ir.program import Program
 from .c_syntax import ident
 
@@ -42,11 +45,13 @@ _TYPE_ENUM = {"bool": "EL_DBG_T_BOOL", "int8": "EL_DBG_T_I8", "uint8": "EL_DBG_T
               "uint16": "EL_DBG_T_U16", "int32": "EL_DBG_T_I32", "uint32": "EL_DBG_T_U32",
               "float32": "EL_DBG_T_F32", "time": "EL_DBG_T_TIME"}
 _KIND_ENUM = {"param": "EL_DBG_K_PARAM", "var": "EL_DBG_K_VAR", "dev_out": "EL_DBG_K_DEV_OUT",
-              "dev_in": "EL_DBG_K_DEV_IN", "state": "EL_DBG_K_STATE", "status": "EL_DBG_K_STATUS"}
+              "dev_in": "EL_DBG_K_DEV_IN", "state": "EL_DBG_K_STATE", "status": "EL_DBG_K_STATUS",
+              "dev_state": "EL_DBG_K_DEV_STATE"}
 # What the debugger may write (docs/protocol.md "What is writable"): the
 # application's inputs and state. A device `in` datum is the application's
 # output to an actuator, rewritten at every publication: read-only; so is
-# a status item, a fault counter of the links.
+# a status item, a fault counter of the links, and a device's state,
+# which only its handlers change.
 WRITABLE_KINDS = ("param", "var", "dev_out", "state")
 
 
@@ -112,8 +117,8 @@ def _int32(v: int) -> str:
 
 
 def debug_items(program: Program, view) -> list[DebugItem]:
-    """Every debug item with its debug id (model items, actor states, then
-    status items)."""
+    """Every debug item with its debug id (model items, actor states,
+    status items, then device states)."""
 
     items: list[DebugItem] = []
     for iv in view.items:
@@ -142,6 +147,18 @@ def debug_items(program: Program, view) -> list[DebugItem]:
         declared.add(sv.c_extern)
         items.append(DebugItem(next_id, st.name, "status", st.type, 1, f"(void *){sv.addr}", decl,
                                None, None, st.location))
+        next_id += 1
+    typed = set()
+    for dev, name, t, count, addr in handlers.state_items(program, view.board):
+        decl = None
+        if dev.id not in typed:  # the state's type and the firmware's (or the library's) variable, once
+            typed.add(dev.id)
+            var = f"el_mdev{dev.id}_state_t el_mdev{dev.id}_state;"
+            # the library holds a copy the interpreter refreshes (generator/interp/interfaces.py)
+            decl = "\n".join(handlers.state_type_lines(dev) + [f"extern {var} /* {dev.path} */"]
+                             + ([var] if view.library else []))
+        items.append(DebugItem(next_id, f"{dev.path}.{name}", "dev_state", t, count, f"(void *){addr}", decl,
+                               None, None, dev.location))
         next_id += 1
     ranged = 0
     for d in items:

@@ -124,6 +124,15 @@ class ModelDevice:
         self.pointers = (ctypes.c_void_p * max(1, len(self.cells)))(*(ctypes.addressof(c) for c in self.cells))
         self.outs = [k for k, it in enumerate(self.items) if it.kind == "dev_out"]
 
+    def state_fields(self) -> dict[str, ctypes.Array]:
+        """Each `state` field by name, as an array (one element for a
+        scalar) over the state's memory, laid out as the C struct is."""
+        fields = [(name, V.ctype(t) * (size or 1)) for name, t, size in self.device.states]
+        if not fields:
+            return {}
+        layout = type("State", (ctypes.Structure,), {"_fields_": fields}).from_address(ctypes.addressof(self.state))
+        return {name: getattr(layout, name) for name, _t in fields}
+
     def call(self, handler: str, published: list[ctypes.Array]) -> None:
         """One handler, on the published data (C arrays of the data's
         types): in, then its out data back."""
@@ -152,6 +161,16 @@ class ModelDevices:
             if H.handler_file(dev, BOARD) is not None:
                 self.devices[dev.id] = ModelDevice(program, dev, load_plugin(cache, program, dev))
         self.running: set[int] = set()  # opened and started
+
+    def state_fields(self) -> dict[str, tuple]:
+        """``DEVICE.FIELD`` -> (type, array over the state's memory) of every
+        device's `state` fields (what ``--trace-state`` records)."""
+        out = {}
+        for dev in self.devices.values():
+            types = {name: t for name, t, _size in dev.device.states}
+            for name, array in dev.state_fields().items():
+                out[f"{dev.device.path}.{name}"] = (types[name], array)
+        return out
 
     def boot(self, published: list[ctypes.Array], only: set[int] | None = None) -> None:
         """open() of every device, then start(), as model.c does."""

@@ -92,7 +92,7 @@ class Engine:
         self.trace = trace
         self.on_replace = on_replace
         self.sampler = Sampler(trace.columns if trace else columns_of(program))
-        self.sampler.bind(program, self.state.published, self.state.charts)
+        self.sampler.bind(program, self.state.published, self.state.charts, self.state.model_devices)
         self.clock = Clock()
         self._earlier_activations: dict[str, int] = {}  # of the programs replaced
         self.native_instants = 0  # instants the runner ran alone (in stretches)
@@ -426,7 +426,7 @@ class Engine:
         if self.stimulus is not None:
             self.stimulus.bind(new.program)
             report.ignored_stimulus = list(self.stimulus.unbound)
-        report.frozen = self.sampler.bind(new.program, new.published, new.charts)
+        report.frozen = self.sampler.bind(new.program, new.published, new.charts, new.model_devices)
         traced = {c.name for c in self.sampler.columns}
         report.untraced = [i.name for i in new.program.items if i.name not in traced] + \
                           [c.name for c in new.program.charts if c.name not in traced]

@@ -36,6 +36,7 @@ import subprocess
 import threading
 from pathlib import Path
 
+from ..board import handlers
 from ..board.registry import load_board
 from ..codegen.debug import protocol_constants
 from ..codegen.render import render_interfaces
@@ -166,6 +167,9 @@ class Interfaces:
         self.actor_states = [(states[k], sizes[k]) for k in range(n_actors)]
         slots = (ctypes.c_void_p * max(1, len(self.program.charts))).in_dll(lib, "el_interp_chart_slots")
         self.chart_slots = [(ctypes.c_uint8 * c.slots).from_address(slots[c.id]) for c in self.program.charts]
+        # The devices' state the debug tables read (codegen/debug.py): a copy of each device's, refreshed by push.
+        self.device_states = {dev.id: (ctypes.c_uint8 * 1).in_dll(lib, f"el_mdev{dev.id}_state")
+                              for dev in handlers.state_devices(self.program, "host")} if self.has_debug else {}
         self._armed = lib.el_interp_armed
         self.status = (ctypes.c_uint16 * max(1, len(self.program.status))).in_dll(lib, "el_interp_status")
 
@@ -197,14 +201,20 @@ class Interfaces:
 
     # ------------------------------------------------------------ items
 
-    def push(self, published: list, charts) -> None:
-        """The interpreter's published items and chart slots into the library
-        (items that are the library's own arrays stay as they are)."""
+    def push(self, published: list, charts, devices=None) -> None:
+        """The interpreter's published items, chart slots and devices' state
+        (``devices``: interp.devices.ModelDevices) into the library (items
+        that are the library's own arrays stay as they are)."""
         for array, values in zip(self.items, published):
             if values is not array:
                 array[:] = values
         for array, runner in zip(self.chart_slots, charts):
             array[:] = [0xFF if s is None else s for s in runner.slots]
+        if devices is not None:
+            for dev_id, target in self.device_states.items():
+                dev = devices.devices.get(dev_id)
+                if dev is not None:
+                    ctypes.memmove(ctypes.addressof(target), dev.state, dev.plugin.state_size)
 
     def pull(self, published: list) -> None:
         """What clients wrote (or persistent storage restored) back into the

@@ -253,7 +253,7 @@ class ProgramState:
         """Call into the interfaces library (which may serve clients): the
         charts' slots go in before (the items are the library's)."""
         io = self.io
-        io.push(self.published, self.charts)
+        io.push(self.published, self.charts, self.model_devices)
         call(*args)
         io.pull(self.published)
 

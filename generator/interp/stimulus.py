@@ -19,6 +19,7 @@ from array import array
 from bisect import bisect_right
 from dataclasses import dataclass, field
 
+from ..board.stimulus_columns import suggestion, unread_items
 from ..core import types as T
 from ..ir.program import Program
 from . import values as V
@@ -102,17 +103,16 @@ class Stimulus:
         live replacement); columns whose item no longer exists, or changed
         type or size, are listed in ``unbound`` and ignored."""
         by_name = {i.name: i for i in program.items}
-        read = {d.id for d in program.devices if d.read_by}
+        unread = unread_items(program)
         self._by_device, self._inputs, self.unbound = {}, [], []
         for col in self.columns:
             col.applied = 0  # a new program's device data take their values again at their next read
             item = by_name.get(col.item)
             if item is None or item.type != col.type or item.count < col.first + col.count \
-                    or item.kind == "dev_in":
+                    or item.kind == "dev_in" or item.id in unread:
                 self.unbound.append(col.name)
             elif item.kind == "dev_out":
-                if item.device in read:  # a device no task reads is never read
-                    self._by_device.setdefault(item.device, []).append((col, item.id))
+                self._by_device.setdefault(item.device, []).append((col, item.id))
             else:
                 self._inputs.append((col, item.id))
 
@@ -179,6 +179,8 @@ class _Reader:
         self.program = program
         self.line = 0
         self.items = {i.name: i for i in program.items}
+        # Local execution simulates every device, as the host board does.
+        self.unread = unread_items(program)
 
     def error(self, message: str, list_columns: bool = False) -> StimulusError:
         text = f"{self.path}:{self.line}: {message}"
@@ -188,13 +190,15 @@ class _Reader:
 
     def _valid_columns(self) -> str:
         names = []
-        for it in self.program.items:
-            if it.kind == "dev_in":
-                continue
+        for it in self._columns():
             names.append(it.name if it.count == 1 else f"{it.name} (or {it.name}[0] .. {it.name}[{it.count - 1}])")
         if not names:
-            return "  valid columns: time_us (the model has no device `out` data, params or vars)"
+            return "  valid columns: time_us (the model has no device `out` data, params or vars that something reads)"
         return "  valid columns: time_us, " + ", ".join(names)
+
+    def _columns(self) -> list:
+        """The items a column may name: not device `in` data, and read."""
+        return [it for it in self.program.items if it.kind != "dev_in" and it.id not in self.unread]
 
     def parse(self, data: bytes) -> list[Column]:
         columns: list[Column] | None = None
@@ -267,13 +271,18 @@ class _Reader:
                 item, index = self.items[m.group(1)], _whole(m.group(2))
                 index = 65536 if index is None else min(index, 65536)
         if item is None:
-            raise self.error(f"unknown column '{name}'", True)
+            near = suggestion(name.encode("utf-8", "surrogateescape"),
+                              [it.name.encode("utf-8") for it in self._columns()])
+            hint = f" (did you mean '{near.decode('utf-8')}'?)" if near is not None else ""
+            raise self.error(f"unknown column '{name}'{hint}", True)
         if item.kind == "dev_in":
             raise self.error(f"column '{name}': {item.name} is a device `in` datum; device `out` data, params "
                              "and vars can be given a stimulus", True)
         if index is not None and (item.count == 1 or index >= item.count):
             elements = " (no index)" if item.count == 1 else "s"
             raise self.error(f"column '{name}': {item.name} has {item.count} element{elements}", True)
+        if item.id in self.unread:
+            raise self.error(f"column '{name}': nothing reads it: {self.unread[item.id]}", True)
         return Column(name, item.name, item.type, index or 0, 1 if index is not None else item.count)
 
     def _value(self, cell: str, col: Column):

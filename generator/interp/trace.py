@@ -19,6 +19,7 @@ import math
 from dataclasses import dataclass
 from typing import Callable
 
+from ..board import handlers as H
 from ..core import types as T
 from ..ir.program import Program
 from . import values as V
@@ -32,10 +33,11 @@ class TraceError(Exception):
 
 @dataclass(frozen=True)
 class TraceColumn:
-    """One traced column: an element of an item, or a chart's activity."""
+    """One traced column: an element of an item or of a device's state
+    field, or a chart's activity."""
 
-    kind: str  # "item" | "chart"
-    name: str  # the item's or the chart's name
+    kind: str  # "item" | "state" | "chart"
+    name: str  # the item's, the state field's (DEVICE.FIELD) or the chart's name
     element: int | None = None  # for an item with count > 1
     type: T.ValueType | None = None
     steps: tuple[str, ...] = ()
@@ -53,12 +55,18 @@ class TraceColumn:
         return _vcd_name(self.name) + ("" if self.element is None else f"({self.element})")
 
 
-def columns_of(program: Program) -> list[TraceColumn]:
-    """The columns of a program's trace, in the host board's order."""
+def columns_of(program: Program, states: bool = False) -> list[TraceColumn]:
+    """The columns of a program's trace, in the host board's order; with
+    ``states`` (``--trace-state``) the `state` fields of the devices running
+    host handlers come between the items and the charts."""
     cols = []
     for item in program.items:
         for e in range(item.count):
             cols.append(TraceColumn("item", item.name, e if item.count > 1 else None, item.type))
+    if states:
+        for dev, name, t, count, _addr in H.state_items(program, "host"):
+            for e in range(count):
+                cols.append(TraceColumn("state", f"{dev.path}.{name}", e if count > 1 else None, t))
     for chart in program.charts:
         cols.append(TraceColumn("chart", chart.name, steps=tuple(s.name for s in chart.steps)))
     return cols
@@ -81,11 +89,13 @@ class Sampler:
         self.last: tuple | None = None
         self._getters: list[Callable[[], object]] = []
 
-    def bind(self, program: Program, published: list[list], charts: list) -> list[str]:
-        """Read the columns from ``published`` (item values by id) and
-        ``charts`` (objects with ``chart`` and ``active``) of ``program``.
+    def bind(self, program: Program, published: list[list], charts: list, devices=None) -> list[str]:
+        """Read the columns from ``published`` (item values by id),
+        ``charts`` (objects with ``chart`` and ``active``) and ``devices``
+        (interp.devices.ModelDevices, for state columns) of ``program``.
         Returns the names of columns that now hold their last value."""
         items = {i.name: i for i in program.items}
+        fields = devices.state_fields() if devices is not None else {}
         chart_by_name = {c.chart.name: c for c in charts}
         getters, frozen = [], []
         for index, col in enumerate(self.columns):
@@ -96,6 +106,11 @@ class Sampler:
                 if item is not None and item.type == col.type and (item.count > 1) == (col.element is not None) \
                         and element < item.count:
                     getter = _item_getter(published, item.id, element, canonical(col.type))
+            elif col.kind == "state":
+                field = fields.get(col.name)
+                element = col.element or 0
+                if field is not None and field[0] == col.type and element < len(field[1]):
+                    getter = _item_getter([field[1]], 0, element, canonical(col.type))
             elif col.name in chart_by_name:
                 getter = _chart_getter(chart_by_name[col.name], col.steps)
             if getter is None:

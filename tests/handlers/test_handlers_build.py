@@ -59,7 +59,7 @@ def test_the_generated_handlers_see_the_devices_names_and_keep_their_own_state(t
     text = (tmp_path / "out" / "el_handlers.c").read_text()
     assert text.count("static int16_t scaled(int16_t v, int16_t k)") == 1  # the file's own code once
     for dev, scale in ((0, 10), (1, 3)):
-        assert f"static el_mdev{dev}_state_t el_mdev{dev}_state; /* zero at boot */" in text
+        assert f"\nel_mdev{dev}_state_t el_mdev{dev}_state; /* zero at boot */" in text  # global: debug, trace
         assert f"#define scale ((int16_t){scale})" in text
         assert f"#define reads ((el_mdev{dev}_state).reads)" in text
         assert re.search(rf"void el_mdev{dev}_read\(void\)\n{{\n    {{\n#line 3 \"[^\"]*gauge_host\.c\"\n\n    reads\+\+;",

@@ -230,19 +230,21 @@ SPI_STATUS_C = dedent("""\
 def test_the_spi_bus_carries_an_eeprom_log_and_a_devices_own_handlers(tmp_path):
     """The log's records reach the SPI EEPROM model behind PB1; the model's
     own device reads 0xFF from a chip select nothing answers (the host
-    simulates it with the same value from the stimulus)."""
+    simulates it with the same value from the stimulus; the simulator,
+    with no hardware behind that device, refuses a column of it)."""
     path = write_model(tmp_path, SPI, {"spi_status.c": SPI_STATUS_C})
     avr = build(path, "avr", tmp_path / "avr", "--sim")
     host = build(path, "host", tmp_path / "host")
-    stim = tmp_path / "s.csv"
-    stim.write_text("time_us,room.temperature,nothing.status\n0,100,255\n25000,-200,\n")
-    # the simulator has nothing behind nothing.status (no chip model): its
-    # column is refused there, and the chip select reads 0xFF by itself
-    avr_stim = tmp_path / "avr-s.csv"
-    avr_stim.write_text("time_us,room.temperature\n0,100\n25000,-200\n")
+    stim, both = tmp_path / "s.csv", tmp_path / "both.csv"
+    stim.write_text("time_us,room.temperature\n0,100\n25000,-200\n")
+    both.write_text("time_us,room.temperature,nothing.status\n0,100,255\n25000,-200,\n")
     args = ["--fast", "--duration", "50ms"]
-    run(avr.simulator, *args, "--stimulus", avr_stim, "--trace", tmp_path / "avr.csv", "--chips", tmp_path)
-    run(host.executable, *args, "--stimulus", stim, "--trace", tmp_path / "host.csv")
+    refused = run(avr.simulator, *args, "--stimulus", both, ok=False)
+    assert refused.returncode == 2 and refused.stderr.startswith(
+        f"{both}:1: column 'nothing.status': nothing reads it: the simavr simulator has no hardware behind device "
+        "nothing (the model's handlers, driver spi_status)\n"), refused.stderr
+    run(avr.simulator, *args, "--stimulus", stim, "--trace", tmp_path / "avr.csv", "--chips", tmp_path)
+    run(host.executable, *args, "--stimulus", both, "--trace", tmp_path / "host.csv")
     assert (tmp_path / "avr.csv").read_bytes() == (tmp_path / "host.csv").read_bytes()
     _, rows = trace_rows(tmp_path / "host.csv")
     assert rows[-1]["s"] == "255"
