@@ -24,6 +24,7 @@ from pathlib import Path
 from typing import Callable
 
 from ..codegen.c_syntax import c_comment, c_literal, c_string
+X
 from ..core.impl_files import DEVICE_BLOCKS, split_impl
 from ..core import types as T
 from ..core.errors import BuildError
@@ -131,34 +132,6 @@ class Binding:
 def firmware_binding(program: Program, device: Device) -> Binding:
     """Firmware: the items of model.c and a static state per device."""
     return Binding(lambda item: item_symbol(program, item.id), f"el_mdev{device.id}_state")
-
-
-def state_type_lines(device: Device) -> list[str]:
-    """The C type of a device's state, ``el_mdev<id>_state_t``: its
-    ``state`` fields in declaration order (the debug tables and the host
-    board's tables declare it again, the same, to reach the firmware's
-    ``el_mdev<id>_state``)."""
-    fields = [f"{t.c_name} {name}{f'[{size}]' if size else ''};" for name, t, size in device.states]
-    return (["typedef struct {"] + [f"    {f}" for f in fields or ["uint8_t el_unused; /* C99 wants a member */"]]
-            + [f"}} el_mdev{device.id}_state_t;"])
-
-
-def state_devices(program: Program, board: str) -> list[Device]:
-    """The devices that keep a state on ``board``: those running a handler
-    file of the model's there whose type declares ``state`` fields."""
-    return [d for d in program.devices if d.states and handler_file(d, board) is not None]
-
-
-def state_items(program: Program, board: str) -> list[tuple[Device, str, T.ValueType, int, str]]:
-    """(device, field, type, count, C address expression) of every device
-    state field on ``board``, named ``DEVICE.FIELD`` (``dev.reads``)
-    in the debug map and the trace."""
-    out = []
-    for dev in state_devices(program, board):
-        for name, t, size in dev.states:
-            where = f"el_mdev{dev.id}_state.{name}"
-            out.append((dev, name, t, size or 1, where if size else f"&{where}"))
-    return out
 
 
 def device_block(program: Program, device: Device, code: HandlerCode, binding: Binding,

@@ -16,9 +16,10 @@ A device `out` datum's column is read when
   simulator harness (AVR in simavr, PIC18 in gpsim) only drives the
   hardware of its ``sim_hw`` table's rows of :data:`DRIVEN_KINDS`: an ADC
   channel, an input pin, a line camera's UART, an encoder's pins, a sensor
-  chip on an I2C bus. A device whose data reach no such hardware (one with
-  the model's own handlers and no chip the harness models behind it, a
-  driver the harness has no hardware for) reads nothing of the stimulus.
+  chip on an I2C bus, the chip model a device type brings (`sim "FILE.c"`).
+  A device whose data reach no such hardware (one with the model's own
+  handlers and no chip model, a driver the harness has no hardware for)
+  reads nothing of the stimulus.
 """
 
 from __future__ import annotations
@@ -27,9 +28,10 @@ from ..codegen.c_syntax import c_string
 from ..ir.program import Program
 from .handlers import handler_file
 
-# The sim_hw kinds (boards/host/sim_harness.h) whose hardware a harness
+# The sim_hw kinds (sim/sim_harness.h) whose hardware a harness
 # drives from a device `out` datum's stimulus value.
-DRIVEN_KINDS = frozenset({"SIM_HW_ADC", "SIM_HW_PIN_IN", "SIM_HW_CAMERA", "SIM_HW_ENCODER", "SIM_HW_I2C_TEMP"})
+DRIVEN_KINDS = frozenset({"SIM_HW_ADC", "SIM_HW_PIN_IN", "SIM_HW_CAMERA", "SIM_HW_ENCODER", "SIM_HW_I2C_TEMP",
+                          "SIM_HW_CHIP"})
 
 # Names longer than this are not compared for "did you mean" (the C reader
 # keeps its edit-distance rows in fixed arrays of this size plus one).

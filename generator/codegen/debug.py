@@ -34,7 +34,7 @@ from types import SimpleNamespace
 
 from ..core import types as T
 from ..core.paths import runtime_dir
-from ..board import handlers
+from . import device_state
 from ..ir.program import Program
 from .c_syntax import ident
 
@@ -149,13 +149,13 @@ def debug_items(program: Program, view) -> list[DebugItem]:
                                None, None, st.location))
         next_id += 1
     typed = set()
-    for dev, name, t, count, addr in handlers.state_items(program, view.board):
+    for dev, name, t, count, addr in device_state.state_items(program, view.board):
         decl = None
         if dev.id not in typed:  # the state's type and the firmware's (or the library's) variable, once
             typed.add(dev.id)
             var = f"el_mdev{dev.id}_state_t el_mdev{dev.id}_state;"
             # the library holds a copy the interpreter refreshes (generator/interp/interfaces.py)
-            decl = "\n".join(handlers.state_type_lines(dev) + [f"extern {var} /* {dev.path} */"]
+            decl = "\n".join(device_state.state_type_lines(dev) + [f"extern {var} /* {dev.path} */"]
                              + ([var] if view.library else []))
         items.append(DebugItem(next_id, f"{dev.path}.{name}", "dev_state", t, count, f"(void *){addr}", decl,
                                None, None, dev.location))
