@@ -692,27 +692,9 @@ static uint64_t wall_ns(void)
     return (uint64_t)ts.tv_sec * 1000000000u + (uint64_t)ts.tv_nsec;
 }
 
-/* A device datum reads its stimulus when the harness drives something
- * behind it (a pin, the ADC, an encoder, a chip model); params and vars
- * always do. */
-static bool harness_reads(uint16_t item)
-{
-    uint16_t k;
-    if (el_items[item].kind != EL_K_DEV_OUT)
-        return true;
-    for (k = 0; k < sim_hw_count; k++)
-        if (sim_hw[k].item == item && sim_hw[k].kind != SIM_HW_NONE)
-            return true;
-    return false;
-}
-
 bool sim_start(uint8_t *eeprom)
 {
     struct sigaction sa;
-    el_host_stimulus_reads = harness_reads;
-    el_host_stimulus_unread_why = "its device runs the model's own handlers and the simulator has nothing behind "
-                                  "it; name the model of its chip after the driver, sim \"FILE.c\" (docs/boards.md, "
-                                  "\"Chip models\"), or leave the column out";
     sim_hw_state = calloc(sim_hw_count ? sim_hw_count : 1u, sizeof *sim_hw_state);
     if (sim_hw_state == NULL)
         return false;
