@@ -67,7 +67,7 @@ def lower_file(path: str | Path, schedule: str | None = None, text: str | None =
 
 def model_files(path: Path, program: Program | None) -> list[Path]:
     """The files a model depends on: itself, its imports, the impl files of
-    its actors and the handler files of its devices."""
+    its actors, the handler files and chip models of its devices."""
     files = [path]
     loaded = load(path, SourceCache(), Diagnostics())
     if loaded is not None:
@@ -77,4 +77,5 @@ def model_files(path: Path, program: Program | None) -> list[Path]:
     if program is not None:
         files += [Path(s.impl) for s in program.specs if s.impl]
         files += [Path(f) for d in program.devices for f in d.handlers.values()]
+        files += [Path(d.chip) for d in program.devices if d.chip]
     return list(dict.fromkeys(files))

@@ -211,6 +211,15 @@ class DriverImpl(Node):
 
 
 @dataclass(frozen=True)
+class ChipModel(Node):
+    """``sim "file.c"`` after a driver: the chip model the simulator
+    harnesses run for each device of the type, from a C file beside the
+    declaring model file."""
+
+    file: str
+
+
+@dataclass(frozen=True)
 class DeviceType(Named):
     params: tuple[FormalParam, ...]
     claims: tuple[Resource, ...]
@@ -221,6 +230,7 @@ class DeviceType(Named):
     driver_span: Span | None
     impls: tuple[DriverImpl, ...] = ()
     states: tuple["StateVar", ...] = ()
+    chips: tuple[ChipModel, ...] = ()  # `sim "file.c"`: at most one (the checker says so)
 
 
 @dataclass(frozen=True)
