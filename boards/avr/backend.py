@@ -181,8 +181,10 @@ class AvrBoard(BoardBase):
     # ---------------------------------------------------------------- running, flashing
 
     def build_simulator(self, program: Program, checked: object, out_dir: Path, compiled: Compiled) -> Simulator:
-        exe = simulator.build_harness(self, out_dir, simulator.sim_model_source(program, self, compiled.executable),
-                                      out_dir / f"{program.name}-sim")
+        chips = simulator.chips_of(program, self)
+        exe = simulator.build_harness(self, out_dir,
+                                      simulator.sim_model_source(program, self, compiled.executable, chips),
+                                      out_dir / f"{program.name}-sim", chips)
         return Simulator(exe, simulator.simulation_warnings(program, self))
 
     def simulator_command(self, out_dir: Path, program: Program) -> list[str]:

@@ -13,7 +13,7 @@ from easylab.board.cbuild import require_tool, run, write_files
 from easylab.board.registry import load_board
 from easylab.board.simtables import c_string, no_model_tables, ram_tables, sim_table, trace_tables
 from easylab.core.errors import BuildError
-from easylab.core.paths import runtime_dir
+from easylab.core.paths import runtime_dir, sim_dir
 from easylab.ir.program import Program
 
 from . import buildcache, linkmap
@@ -123,12 +123,13 @@ def build_harness(board, out_dir: Path, model_source: str, exe: Path) -> Path:
     [model_c] = write_files(out_dir, {"sim_model.c": model_source})
     folder = board.description.folder
     host = load_board("host").description.folder
-    includes = [f"-I{folder / 'sim'}", f"-I{host}", f"-I{runtime_dir()}"]
+    includes = [f"-I{folder / 'sim'}", f"-I{sim_dir()}", f"-I{host}", f"-I{runtime_dir()}"]
     obj_dir = out_dir / "sim-obj"
     obj_dir.mkdir(parents=True, exist_ok=True)
     cflags = [*spec.get("cflags", []), *includes]
     cxxflags = [*spec.get("cxxflags", []), *includes, "-I/usr/include/gpsim", *pc.stdout.split()]
     objects = [_object(cc, cflags, host / s, obj_dir) for s in spec.get("host_sources", [])]
+    objects += [_object(cc, cflags, sim_dir() / s, obj_dir) for s in spec.get("shared_sources", [])]
     objects += [_object(cc, cflags, runtime_dir() / s, obj_dir) for s in spec.get("runtime_sources", [])]
     objects += [_object(cxx, cxxflags, folder / s, obj_dir) for s in spec.get("cxx_sources", [])]
     objects.append(_object(cc, cflags, model_c, obj_dir, cache=False))

@@ -4,7 +4,7 @@
  * Runs a firmware built with `easylab build --board pic18 --sim` in gpsim
  * (Debian's libgpsim) with the host board's command line where it makes
  * sense, so that one stimulus gives one trace on every board (what every
- * harness shares is boards/host/sim_harness.c):
+ * harness shares is sim/sim_harness.c):
  *
  *   NAME-sim [--fast] [--duration T] [--cycles N] [--stimulus S.csv]
  *            [--trace T.csv|T.vcd] [--pins P.csv|P.vcd] [--nvram FILE]

@@ -476,6 +476,33 @@ uint64_t sim_tick_extend(uint32_t tick)
     return sim_tick_extend_bits(tick, 32u);
 }
 
+bool (*sim_chip_value)(uint16_t chip, uint8_t k, const el_chip_value_t *value);
+
+/* The stimulus value of a device datum, to its chip model. */
+static bool chip_value(uint16_t k)
+{
+    const el_item_t *it = &el_items[sim_hw[k].item];
+    el_chip_value_t v;
+    memset(&v, 0, sizeof v);
+    switch (it->type) {
+    case EL_T_BOOL: { bool x; memcpy(&x, it->addr, sizeof x); v.i = x ? 1 : 0; break; }
+    case EL_T_I8: { int8_t x; memcpy(&x, it->addr, sizeof x); v.i = x; break; }
+    case EL_T_U8: { uint8_t x; memcpy(&x, it->addr, sizeof x); v.i = x; break; }
+    case EL_T_I16: { int16_t x; memcpy(&x, it->addr, sizeof x); v.i = x; break; }
+    case EL_T_U16: { uint16_t x; memcpy(&x, it->addr, sizeof x); v.i = x; break; }
+    case EL_T_I32: { int32_t x; memcpy(&x, it->addr, sizeof x); v.i = x; break; }
+    case EL_T_F32: { float x; memcpy(&x, it->addr, sizeof x); v.is_float = true; v.f = x; break; }
+    default: { uint32_t x; memcpy(&x, it->addr, sizeof x); v.i = x; break; } /* uint32, time */
+    }
+    if (!v.is_float)
+        v.f = (double)v.i;
+    if (sim_chip_value == NULL || sim_chip_value(sim_hw[k].a, (uint8_t)sim_hw[k].b, &v))
+        return true;
+    el_host_error("%s: the stimulus at %llu us gives the chip model a value it refuses", it->name,
+                  (unsigned long long)el_sim_now_us);
+    return false;
+}
+
 void sim_instant_inputs(uint64_t tick)
 {
     static unsigned char *before;
@@ -532,7 +559,7 @@ void sim_instant_inputs(uint64_t tick)
             continue;
         if (sim_hw[k].kind != SIM_HW_CAMERA)
             memcpy(sim_hw_state[k].value, it->addr, sim_item_addr[sim_hw[k].item].size);
-        if (!sim_drive_hardware(k)) {
+        if (!(sim_hw[k].kind == SIM_HW_CHIP ? chip_value(k) : sim_drive_hardware(k))) {
             sim_exit_status = SIM_EXIT_RUN;
             sim_stop = true;
             return;

@@ -1,0 +1,108 @@
+/* EasyLab AVR board, simulator harness: simavr's buses to the chips'
+ * dispatch (avr_chips.h; sim/sim_chips.c runs the chip models).
+ *
+ * simavr 1.6's TWI talks to the chips through IRQ messages: at each
+ * address byte the master raises a START message carrying the address and
+ * its R/W bit, then one WRITE message per byte written and one READ
+ * message per byte it wants, and STOP at the end. A chip acknowledges an
+ * address or a written byte by answering with an ACK message at once (no
+ * answer is a NACK) and gives a read byte by answering with a READ message.
+ * Its SPI raises each byte the master sends (100 us after SPDR is written,
+ * whatever the clock); the selected chip answers at once with the byte it
+ * shifts out meanwhile. A chip select is the pin's level as the port drives
+ * it; the harness numbers pins port letter << 8 | bit.
+ */
+#include "avr_chips.h"
+#include "sim_chips.h"
+#include "sim_model.h"
+
+#include "avr_ioport.h"
+#include "avr_spi.h"
+#include "avr_twi.h"
+#include "avr_uart.h"
+#include "sim_irq.h"
+#include "sim_time.h"
+
+static avr_t *mcu;
+static avr_irq_t *twi_in; /* the TWI's input: the chips' answers */
+/* The level of each SPI chip's chip select as last seen (1: not selected). */
+static uint8_t cs_level[64];
+
+static void answer(uint8_t msg, uint8_t addr, uint8_t data)
+{
+    avr_raise_irq(twi_in, avr_twi_irq_msg(msg, addr, data));
+}
+
+static void on_twi(struct avr_irq_t *irq, uint32_t value, void *param)
+{
+    avr_twi_msg_irq_t m;
+    (void)irq;
+    (void)param;
+    m.u.v = value;
+    if (m.u.twi.msg & TWI_COND_STOP)
+        sim_chips_i2c_stop(0u);
+    if (m.u.twi.msg & TWI_COND_START) {
+        if (sim_chips_i2c_start(0u, (uint8_t)(m.u.twi.addr >> 1), (m.u.twi.addr & 1u) != 0u))
+            answer(TWI_COND_ACK, m.u.twi.addr, 1u);
+        return;
+    }
+    if (m.u.twi.msg & TWI_COND_WRITE) {
+        if (sim_chips_i2c_write(0u, m.u.twi.data))
+            answer(TWI_COND_ACK, m.u.twi.addr, 1u);
+    } else if (m.u.twi.msg & TWI_COND_READ) {
+        answer(TWI_COND_READ, m.u.twi.addr, sim_chips_i2c_read(0u));
+    }
+}
+
+static void on_spi(struct avr_irq_t *irq, uint32_t value, void *param)
+{
+    (void)irq;
+    (void)param;
+    avr_raise_irq(avr_io_getirq(mcu, AVR_IOCTL_SPI_GETIRQ(0), SPI_IRQ_INPUT), sim_chips_spi_byte(0u, (uint8_t)value));
+}
+
+static void on_chip_select(struct avr_irq_t *irq, uint32_t value, void *param)
+{
+    uint16_t k = (uint16_t)(uintptr_t)param;
+    uint8_t level = (uint8_t)(value & 1u);
+    (void)irq;
+    if (level == cs_level[k]) /* the port wrote the pin's level again */
+        return;
+    cs_level[k] = level;
+    sim_chips_spi_select(sim_chip_table[k].bus, sim_chip_table[k].cs, level == 0u);
+}
+
+void avr_chips_attach(avr_t *avr)
+{
+    uint16_t k;
+    mcu = avr;
+    twi_in = avr_io_getirq(avr, AVR_IOCTL_TWI_GETIRQ(0), TWI_IRQ_INPUT);
+    if (twi_in != NULL)
+        avr_irq_register_notify(avr_io_getirq(avr, AVR_IOCTL_TWI_GETIRQ(0), TWI_IRQ_OUTPUT), on_twi, NULL);
+    avr_irq_register_notify(avr_io_getirq(avr, AVR_IOCTL_SPI_GETIRQ(0), SPI_IRQ_OUTPUT), on_spi, NULL);
+    for (k = 0; k < sim_chip_table_count && k < sizeof cs_level; k++) {
+        const sim_chip_entry_t *e = &sim_chip_table[k];
+        if (e->kind != SIM_CHIP_SPI)
+            continue;
+        cs_level[k] = 1u;
+        avr_irq_register_notify(avr_io_getirq(avr, AVR_IOCTL_IOPORT_GETIRQ((char)(e->cs >> 8)), e->cs & 0xFFu),
+                                on_chip_select, (void *)(uintptr_t)k);
+    }
+}
+
+/* ---- what the chips' dispatch needs of the harness ---- */
+
+uint64_t sim_board_now_us(void)
+{
+    return avr_cycles_to_usec(mcu, mcu->cycle);
+}
+
+void sim_board_uart_receive(uint8_t uart, uint8_t byte)
+{
+    avr_raise_irq(avr_io_getirq(mcu, AVR_IOCTL_UART_GETIRQ((uint32_t)('0' + uart)), UART_IRQ_INPUT), byte);
+}
+
+void sim_board_pin_drive(uint16_t pin, bool level)
+{
+    avr_raise_irq(avr_io_getirq(mcu, AVR_IOCTL_IOPORT_GETIRQ((char)(pin >> 8)), pin & 0xFFu), level ? 1u : 0u);
+}

@@ -1,0 +1,15 @@
+/* EasyLab AVR board, simulator harness: simavr's TWI and SPI to the chips'
+ * dispatch (sim/sim_chips.h, shared by the harnesses), so that the
+ * firmware's own drivers (the board's and those a model brings) run
+ * against the chip models of the build (docs/boards.md, "Chip models"). */
+#ifndef AVR_CHIPS_H
+#define AVR_CHIPS_H
+
+#include "sim_avr.h"
+
+/* Attach the chips of sim_chip_table to the MCU's TWI, SPI and the chip
+ * select pins (whether or not the build has chips: an address nobody
+ * acknowledges is a NACK, a chip select nobody answers reads 0xFF). */
+void avr_chips_attach(avr_t *avr);
+
+#endif /* AVR_CHIPS_H */
