@@ -50,6 +50,21 @@ def test_an_spi_adc_and_an_i2c_sensor_of_the_models_own_run_alike_in_simavr_on_t
     assert by_time[70000]["level"] == "2049"
 
 
+def test_the_docs_show_the_example_the_tests_build_and_run():
+    """docs/boards.md's SPI device (model, handlers, chip model) is
+    examples/own_chips/ as the test above builds and runs it, word for
+    word; docs/language.md's device type is the model's."""
+    doc = (ROOT / "docs" / "boards.md").read_text()
+    shown = dict(re.findall(r"`(examples/own_chips/[^`]+)`:\n\n```\w*\n(.*?)```\n", doc, re.S))
+    assert sorted(shown) == ["examples/own_chips/drivers/mcp3201_avr.c", "examples/own_chips/drivers/mcp3201_chip.c",
+                             "examples/own_chips/drivers/mcp3201_host.c", "examples/own_chips/own_chips.elab"]
+    for rel, text in shown.items():
+        assert text == (ROOT / rel).read_text(), rel
+    language = (ROOT / "docs" / "language.md").read_text()
+    [device_type] = re.findall(r"```\n(device type Mcp3201.*?)```\n", language, re.S)
+    assert device_type in (OWN / "own_chips.elab").read_text()
+
+
 def test_a_chip_model_refuses_a_value_it_cannot_have(own, tmp_path):
     _model, avr, _host = own
     stim = tmp_path / "s.csv"
