@@ -68,9 +68,10 @@ typedef struct {
     size_t state_size;
     /* After the state is zeroed, before the MCU's first instruction. */
     void (*reset)(el_chip_t *chip);
-    /* The stimulus set the value of the device's `out` datum `k` (a stimulus
-     * column); false (after el_chip_error) for a value the chip cannot have:
-     * the run ends with that message. */
+    /* The stimulus value of the device's scalar `out` datum `k` (a stimulus
+     * column; value_names[k]), at each instant the stimulus is applied;
+     * false (after el_chip_error) for a value the chip cannot have: the run
+     * ends with that message. */
     bool (*value)(el_chip_t *chip, uint8_t k, const el_chip_value_t *value);
 
     /* I2C, at the chip's address only. `start`: its address with R/W (a

@@ -5,6 +5,10 @@ the simulated MCU's RAM. A harness reads the values straight from the
 MCU's memory at each instant and writes them with the host board's own
 trace code, so its trace files equal the host board's byte for byte.
 
+The chips a harness runs (sim/sim_chips.h: a model's own chip models and
+the std ones, :func:`sim_chips`) are generic too: ``sim_chip_table``, and
+``SIM_HW_CHIP`` rows that route a device datum's stimulus to its chip.
+
 The address tables use the types of a harness's ``sim_model.h``::
 
     typedef struct { uint16_t addr; uint16_t size; } sim_addr_t;

@@ -23,10 +23,13 @@
 #include "sim_irq.h"
 #include "sim_time.h"
 
+#include <stdlib.h>
+
 static avr_t *mcu;
 static avr_irq_t *twi_in; /* the TWI's input: the chips' answers */
-/* The level of each SPI chip's chip select as last seen (1: not selected). */
-static uint8_t cs_level[64];
+/* The level of each SPI chip's chip select as last seen (1: not selected),
+ * by index into sim_chip_table. */
+static uint8_t *cs_level;
 
 static void answer(uint8_t msg, uint8_t addr, uint8_t data)
 {
@@ -72,15 +75,20 @@ static void on_chip_select(struct avr_irq_t *irq, uint32_t value, void *param)
     sim_chips_spi_select(sim_chip_table[k].bus, sim_chip_table[k].cs, level == 0u);
 }
 
-void avr_chips_attach(avr_t *avr)
+bool avr_chips_attach(avr_t *avr)
 {
     uint16_t k;
     mcu = avr;
+    cs_level = calloc(sim_chip_table_count ? sim_chip_table_count : 1u, 1u);
+    if (cs_level == NULL) {
+        el_host_error("out of memory for the chips' selects");
+        return false;
+    }
     twi_in = avr_io_getirq(avr, AVR_IOCTL_TWI_GETIRQ(0), TWI_IRQ_INPUT);
     if (twi_in != NULL)
         avr_irq_register_notify(avr_io_getirq(avr, AVR_IOCTL_TWI_GETIRQ(0), TWI_IRQ_OUTPUT), on_twi, NULL);
     avr_irq_register_notify(avr_io_getirq(avr, AVR_IOCTL_SPI_GETIRQ(0), SPI_IRQ_OUTPUT), on_spi, NULL);
-    for (k = 0; k < sim_chip_table_count && k < sizeof cs_level; k++) {
+    for (k = 0; k < sim_chip_table_count; k++) {
         const sim_chip_entry_t *e = &sim_chip_table[k];
         if (e->kind != SIM_CHIP_SPI)
             continue;
@@ -88,6 +96,7 @@ void avr_chips_attach(avr_t *avr)
         avr_irq_register_notify(avr_io_getirq(avr, AVR_IOCTL_IOPORT_GETIRQ((char)(e->cs >> 8)), e->cs & 0xFFu),
                                 on_chip_select, (void *)(uintptr_t)k);
     }
+    return true;
 }
 
 /* ---- what the chips' dispatch needs of the harness ---- */

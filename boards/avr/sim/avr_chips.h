@@ -7,9 +7,11 @@
 
 #include "sim_avr.h"
 
+#include <stdbool.h>
+
 /* Attach the chips of sim_chip_table to the MCU's TWI, SPI and the chip
  * select pins (whether or not the build has chips: an address nobody
  * acknowledges is a NACK, a chip select nobody answers reads 0xFF). */
-void avr_chips_attach(avr_t *avr);
+bool avr_chips_attach(avr_t *avr); /* false after a message */
 
 #endif /* AVR_CHIPS_H */

@@ -499,8 +499,7 @@ int main(int argc, char **argv)
     uart_log_open();
     /* Inputs first (the chips' memories, then sim_start's): a failed start
      * creates no trace file. */
-    avr_chips_attach(avr);
-    if (!sim_chips_start(sim_opt.chips) || !sim_start(eeprom))
+    if (!avr_chips_attach(avr) || !sim_chips_start(sim_opt.chips) || !sim_start(eeprom))
         return SIM_EXIT_USAGE;
     watch_pins();
     avr_register_io_write(avr, GPIOR0_ADDR, gpior0_write, NULL);
