@@ -79,12 +79,14 @@ $(VENV)/.installed: pyproject.toml setup.py
 # Test processes (pytest-xdist): one per core by default; TEST_JOBS=0 runs
 # the suite in this process. A test module stays in one process (module
 # fixtures build once); firmware several modules need is built once per run.
+# Files start longest first (tests/durations.json; refresh it with
+# `python tests/durations.py LOG` from a run's --durations report).
 TEST_JOBS ?= auto
 
 # Tests marked `realtime` (a host answering a simulated board's deadlines
 # against the wall clock) run alone afterwards: parallel tests would starve them.
 test: setup
-	$(PY) -m pytest -q -n $(TEST_JOBS) --dist loadfile -m "not realtime"
+	$(PY) -m pytest -q -n $(TEST_JOBS) --dist loadfile --no-loadscope-reorder --durations=60 -m "not realtime"
 	$(PY) -m pytest -q -n 0 -m realtime
 
 demo: setup

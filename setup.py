@@ -17,9 +17,9 @@ ROOTS = {
     "easylab": "generator",
     "easylab.templates": "templates",
     "easylab.runtime_c": "runtime_c",
-    "easylab.sim": "sim",
     "easylab.boards": "boards",
     "easylab.host_tools": "host_tools",
+    "easylab.sim": "sim",
 }
 SKIPPED = {"__pycache__"}
 

@@ -17,8 +17,10 @@ writes ``<out_dir>/remote.json``.
 from __future__ import annotations
 
 import json
+import os
 import re
 import signal
+import socket
 import subprocess
 import sys
 import tempfile
@@ -40,6 +42,12 @@ BAUDS = (115200, 1_000_000)
 # PB7, is a crystal pin there).
 AVR_RUN = ("pt100_sensor", "atmega2560", "1s")
 AVR_SIZE = ("blink", "atmega328p")
+# Remote execution at 1 kHz: blink (a 1 ms task) through the AVR proxy at
+# 1 Mbaud in real time, 10,000 instants a run, on an idle machine and with
+# part of the test suite running beside it.
+ONE_KHZ = ("blink", "atmega328p", 1_000_000, "10s", 3)
+SUITE_BESIDE = [sys.executable, "-m", "pytest", "-q", "-n", "2", "-p", "no:cacheprovider", "tests/frontend",
+                "tests/sdf"]
 
 
 def _device_stimulus(stimulus: Path, program, out: Path) -> Path | None:
@@ -180,6 +188,83 @@ def _avr_proxy(work: Path, figures: dict, tiny: bool) -> dict:
     return result
 
 
+_COUNTED = re.compile(r"the proxy counted (\d+) overruns")
+_SAFE = re.compile(r"at ([\d.]+) s the proxy applied its safe values")
+
+
+def _one_khz_run(built, program_path: Path, work: Path, duration: str, realtime: bool) -> dict:
+    """One real-time run of ``easylab remote`` against the AVR proxy in
+    simavr: the instants it ran, the proxy's overruns (values that came
+    after their deadline), and whether it ended in the safe state (K late
+    in a row). ``realtime``: `--realtime` over a TCP link (the harness on
+    127.0.0.1), else a pty."""
+    work.mkdir(parents=True, exist_ok=True)
+    if realtime:
+        with socket.socket() as s:
+            s.bind(("127.0.0.1", 0))
+            port = s.getsockname()[1]
+        uart, target = f"tcp:{port}", f"socket://127.0.0.1:{port}"
+    else:
+        uart = target = str(work / "link")
+    sim = subprocess.Popen([str(built.simulator), "--uart0", uart if realtime else f"pty:{uart}"],
+                           stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True, stdin=subprocess.DEVNULL)
+    try:
+        while not realtime and not Path(uart).exists():
+            time.sleep(0.01)
+        if realtime:
+            time.sleep(0.5)  # the harness listens
+        host = subprocess.run([sys.executable, "-m", "easylab", "remote", str(program_path), "--target", target,
+                               "--baud", str(ONE_KHZ[2]), "--duration", duration, "--stimulus",
+                               str(program_path.with_suffix(".stimulus.csv")), *(["--realtime"] if realtime else [])],
+                              stdin=subprocess.DEVNULL, capture_output=True, text=True, timeout=300)
+    finally:
+        sim.send_signal(signal.SIGTERM)
+        sim.communicate(timeout=30)
+    safe = _SAFE.search(host.stderr)
+    counted = _COUNTED.search(host.stderr)
+    if host.returncode != 0 and safe is None:
+        raise RuntimeError(f"easylab remote failed:\n{host.stderr}")
+    instants = round(float(safe.group(1)) * 1000) if safe else _us(duration) // 1000
+    # A run that ended in the safe state had K late values in a row at least.
+    late = int(counted.group(1)) if counted else (device_model(lower_file(program_path)[0]).overrun_limit if safe
+                                                  else 0)
+    return {"instants": instants, "overruns": late, "safe_state": safe is not None}
+
+
+# (setting, the suite beside, --realtime over TCP)
+ONE_KHZ_SETTINGS = (("idle", False, False), ("suite_beside", True, False), ("suite_beside_realtime_tcp", True, True))
+
+
+def _one_khz(work: Path, tiny: bool) -> dict:
+    """Overruns per 10,000 instants of blink at 1 kHz through the AVR proxy
+    at 1 Mbaud in real time: idle over a pty; with part of the suite beside
+    it over a pty, and with `--realtime` over a TCP link."""
+    name, mcu, baud, duration, runs = ONE_KHZ
+    model = ROOT / "examples" / f"{name}.elab"
+    program, _ = lower_file(model)
+    built = build_proxy(program, "avr", work / "one-khz", mcu=mcu, sim=True, baud=baud)
+    duration, runs = ("300ms", 1) if tiny else (duration, runs)
+    result = {"example": name, "mcu": mcu, "baud": baud}
+    for setting, beside, realtime in ONE_KHZ_SETTINGS:
+        load = None
+        if beside:
+            load = subprocess.Popen(["sh", "-c", 'while :; do "$@" >/dev/null 2>&1; done', "sh", *SUITE_BESIDE],
+                                    cwd=ROOT, stdin=subprocess.DEVNULL, start_new_session=True)
+            time.sleep(1.0)
+        try:
+            each = [_one_khz_run(built, model, work / f"one-khz-{setting}-{k}", duration, realtime)
+                    for k in range(runs)]
+        finally:
+            if load is not None:
+                os.killpg(load.pid, signal.SIGTERM)
+                load.wait(timeout=30)
+        instants = sum(r["instants"] for r in each)
+        result[setting] = {"runs": each, "overruns_per_10000": round(sum(r["overruns"] for r in each) * 10000
+                                                                      / max(instants, 1), 1),
+                           "ended_safe": sum(r["safe_state"] for r in each)}
+    return result
+
+
 def main(out_dir: Path, tiny: bool = False) -> None:
     out_dir.mkdir(parents=True, exist_ok=True)
     examples = {"pt100_sensor": "200ms"} if tiny else EXAMPLES
@@ -217,6 +302,16 @@ def main(out_dir: Path, tiny: bool = False) -> None:
     print(f"AVR proxy of {size['example']} on the {size['mcu']}: flash {size['flash']} of {size['flash_max']} bytes, "
           f"RAM {size['ram']} of {size['ram_max']} bytes")
     figures["avr_proxy"] = avr
+    with tempfile.TemporaryDirectory() as tmp:
+        khz = _one_khz(Path(tmp), tiny)
+    print(f"\n{khz['example']} at 1 kHz through the AVR proxy ({khz['mcu']}) at {khz['baud']} baud, real time:")
+    for setting, _, _ in ONE_KHZ_SETTINGS:
+        k = khz[setting]
+        print(f"  {setting:25} overruns per 10,000 instants {k['overruns_per_10000']:>7}, runs ended in the safe "
+              f"state {k['ended_safe']} of {len(k['runs'])}: " + ", ".join(f"{r['instants']} instants "
+                                                                         f"{r['overruns']} overruns"
+                                                                         for r in k["runs"]))
+    figures["one_khz"] = khz
     (out_dir / "remote.json").write_text(json.dumps(figures, indent=2) + "\n")
 
 

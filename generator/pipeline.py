@@ -67,7 +67,7 @@ def lower_file(path: str | Path, schedule: str | None = None, text: str | None =
 
 def model_files(path: Path, program: Program | None) -> list[Path]:
     """The files a model depends on: itself, its imports, the impl files of
-    its actors, the handler files and chip models of its devices."""
+    its actors and the handler files of its devices."""
     files = [path]
     loaded = load(path, SourceCache(), Diagnostics())
     if loaded is not None:

@@ -8,6 +8,7 @@ port, an unplugged adapter, a closed socket), never a pyserial traceback.
 
 from __future__ import annotations
 
+import socket
 import time
 
 import serial
@@ -35,9 +36,22 @@ def open_port(url: str, baudrate: int = 115200, timeout: float = 0.05):
         port = serial.serial_for_url(url, baudrate=baudrate, timeout=timeout, write_timeout=2.0,
                                      do_not_open=True)
         port.open()
+        _no_delay(port)
         return port
     except (*_PORT_ERRORS, ValueError) as err:
         raise TransportError(f"cannot open {url}: {_reason(err)}") from None
+
+
+def _no_delay(port) -> None:
+    """A TCP link sends each frame at once: Nagle's algorithm would hold a
+    small frame until the peer acknowledges the last (up to its delayed
+    acknowledgement, tens of milliseconds: a 1 ms deadline missed)."""
+    sock = getattr(port, "_socket", None)  # pyserial's socket:// port
+    if sock is not None:
+        try:
+            sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
+        except OSError:
+            pass  # not a TCP socket
 
 
 def _reason(err: Exception) -> str:
@@ -68,9 +82,11 @@ class FrameTransport:
         return cls(open_port(url, baudrate), url)
 
     def send(self, data: bytes) -> None:
+        """Hand ``data`` to the operating system whole (not waiting for it
+        to leave: tcdrain on a pty may wait a kernel tick, 4 ms, which is a
+        1 ms deadline missed)."""
         try:
             self.port.write(data)
-            self.port.flush()
             self.bytes_out += len(data)
         except _PORT_ERRORS as err:
             raise TransportError(f"lost the connection to {self.url}: {_reason(err)}") from None

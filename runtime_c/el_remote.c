@@ -17,7 +17,6 @@
 #error "el_remote_config.h (easylab proxy) sizes the frames and tables: EL_RMT_RX_FRAME, EL_RMT_TX_FRAME, EL_RMT_TASKS"
 #endif
 
-#define MASK_BITS 32u /* the proxy tasks a DOWN's mask can name */
 #define TX_CAP (EL_COBS_MAX_ENCODED(EL_RMT_TX_FRAME) + 1u)
 /* The largest payload the proxy sends. */
 #define TX_PAYLOAD (EL_RMT_TX_FRAME - EL_RMT_HEADER - EL_RMT_TRAILER)
@@ -143,9 +142,10 @@ static void on_down(uint32_t instant, const uint8_t *p, uint16_t n)
         }
         staged_at = (uint16_t)(staged_at + size);
     }
-    for (i = 0u; i < MASK_BITS; i++) { /* tasks whose activation is over (or none): too late */
-        if ((mask & ((uint32_t)1u << i)) != 0u &&
-            (i >= EL_RMT_TASKS || !(pending[i] && release_tick[i] == instant))) {
+    /* Tasks whose activation is over (or none): too late. The mask moves
+     * one bit a turn: a shift by i is a loop of i steps on an 8-bit CPU. */
+    for (i = 0u; mask != 0u; i++, mask >>= 1) {
+        if ((mask & 1u) != 0u && (i >= EL_RMT_TASKS || !(pending[i] && release_tick[i] == instant))) {
             count(EL_RMT_COUNTER_STALE);
         }
     }

@@ -58,7 +58,7 @@ typedef struct el_chip {
     uint8_t address;          /* I2C: the 7-bit address the device claims */
     uint16_t cs;              /* SPI: the chip select's pin (the board's numbering) */
     const char *cs_name;      /* SPI: its name ("PB2") */
-    uint8_t value_count;      /* the device's scalar `out` data, in declaration order */
+    uint8_t value_count;      /* the device's `out` data, in declaration order */
     const char *const *value_names; /* their names ("value") */
     void *harness;            /* the harness's own */
 } el_chip_t;
@@ -68,10 +68,9 @@ typedef struct {
     size_t state_size;
     /* After the state is zeroed, before the MCU's first instruction. */
     void (*reset)(el_chip_t *chip);
-    /* The stimulus value of the device's scalar `out` datum `k` (a stimulus
-     * column; value_names[k]), at each instant the stimulus is applied;
-     * false (after el_chip_error) for a value the chip cannot have: the run
-     * ends with that message. */
+    /* The stimulus set the value of the device's `out` datum `k` (a stimulus
+     * column); false (after el_chip_error) for a value the chip cannot have:
+     * the run ends with that message. */
     bool (*value)(el_chip_t *chip, uint8_t k, const el_chip_value_t *value);
 
     /* I2C, at the chip's address only. `start`: its address with R/W (a
@@ -111,10 +110,6 @@ void el_chip_uart_send(el_chip_t *chip, uint8_t byte);
 /* Drive a pin the device claims (an input of the MCU) to `level`. */
 void el_chip_pin_drive(el_chip_t *chip, uint16_t pin, bool level);
 
-/* The device's integer (or bool) parameter `name` as the model gives it
- * (`bytes` of an EEPROM log); `otherwise` when it has none of that name. */
-int64_t el_chip_param(const el_chip_t *chip, const char *name, int64_t otherwise);
-
 /* `size` bytes of memory that outlive the run: with --chips DIR they are
  * loaded from and saved to DIR/<device>.bin, otherwise 0xFF (erased) each
  * run. The same pointer on every call (one memory per chip); NULL (after a
@@ -122,7 +117,7 @@ int64_t el_chip_param(const el_chip_t *chip, const char *name, int64_t otherwise
 uint8_t *el_chip_memory(el_chip_t *chip, size_t size);
 
 /* Report a problem of the chip (printf-style), prefixed with the device's
- * path: "device 'adc': ...". */
+ * path. */
 void el_chip_error(const el_chip_t *chip, const char *format, ...)
 #if defined(__GNUC__)
     __attribute__((format(printf, 2, 3)))

@@ -17,7 +17,6 @@
 #ifndef SIM_HARNESS_H
 #define SIM_HARNESS_H
 
-#include "el_chip.h"
 #include "host_internal.h"
 
 #include <signal.h>
@@ -43,7 +42,8 @@ enum {
     SIM_HW_CAMERA,  /* a: UART; c: baud; line camera frames */
     SIM_HW_ENCODER, /* a, b: pins A and B; quadrature edges */
     SIM_HW_PWM,     /* the firmware drives a PWM output */
-    SIM_HW_CHIP     /* a: the chip (sim_chip_table), b: its value k; handled here, not by the board */
+    SIM_HW_I2C_TEMP, /* a: bus, b: address; the temperature of a sensor chip there, 1/16 degC (harnesses with chip models) */
+    SIM_HW_CHIP     /* a: the chip (sim_chip_table), b: its value k; the value reaches the device's chip model (sim/el_chip.h) */
 };
 
 typedef struct {
@@ -199,11 +199,6 @@ bool sim_start(uint8_t *eeprom);
 bool sim_service(uint64_t cycle);
 /* Close everything, save the EEPROM image, --report; the exit status. */
 int sim_finish(uint64_t cycles, uint64_t asleep, const uint8_t *eeprom);
-
-/* Where the stimulus of a SIM_HW_CHIP row goes: sim_chips_value of the
- * chips' dispatch (sim_chips.c), which sets it at sim_chips_start; a
- * harness without chip models has no such rows. False after a message. */
-extern bool (*sim_chip_value)(uint16_t chip, uint8_t k, const el_chip_value_t *value);
 
 /* ---- what the board's harness provides ---- */
 

@@ -9,6 +9,7 @@ import re
 import shutil
 import socket
 import subprocess
+import time
 
 import pytest
 
@@ -55,3 +56,31 @@ def non_reading_client(port: int) -> socket.socket:
     s.connect(("127.0.0.1", port))
     s.setblocking(False)
     return s
+
+
+def flood_without_reading(proc: subprocess.Popen, port: int, seconds: float, next_burst, served_by_reader
+                          ) -> tuple[int, bool]:
+    """Send ``next_burst()`` to the program's TCP port for ``seconds`` (or
+    until it exits) from a client that never reads, reconnecting whenever
+    the program drops it; after the first drop, ask ``served_by_reader()``
+    (a client that reads) whether the program still serves others. Returns
+    (drops, served)."""
+    drops = 0
+    served = False
+    client = non_reading_client(port)
+    try:
+        end = time.monotonic() + seconds
+        while time.monotonic() < end and proc.poll() is None:
+            try:
+                client.send(next_burst())
+            except BlockingIOError:
+                time.sleep(0.001)  # both socket buffers full: the program has stopped taking requests
+            except (ConnectionResetError, BrokenPipeError):
+                drops += 1
+                client.close()
+                if not served:  # a client that reads is served meanwhile
+                    served = served_by_reader()
+                client = non_reading_client(port)
+    finally:
+        client.close()
+    return drops, served

@@ -28,7 +28,7 @@ from easylab.board.cbuild import (compile_objects, dispatcher_width_flags, elf_s
                                   require_tool, run,
                                   runtime_sources, write_files)
 from easylab.board.contract import Compiled, CompileOptions, SizeReport, Simulator
-from easylab.board.simtables import kept_symbols
+from easylab.board.simtables import chip_files, kept_symbols
 from easylab.core.errors import BuildError
 from easylab.ir.program import Program
 
@@ -181,10 +181,8 @@ class AvrBoard(BoardBase):
     # ---------------------------------------------------------------- running, flashing
 
     def build_simulator(self, program: Program, checked: object, out_dir: Path, compiled: Compiled) -> Simulator:
-        chips = simulator.chips_of(program, self)
-        exe = simulator.build_harness(self, out_dir,
-                                      simulator.sim_model_source(program, self, compiled.executable, chips),
-                                      out_dir / f"{program.name}-sim", chips)
+        exe = simulator.build_harness(self, out_dir, simulator.sim_model_source(program, self, compiled.executable),
+                                      out_dir / f"{program.name}-sim", chip_files(program))
         return Simulator(exe, simulator.simulation_warnings(program, self))
 
     def simulator_command(self, out_dir: Path, program: Program) -> list[str]:

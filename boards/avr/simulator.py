@@ -9,12 +9,14 @@ import subprocess
 from easylab.codegen.c_syntax import c_comment
 from pathlib import Path
 
+from easylab.board import handlers
 from easylab.board.cbuild import require_tool, run, write_files
 from easylab.board.registry import load_board
-from easylab.board.simtables import (SimChip, c_string, chip_sources, chip_tables, chip_value_rows, no_model_tables,
-                                     ram_tables, sim_chips, sim_table, trace_tables)
+from easylab.board.resources import parse_claim, parse_select
+from easylab.board.simtables import (c_string, chip_files, chip_hardware_row, chip_table, no_model_tables,
+                                     ram_tables, sim_table, trace_tables)
 from easylab.core.errors import BuildError
-from easylab.core.paths import runtime_dir, sim_dir
+from easylab.core.paths import data_dir, runtime_dir
 from easylab.ir.program import Program
 
 from .devices import device_views
@@ -47,30 +49,74 @@ def ram_symbols(nm: str, elf: Path) -> dict[str, tuple[int, int]]:
     return syms
 
 
-def avr_pin_number(pin: str) -> int:
-    """A pin as the harness numbers it: port letter << 8 | bit ("PB2")."""
-    return ord(pin[1]) << 8 | int(pin[2])
+# The chips the harness models on an I2C bus, by the addresses their kind
+# takes (sim/avr_chips.h): LM75 / TMP102-class sensors and 24LC256-class EEPROMs.
+TEMPERATURE_ADDRESSES = range(0x48, 0x50)
+EEPROM_ADDRESSES = range(0x50, 0x58)
+_SENSOR_TYPES = ("int8", "uint8", "int16", "uint16", "int32", "uint32")
 
 
-def chips_of(program: Program, board) -> list[SimChip]:
-    """The chips the harness runs for the build (easylab.board.simtables)."""
-    return sim_chips(program, board.name, avr_pin_number)
+def _i2c_places(program: Program) -> list[tuple[object, int, int]]:
+    """(device, bus, address) of every claim of a place on an I2C bus."""
+    places = []
+    for dev in program.devices:
+        for text in dev.claims:
+            claim, select = parse_claim(text), parse_select(text)
+            if claim and claim[0] == "i2c" and select and select[0] == "addr":
+                places.append((dev, claim[1], select[1]))
+    return places
 
 
-def _hardware_rows(program: Program, views: dict, chips: list[SimChip]) -> list[str]:
+def _memory(dev) -> tuple[int, int]:
+    """An EEPROM's size and page: its log device's, or a 24LC256's."""
+    return int(dev.params.get("bytes", (None, 32768))[1]), int(dev.params.get("page", (None, 64))[1])
+
+
+def _chip_rows(program: Program, board) -> list[str]:
+    """sim_chips: a chip model at every claimed I2C address of a kind the
+    harness models, and behind the chip select of every std SPI EEPROM log
+    the board drives; an EEPROM log's size and page come from its device."""
+    rows = []
+    for dev, bus, addr in _i2c_places(program):
+        if addr in TEMPERATURE_ADDRESSES:
+            rows.append(f"    {{ {bus}u, 0x{addr:02x}u, SIM_CHIP_TEMPERATURE, 0UL, 0u, 0 }}, /* {dev.path} */")
+        elif addr in EEPROM_ADDRESSES:
+            size, page = _memory(dev)
+            rows.append(f"    {{ {bus}u, 0x{addr:02x}u, SIM_CHIP_EEPROM, {size}UL, {page}u, 0 }}, /* {dev.path} */")
+    for dev in program.devices:
+        if dev.driver != "spi_eeprom_log" or handlers.handler_file(dev, board.name) is not None:
+            continue
+        bus, (_how, pin) = parse_claim(dev.claims[0])[1], parse_select(dev.claims[0])
+        size, page = _memory(dev)
+        rows.append(f"    {{ {bus}u, {pin[2]}u, SIM_CHIP_SPI_EEPROM, {size}UL, {page}u, '{pin[1]}' }}, "
+                    f"/* {dev.path}: cs {pin} */")
+    return rows
+
+
+def _sensor_item(program: Program, device) -> int | None:
+    """The datum whose stimulus is the temperature of a sensor chip the
+    device claims: its first `out` datum of an integer type."""
+    if not any(addr in TEMPERATURE_ADDRESSES for dev, _b, addr in _i2c_places(program) if dev is device):
+        return None
+    return next((i for i in device.items if program.items[i].kind == "dev_out"
+                 and program.items[i].type.name in _SENSOR_TYPES and program.items[i].count == 1), None)
+
+
+def _hardware_rows(program: Program, views: dict) -> list[str]:
     """sim_hw: how each device datum reaches the hardware the harness drives."""
     rows = []
-    to_chips = chip_value_rows(chips)
     for it in program.items:
         if it.device is None:
             continue
-        if it.id in to_chips:  # a value of a chip model on a bus, whatever drives the device
-            chip, k = to_chips[it.id]
-            rows.append(f"    {{ {it.id}u, SIM_HW_CHIP, {chip}u, {k}u, 0UL }}, /* {it.name}: "
-                        f"{c_comment(chips[chip].file.name)} */")
+        dev = program.devices[it.device]
+        if _sensor_item(program, dev) == it.id:  # a sensor on the I2C bus, whatever drives it
+            bus, addr = next((b, a) for d, b, a in _i2c_places(program)
+                             if d is dev and a in TEMPERATURE_ADDRESSES)
+            rows.append(f"    {{ {it.id}u, SIM_HW_I2C_TEMP, {bus}u, 0x{addr:02x}u, 0UL }}, /* {it.name} */")
             continue
         if it.device not in views:  # a device that runs handlers from the model's folder
-            rows.append(f"    {{ {it.id}u, SIM_HW_NONE, 0u, 0u, 0UL }}, /* {it.name} (handlers of the model) */")
+            rows.append(chip_hardware_row(program, it)
+                        or f"    {{ {it.id}u, SIM_HW_NONE, 0u, 0u, 0UL }}, /* {it.name} (handlers of the model) */")
             continue
         v = views[it.device]
         h = v.hw
@@ -119,10 +165,9 @@ def _pin_rows(mcu: Mcu, views: dict) -> list[str]:
     return rows
 
 
-def sim_model_source(program: Program, board, elf: Path, chips: list[SimChip]) -> str:
+def sim_model_source(program: Program, board, elf: Path) -> str:
     """The harness's view of one build (sim/sim_model.h): the trace tables,
-    the RAM addresses, the hardware behind device data, the chips
-    (:func:`chips_of`), the pins."""
+    the RAM addresses, the hardware behind device data, the pins."""
     mcu = board.part
     views = {v.id: v for v in device_views(program, board)}
     lines = [f"/* Generated by EasyLab: the simavr harness's tables for model \"{c_comment(program.name)}\" on the "
@@ -131,13 +176,21 @@ def sim_model_source(program: Program, board, elf: Path, chips: list[SimChip]) -
     symbols = ram_symbols(board.description.toolchain.tool("nm", "avr-nm"), elf)
     lines += ram_tables(program, symbols, TICK_SYMBOL, str(elf))
     lines.append(f"const uint8_t sim_tick_size = {symbols.get(TICK_SYMBOL, (0, 4))[1]}u;")
-    lines += sim_table("sim_hw_t", "sim_hw", "sim_hw_count", _hardware_rows(program, views, chips),
+    lines += sim_table("sim_hw_t", "sim_hw", "sim_hw_count", _hardware_rows(program, views),
                        "{ 0xffffu, SIM_HW_NONE, 0u, 0u, 0UL }")
-    lines += chip_tables(chips)
+    lines += sim_table("sim_chip_t", "sim_chips", "sim_chip_count", _chip_rows(program, board),
+                       "{ 0u, 0u, 0u, 0UL, 0u, 0 }")
     lines += sim_table("sim_pin_t", "sim_pins", "sim_pin_count", _pin_rows(mcu, views),
                        "{ 0, 0u, SIM_PIN_LEVEL, 0u, 0u, 0u, \"\", \"\" }")
+    lines += chip_table(program, pin_number)
     lines += harness_constants(board, elf)
     return "\n".join(lines) + "\n"
+
+
+def pin_number(pin: str) -> int:
+    """The harness's number of a pin ("PB2": port << 3 | bit), as chip
+    models see their chip selects (sim/sim_chips.h)."""
+    return (ord(pin[1]) - ord("A")) << 3 | int(pin[2:])
 
 
 def harness_constants(board, elf: Path) -> list[str]:
@@ -164,10 +217,11 @@ def simulation_warnings(program: Program, board) -> list[str]:
     return notes
 
 
-def build_harness(board, out_dir: Path, model_source: str, exe: Path, chips: list[SimChip] = ()) -> Path:
+def build_harness(board, out_dir: Path, model_source: str, exe: Path,
+                  chips: list[tuple[str, str]] = ()) -> Path:
     """Compile the harness of sim/ with one build's tables (``model_source``,
-    written as sim_model.c in ``out_dir``) and its chip models (each file
-    with ``-DEL_CHIP=`` its descriptor's name) into ``exe``."""
+    written as sim_model.c in ``out_dir``) into ``exe``; ``chips``: the
+    model's chip models, (file, the EL_CHIP symbol it defines)."""
     spec = board.description.table("simulator")
     cc = spec.get("cc", "gcc")
     require_tool(cc, board.name, "gcc", "simulator's C compiler")
@@ -179,20 +233,17 @@ def build_harness(board, out_dir: Path, model_source: str, exe: Path, chips: lis
     [model_c] = write_files(out_dir, {"sim_model.c": model_source})
     folder = board.description.folder
     host = load_board("host").description.folder
-    includes = [f"-I{folder / 'sim'}", f"-I{sim_dir()}", f"-I{host}", f"-I{runtime_dir()}"]
+    shared = data_dir("sim")  # the harnesses' chip dispatch and the chip-model API
     sources = [folder / s for s in spec.get("sources", [])] + [host / s for s in spec.get("host_sources", [])] \
-        + [sim_dir() / s for s in spec.get("shared_sources", [])] \
-        + [runtime_dir() / s for s in spec.get("runtime_sources", [])] + [model_c]
-    # Each chip model on its own: every file defines its descriptor as EL_CHIP.
+        + [runtime_dir() / s for s in spec.get("runtime_sources", [])] \
+        + [shared / s for s in spec.get("shared_sources", [])] + [model_c]
+    flags = [*spec.get("cflags", []), f"-I{folder / 'sim'}", f"-I{shared}", f"-I{host}", f"-I{runtime_dir()}"]
     objects = []
-    for src, symbol in chip_sources(list(chips)):
-        obj = out_dir / "sim-chips" / f"{symbol}.o"
-        obj.parent.mkdir(parents=True, exist_ok=True)
-        run([cc, *spec.get("cflags", []), f"-DEL_CHIP={symbol}", f"-I{sim_dir()}", "-c", "-o", str(obj), str(src)],
-            f"building the chip model {src}")
-        objects.append(obj)
-    run([cc, *spec.get("cflags", []), *includes, "-o", str(exe), *map(str, sources), *map(str, objects),
-         *pc.stdout.split(), *spec.get("ldflags", [])], "building the simulator")
+    for k, (chip, symbol) in enumerate(chips):  # each with its own EL_CHIP
+        objects.append(out_dir / f"chip{k}.o")
+        run([cc, *flags, f"-DEL_CHIP={symbol}", "-c", "-o", str(objects[-1]), str(chip)], "building the simulator")
+    run([cc, *flags, "-o", str(exe), *map(str, sources + objects), *pc.stdout.split(), *spec.get("ldflags", [])],
+        "building the simulator")
     return exe
 
 
@@ -201,6 +252,8 @@ def port_program_tables(board, elf: Path) -> str:
     contract program): nothing to trace, no devices; UART 0 carries what
     the program prints."""
     return "\n".join([*no_model_tables("simavr", '{ 0, 0u, SIM_PIN_LEVEL, 0u, 0u, 0u, "", "" }'),
-                      *chip_tables([]),
+                      "const sim_chip_t sim_chips[1] = { { 0u, 0u, 0u, 0UL, 0u, 0 } };",
+                      "const uint16_t sim_chip_count = 0u;",
+                      *chip_table(None, pin_number),
                       "const uint8_t sim_tick_size = 4u;",
                       *harness_constants(board, elf), ""])

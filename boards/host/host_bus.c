@@ -39,6 +39,7 @@ typedef struct {
     bool settling;         /* the line is new: its first wait is the settle time */
     int64_t gap_us;        /* time this program's loop slept for the line's silences */
     int64_t answer_us;     /* time it waited for the slave's answers */
+    uint32_t waits;        /* answers waited for */
 } bus_line_t;
 
 static int64_t first_frame_us = -1; /* the first frame after the settle: the blocked time's base */
@@ -238,6 +239,7 @@ uint16_t el_port_bus_receive(const char *node, uint8_t *buf, uint16_t want)
     }
     line->quiet_from_us = now_us();
     line->answer_us += line->quiet_from_us - began;
+    line->waits++;
     if (got < want)
         missed(line);
     else
@@ -267,7 +269,9 @@ static void report_blocking(void)
                     "%lld ms of silence before frames (EASYLAB_BUS_GAP_US)", el_host_prog, (long long)(blocked / 1000),
             (long long)(run_us / 1000), (long long)(100 * blocked / run_us), (long long)(gaps / 1000));
     for (i = 0u; i < line_count; i++)
-        fprintf(stderr, ", %lld ms waiting for node '%s'", (long long)(lines[i].answer_us / 1000), lines[i].node);
+        fprintf(stderr, ", %lld ms waiting for node '%s' (%lu answers, %.1f ms each)",
+                (long long)(lines[i].answer_us / 1000), lines[i].node, (unsigned long)lines[i].waits,
+                lines[i].waits ? (double)lines[i].answer_us / 1000.0 / (double)lines[i].waits : 0.0);
     fputs("; a task whose deadline falls in that time is late (docs/distribution.md, \"Real time\")\n", stderr);
 }
 

@@ -190,6 +190,14 @@ uint64_t el_host_now_us(void);
  * Returns false on error (nothing loaded). */
 bool el_host_stimulus_load(const char *path);
 void el_host_stimulus_free(void);
+/* Whether the program reads the stimulus of an item (NULL, as on the host
+ * board: every device `out` datum, param and var). A simulator harness
+ * sets it: a device datum with nothing behind it in the simulation (no
+ * hardware the harness drives, no chip model) reads no stimulus, and its
+ * column is an error rather than a value dropped without a word. */
+extern bool (*el_host_stimulus_reads)(uint16_t item);
+/* Why the program does not read item's stimulus (with el_host_stimulus_reads). */
+extern const char *el_host_stimulus_unread_why;
 /* The loaded stimulus's events in order (for a simulator that replays it
  * inside a firmware): the row's time, the item, the elements it sets
  * (first, n) and one value (el_host_type_size bytes). False past the last. */

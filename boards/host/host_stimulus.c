@@ -179,6 +179,9 @@ static size_t count_cells(const char *s)
 
 /* ---- the header ---- */
 
+bool (*el_host_stimulus_reads)(uint16_t item);
+const char *el_host_stimulus_unread_why = "";
+
 static void list_valid_columns(void)
 {
     uint16_t i;
@@ -186,7 +189,7 @@ static void list_valid_columns(void)
     fprintf(stderr, "  valid columns: time_us");
     for (i = 0; i < el_item_count; i++) {
         const el_item_t *it = &el_items[i];
-        if (it->kind == EL_K_DEV_IN)
+        if (it->kind == EL_K_DEV_IN || (el_host_stimulus_reads != NULL && !el_host_stimulus_reads(i)))
             continue;
         if (it->count == 1u)
             fprintf(stderr, ", %s", it->name);
@@ -252,6 +255,11 @@ static bool resolve_column(const char *name, column_t *col)
     if (el_items[item].kind == EL_K_DEV_IN) {
         stim_error("column '%s': %s is %s; device `out` data, params and vars can be given a stimulus", name,
                    el_items[item].name, kind_name(el_items[item].kind));
+        list_valid_columns();
+        return false;
+    }
+    if (el_host_stimulus_reads != NULL && !el_host_stimulus_reads((uint16_t)item)) {
+        stim_error("column '%s': nothing in this program reads it: %s", name, el_host_stimulus_unread_why);
         list_valid_columns();
         return false;
     }

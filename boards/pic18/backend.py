@@ -26,6 +26,7 @@ from easylab.board import handlers, resources
 from easylab.board.base import BoardBase
 from easylab.board.cbuild import mode_flags, require_tool, runtime_sources, write_files
 from easylab.board.contract import Compiled, CompileOptions, SizeReport, Simulator
+from easylab.board.simtables import chip_files
 from easylab.core.errors import BuildError
 from easylab.core.paths import runtime_dir
 from easylab.ir.program import Program
@@ -53,12 +54,29 @@ class Pic18Board(BoardBase):
 
     def check(self, program: Program) -> resources.Resolved:
         # the part's own rule once the claims are right
-        return resources.check(program, self.name, self.part.part(), self.drivers,
-                               lambda prog, res: handlers.not_built(prog, self.name, self.drivers)
-                               + ([] if res.problems else devices.analog_problems(prog, self.part)))
+        resolved = resources.check(program, self.name, self.part.part(), self.drivers,
+                                   lambda prog, res: [] if res.problems else devices.analog_problems(prog, self.part))
+        handlers.check_files(program, self.name)
+        return resolved
 
     def produce(self, program: Program, checked: resources.Resolved, release: bool) -> dict[str, str]:
-        return devices.files(program, self, checked, release)
+        """The configuration and device tables, and the handlers a model
+        brings for the board (el_handlers.c: portable C, lowered and
+        compiled as model.c is; they may use the MSSP's buses, el_bus.h)."""
+        return {**devices.files(program, self, checked, release),
+                **handlers.source(program, self.name, includes=("el_bus.h",), chip_select=self.chip_select)}
+
+    def device_call(self, device, handler: str) -> str:
+        """A handler file's function is called by its name: el_pic18_devices.h
+        declares it (devices.handler_declarations)."""
+        call = handlers.call(device, handler, self.name)
+        if call:
+            return f"{handlers.function_name(device, handler)}();"
+        return super().device_call(device, handler)
+
+    def chip_select(self, pin: str) -> str:
+        """A chip select for handler files (EL_CS): struct el_pin of el_board.h."""
+        return devices.chip_select(self.part, pin)
 
     def _build(self, out_dir: Path, release: bool, extra: tuple[str, ...] = ()) -> sdcc.Build:
         folder = self.description.folder
@@ -223,7 +241,7 @@ class Pic18Board(BoardBase):
     def build_simulator(self, program: Program, checked: object, out_dir: Path, compiled: Compiled) -> Simulator:
         lmap = linkmap.read_map(compiled.executable.with_suffix(".map"))
         model = simulator.sim_model_source(program, self, compiled.executable, lmap, checked.uarts)
-        exe = simulator.build_harness(self, out_dir, model, out_dir / f"{program.name}-sim")
+        exe = simulator.build_harness(self, out_dir, model, out_dir / f"{program.name}-sim", chip_files(program))
         return Simulator(exe, [])
 
     def simulator_command(self, out_dir: Path, program: Program) -> list[str]:

@@ -9,6 +9,7 @@ import json
 from easylab.codegen.c_syntax import c_comment
 from dataclasses import dataclass
 
+from easylab.board import handlers
 from easylab.board.devices import DeviceView, devices_header
 from easylab.board.resources import Resolved, parse_claim
 from easylab.board.simtables import item_symbol
@@ -92,10 +93,21 @@ def _claims(mcu: Mcu, texts: list[str]) -> list[tuple[str, object]]:
     return out
 
 
+def chip_select(mcu: Mcu, pin: str) -> str:
+    """The C initializer of a chip select (struct el_pin of el_board.h):
+    the hardware layer's pin number."""
+    pin = mcu.part().own_pin(pin)
+    return f"{{ 0x{pin_code(pin):02X}u }}"
+
+
 def device_views(program: Program, mcu: Mcu, drivers: dict) -> list[DeviceView]:
+    """The board's drivers' devices (those whose types bring handler files
+    for the board run those instead)."""
     views = []
     encoder_slot = 0
     for dev in program.devices:
+        if handlers.handler_file(dev, "pic18") is not None:
+            continue
         claims = _claims(mcu, dev.claims)
         items = [item_symbol(program, i) for i in dev.items]
         d = dev.driver
@@ -221,11 +233,39 @@ def config_header(program: Program, board, res: Resolved, release: bool) -> str:
             lines.append(f"#define EL_PIC18_DEBUG_BAUD {int(u.get('baud', 115200))}UL")
         elif u["use"] == "modbus-rtu":
             lines.append("#define EL_PIC18_MODBUS 1")
-    lines += remote_link(mcu, res)
+    lines += mssp_config(board, res) + remote_link(mcu, res)
     if board.sim:
         lines += ["", "#define EL_PIC18_SIM 1 /* simulation build: instants reported to the gpsim harness */"]
     lines += ["", "#endif /* EL_PIC18_CONFIG_H */", ""]
     return "\n".join(lines)
+
+
+_SPI_DIVIDERS = {4: 0, 16: 1, 64: 2}  # Fosc / n: SSPCON1's SSPM
+
+
+def mssp_config(board, res: Resolved) -> list[str]:
+    """The MSSP's settings when a device is on its I2C or SPI bus
+    (pic18_mssp.c): SSPADD for the I2C clock, SSPM for the SPI's."""
+    lines = []
+    if ("i2c", 0) in res.buses:
+        i2c = board.description.table("i2c")
+        hz = int(i2c.get("clock_hz", 400000))
+        sspadd = max(3, -(-board.fcy // hz) - 1)  # Fosc / (4 (SSPADD + 1)), at most hz
+        if sspadd > 255:
+            raise BuildError(f"board.toml's [i2c] clock_hz {hz} is too slow for the MSSP at {board.clock_hz} Hz")
+        lines += ["", f"/* i2c[0] on the MSSP: {', '.join(c.owner for c in res.buses[('i2c', 0)])} */",
+                  "#define EL_PIC18_I2C 1", f"#define EL_PIC18_I2C_SSPADD {sspadd}u /* {board.fcy // (sspadd + 1)} Hz */",
+                  # SMP clear: slew-rate control, for the 400 kHz mode only
+                  f"#define EL_PIC18_I2C_SSPSTAT 0x{0x00 if 100000 < hz < 1000000 else 0x80:02X}u",
+                  f"#define EL_I2C_WAIT_US {int(i2c.get('wait_us', 2000))}UL /* the longest wait for a job */",
+                  f"#define EL_I2C_BUSY_US {int(i2c.get('busy_us', 10000))}UL /* a busy chip is tried again this long */"]
+    if ("spi", 0) in res.buses:
+        hz = int(board.description.table("spi").get("clock_hz", 4000000))
+        divider = next((k for k in sorted(_SPI_DIVIDERS) if board.clock_hz // k <= hz), 64)
+        lines += ["", f"/* spi[0], master on the MSSP: {', '.join(c.owner for c in res.buses[('spi', 0)])} */",
+                  "#define EL_PIC18_SPI 1", f"#define EL_PIC18_SPI_SSPM {_SPI_DIVIDERS[divider]}u "
+                  f"/* Fosc / {divider}: {board.clock_hz // divider} Hz */"]
+    return lines
 
 
 def linker_script(mcu: Mcu, big_start: int | None = None, measure: bool = False) -> str:
@@ -290,11 +330,28 @@ def hw_map(program: Program, board, res: Resolved, views: list[DeviceView]) -> d
     }
 
 
+def handler_declarations(program: Program) -> list[str]:
+    """The functions of the devices that run handler files (el_handlers.c),
+    declared at file scope: sdcc takes a function declared inside a block
+    (the generic call's form) for an uninitialised variable."""
+    lines = []
+    for dev in program.devices:
+        if handlers.handler_file(dev, "pic18") is not None:
+            lines.append(f"/* {dev.path}: handlers {handlers.handler_file(dev, 'pic18')} */")
+            lines += [f"void {handlers.function_name(dev, h)}(void);" for h in handlers.HANDLERS]
+    return lines
+
+
 def files(program: Program, board, res: Resolved, release: bool) -> dict[str, str]:
     """The board's generated files: {file name: text}."""
     views = device_views(program, board.part, board.drivers)
+    header = devices_header(program, views, "pic18", "boards/pic18/drivers/")
+    declared = handler_declarations(program)
+    if declared:
+        end = "#endif /* EL_PIC18_DEVICES_H */"
+        header = header.replace(end, "\n".join(declared) + "\n\n" + end)
     return {
         "el_pic18_config.h": config_header(program, board, res, release),
-        "el_pic18_devices.h": devices_header(program, views, "pic18", "boards/pic18/drivers/"),
+        "el_pic18_devices.h": header,
         "hw_map.json": json.dumps(hw_map(program, board, res, views), indent=2) + "\n",
     }

@@ -19,6 +19,7 @@
 /* The runtime's entry point (runtime_c/el_dispatch.c); main() calls it. */
 void el_run(int argc, char **argv);
 
+#include "pic18_hw.h"         /* struct el_pin: a chip select (runtime_c/el_bus.h) */
 #include "el_pic18_devices.h" /* generated: el_dev<id> and the drivers */
 
 #endif /* EL_BOARD_H */

@@ -30,6 +30,8 @@ class Mcu:
     # sdcc's software stack (arguments, saved registers, the interrupt
     # handler's context), at the top of RAM below el_pic18_kept.
     stack: int = 384
+    i2c: dict[int, list[str]] = field(default_factory=dict)  # the MSSP as I2C: bus 0 -> (SDA, SCL)
+    spi: dict[int, list[str]] = field(default_factory=dict)  # the MSSP as SPI: bus 0 -> (SCK, SDO, SDI)
 
     @property
     def device(self) -> str:
@@ -56,7 +58,8 @@ class Mcu:
                     self.unavailable, {}, network=False, pwm_source="CCP output",
                     no_interrupt="which has neither an external interrupt (INT0..INT2 on RB0..RB2) nor PORTB's "
                                  "interrupt on change (RB4..RB7)",
-                    aliases=self.aliases())
+                    i2c=self.i2c, spi=self.spi, aliases=self.aliases(),
+                    bus_modules={**{("i2c", n): "MSSP" for n in self.i2c}, **{("spi", n): "MSSP" for n in self.spi}})
 
 
 def pin_code(pin: str) -> int:
@@ -73,5 +76,7 @@ def read_mcus(table: dict) -> dict[str, Mcu]:
                         {int(k): str(v) for k, v in m.get("adc", {}).items()},
                         {str(k): int(v) for k, v in m.get("pwm", {}).items()},
                         {str(k): int(v) for k, v in m.get("int", {}).items()}, list(m.get("change", [])),
-                        dict(m.get("unavailable", {})), int(m.get("stack", 384)))
+                        dict(m.get("unavailable", {})), int(m.get("stack", 384)),
+                        {int(k): list(v) for k, v in m.get("i2c", {}).items()},
+                        {int(k): list(v) for k, v in m.get("spi", {}).items()})
     return out

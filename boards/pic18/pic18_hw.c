@@ -10,8 +10,9 @@
  * is the 32-bit fine clock.
  *
  * Interrupts: IPEN is clear, so every source comes to one handler at the
- * high-priority vector: Timer2, Timer1, the EUSART (pic18_uart.c), and the
- * encoders' pins (INT0..INT2, PORTB's interrupt on change of RB4..RB7).
+ * high-priority vector: Timer2, Timer1, the EUSART (pic18_uart.c), the
+ * MSSP as the I2C master (pic18_mssp.c), and the encoders' pins
+ * (INT0..INT2, PORTB's interrupt on change of RB4..RB7).
  *
  * The watchdog (WDTPS 1:512, about 2 s) is enabled by software
  * (SWDTEN) from el_pic18_start on and kicked while the port waits.
@@ -132,6 +133,20 @@ uint32_t el_pic18_clock(void)
     INTCONbits.GIE = gie;
     return (uint32_t)high << 16 | (uint16_t)((uint16_t)mid << 8 | low);
 }
+
+#if defined(EL_PIC18_I2C) && EL_PIC18_I2C
+/* The same without touching GIE: only the I2C bus's jobs need it. */
+uint32_t el_pic18_clock_isr(void)
+{
+    uint16_t high = clock_high;
+    uint8_t low = TMR1L;
+    uint8_t mid = TMR1H;
+    if (PIR1bits.TMR1IF && mid < 0x80u) {
+        high++;
+    }
+    return (uint32_t)high << 16 | (uint16_t)((uint16_t)mid << 8 | low);
+}
+#endif
 
 uint8_t el_pic18_irq_save(void)
 {
@@ -397,6 +412,9 @@ void el_pic18_uart_isr(void); /* pic18_uart.c */
 
 EL_PIC18_ISR(el_pic18_isr)
 {
+#if defined(EL_PIC18_I2C) && EL_PIC18_I2C
+    bool tick = PIR1bits.TMR2IF;
+#endif
     if (PIR1bits.TMR2IF) {
         PIR1bits.TMR2IF = 0;
         if (--isr_left == 0u) {
@@ -411,6 +429,11 @@ EL_PIC18_ISR(el_pic18_isr)
 #if defined(EL_PIC18_UART_RX)
     if ((PIE1bits.RCIE && PIR1bits.RCIF) || (PIE1bits.TXIE && PIR1bits.TXIF)) {
         el_pic18_uart_isr();
+    }
+#endif
+#if defined(EL_PIC18_I2C) && EL_PIC18_I2C
+    if ((PIE1bits.SSPIE && PIR1bits.SSPIF) || (PIE2bits.BCLIE && PIR2bits.BCLIF) || (tick && el_pic18_i2c_parked)) {
+        el_pic18_i2c_isr();
     }
 #endif
 #if EL_PIC18_ENCODERS > 0

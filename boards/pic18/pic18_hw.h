@@ -23,6 +23,13 @@
 /* A port pin: port (0 = A .. 4 = E) << 3 | bit. */
 typedef uint8_t el_pic18_pin_t;
 
+/* A pin as the buses take a chip select (runtime_c/el_bus.h's el_pin_t;
+ * the backend's chip_select gives its initializer, handler files get it
+ * as EL_CS). */
+struct el_pin {
+    el_pic18_pin_t code;
+};
+
 /* ---- start, time, interrupts (pic18_hw.c) ---- */
 
 /* Timers, interrupts and the watchdog on; returns the reset's cause
@@ -40,6 +47,9 @@ void el_pic18_resync(uint32_t tick);
 /* The fine clock: instruction cycles (EL_PIC18_FCY per second) since
  * el_pic18_start, wrapping at 2^32 (about 7 minutes at 10 MHz). */
 uint32_t el_pic18_clock(void);
+/* The same inside the interrupt handler or a critical section (it leaves
+ * the interrupt enable alone; builds with the I2C bus). */
+uint32_t el_pic18_clock_isr(void);
 /* Critical sections: the previous state of the global interrupt enable. */
 uint8_t el_pic18_irq_save(void);
 void el_pic18_irq_restore(uint8_t state);
@@ -95,6 +105,13 @@ uint16_t el_pic18_uart_errors(void);        /* framing, parity, overrun, full ri
 /* Polled output for programs without the ring (the port contract program). */
 void el_pic18_uart_putc_polled(uint8_t c);
 void el_pic18_uart_flush_polled(void);
+
+/* ---- the MSSP as the I2C master (pic18_mssp.c): the interrupt
+ * handler's part, for SSPIF and BCLIF, and for a tick's interrupt while a
+ * job waits parked for its busy chip ---- */
+
+void el_pic18_i2c_isr(void);
+extern volatile bool el_pic18_i2c_parked;
 
 /* ---- data EEPROM (pic18_nv.c) ---- */
 

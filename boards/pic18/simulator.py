@@ -11,9 +11,10 @@ from pathlib import Path
 
 from easylab.board.cbuild import require_tool, run, write_files
 from easylab.board.registry import load_board
-from easylab.board.simtables import c_string, no_model_tables, ram_tables, sim_table, trace_tables
+from easylab.board.simtables import (c_string, chip_hardware_row, chip_table, no_model_tables, ram_tables,
+                                     sim_table, trace_tables)
 from easylab.core.errors import BuildError
-from easylab.core.paths import runtime_dir, sim_dir
+from easylab.core.paths import data_dir, runtime_dir
 from easylab.ir.program import Program
 
 from . import buildcache, linkmap
@@ -29,6 +30,10 @@ def _hardware_rows(program: Program, views: dict) -> list[str]:
     rows = []
     for it in program.items:
         if it.device is None:
+            continue
+        if it.device not in views:  # a device that runs handlers from the model's folder
+            rows.append(chip_hardware_row(program, it)
+                        or f"    {{ {it.id}u, SIM_HW_NONE, 0u, 0u, 0UL }}, /* {it.name} (handlers of the model) */")
             continue
         v = views[it.device]
         h = v.hw
@@ -88,6 +93,7 @@ def sim_model_source(program: Program, board, hexfile: Path, lmap: linkmap.LinkM
     lines += sim_table("sim_pin_t", "sim_pins", "sim_pin_count", _pin_rows(views),
                        "{ 0u, SIM_PIN_LEVEL, 0u, \"\", \"\" }")
     parity = {"none": 0, "even": 1, "odd": 2}[str(uarts.get(0, {}).get("parity", "none"))]
+    lines += chip_table(program, pin_code)
     lines += _hooks(lmap, str(hexfile)) + harness_constants(board, hexfile)
     lines.append(f"const uint8_t sim_uart_parity = {parity}u;")
     return "\n".join(lines) + "\n"
@@ -106,10 +112,11 @@ def harness_constants(board, hexfile: Path) -> list[str]:
             f"const uint16_t sim_stack_size = {mcu.stack}u;"]
 
 
-def build_harness(board, out_dir: Path, model_source: str, exe: Path) -> Path:
+def build_harness(board, out_dir: Path, model_source: str, exe: Path, chips: tuple[Path, ...] = ()) -> Path:
     """Compile the harness of sim/ (and the host board's trace and stimulus
-    code) with one build's tables (``model_source``, written as sim_model.c
-    in ``out_dir``) into ``exe``."""
+    code, the chips' dispatch of the installation's sim/) with one build's
+    tables (``model_source``, written as sim_model.c in ``out_dir``) into
+    ``exe``; ``chips``: C files of chip models (sim/el_chip.h) to link in."""
     spec = board.description.table("simulator")
     cc, cxx = spec.get("cc", "gcc"), spec.get("cxx", "g++")
     packages = spec.get("debian_packages", "gpsim-dev g++")
@@ -123,24 +130,31 @@ def build_harness(board, out_dir: Path, model_source: str, exe: Path) -> Path:
     [model_c] = write_files(out_dir, {"sim_model.c": model_source})
     folder = board.description.folder
     host = load_board("host").description.folder
-    includes = [f"-I{folder / 'sim'}", f"-I{sim_dir()}", f"-I{host}", f"-I{runtime_dir()}"]
+    shared = data_dir("sim")  # the harnesses' chip dispatch and the chip-model API
+    includes = [f"-I{folder / 'sim'}", f"-I{shared}", f"-I{host}", f"-I{runtime_dir()}"]
     obj_dir = out_dir / "sim-obj"
     obj_dir.mkdir(parents=True, exist_ok=True)
     cflags = [*spec.get("cflags", []), *includes]
     cxxflags = [*spec.get("cxxflags", []), *includes, "-I/usr/include/gpsim", *pc.stdout.split()]
     objects = [_object(cc, cflags, host / s, obj_dir) for s in spec.get("host_sources", [])]
-    objects += [_object(cc, cflags, sim_dir() / s, obj_dir) for s in spec.get("shared_sources", [])]
     objects += [_object(cc, cflags, runtime_dir() / s, obj_dir) for s in spec.get("runtime_sources", [])]
+    objects += [_object(cc, cflags, shared / s, obj_dir) for s in spec.get("shared_sources", [])]
+    for k, chip in enumerate(chips):  # (file, its EL_CHIP symbol), or a file that defines EL_CHIP itself
+        file, symbol = (chip, None) if isinstance(chip, (str, Path)) else chip
+        objects.append(_object(cc, cflags + ([f"-DEL_CHIP={symbol}"] if symbol else []), Path(file), obj_dir,
+                               cache=False, name=f"chip{k}"))
     objects += [_object(cxx, cxxflags, folder / s, obj_dir) for s in spec.get("cxx_sources", [])]
     objects.append(_object(cc, cflags, model_c, obj_dir, cache=False))
     run([cxx, "-o", str(exe), *map(str, objects), *spec.get("ldflags", [])], "building the simulator")
     return exe
 
 
-def _object(compiler: str, flags: list[str], src: Path, obj_dir: Path, cache: bool = True) -> Path:
-    """One of the harness's objects; the same preprocessed source with the
-    same flags comes from the build cache."""
-    obj = obj_dir / (src.stem + ".o")
+def _object(compiler: str, flags: list[str], src: Path, obj_dir: Path, cache: bool = True,
+            name: str | None = None) -> Path:
+    """One of the harness's objects (``name``.o, by default the source's
+    name); the same preprocessed source with the same flags comes from the
+    build cache."""
+    obj = obj_dir / ((name or src.stem) + ".o")
     digest = None
     if cache:
         text = run([compiler, *flags, "-E", str(src)], "building the simulator").stdout
@@ -162,4 +176,4 @@ def port_program_tables(board, hexfile: Path, lmap: linkmap.LinkMap) -> str:
                       "const uint16_t sim_busy_addr = 0xffffu;",
                       f"const uint16_t sim_kept_addr = 0x{lmap.ram_symbols().get('el_pic18_kept', 0xFFFF):03X}u;",
                       "const uint8_t sim_uart_parity = 0u;",
-                      *harness_constants(board, hexfile), ""])
+                      *chip_table(None, pin_code), *harness_constants(board, hexfile), ""])

@@ -107,17 +107,6 @@ def lacking(device: Device, board: str) -> str | None:
             f"driver')")
 
 
-def not_built(program: Program, board: str, drivers: dict) -> list[str]:
-    """The problems of devices whose types bring handler files for a board
-    that does not build handler files (its own drivers only), at their
-    source lines."""
-    return [f"{dev.location}: error: device '{dev.path}' ({dev.type_name}) brings its own handlers for the {board} "
-            f"board ({Path(handler_file(dev, board)).name}), but the {board} board builds its own drivers only "
-            f"({', '.join(sorted(drivers))}); docs/boards.md, 'Writing a device driver', names the boards that build "
-            "handler files"
-            for dev in program.devices if handler_file(dev, board) is not None]
-
-
 def check_files(program: Program, board: str) -> None:
     """Read and split every handler file the build uses (a BuildError names
     the first one that cannot be)."""

@@ -8,7 +8,8 @@ itself. Each claim of the model (devices' ``claims``, interfaces' ``on
 uartN``) stands for physical pins; a bus's lines are shared by the devices
 on it (``i2c[0] addr 0x48``, ``spi[0] cs "PB2"``), a chip select is its
 device's own. A resource the part lacks, a pin claimed twice through
-different resources, a bus address I2C does not allow, or a device whose
+different resources, a bus address I2C does not allow, a bus whose module
+(one peripheral serving I2C and SPI) another bus of the model uses, or a device whose
 driver the board lacks or drives differently (and whose type brings no
 handler file for the board) is a problem, and all problems are reported
 together, each at its source line.
@@ -50,6 +51,9 @@ class Part:
     i2c: dict[int, list[str]] = field(default_factory=dict)  # I2C bus n -> its pins (SDA, SCL)
     spi: dict[int, list[str]] = field(default_factory=dict)  # SPI bus n -> its pins (SCK, MOSI, MISO, SS)
     aliases: dict[str, str] = field(default_factory=dict)  # another name of a pin -> the part's name for it
+    # The peripheral behind a bus, when one serves several: ("i2c", 0) -> "MSSP"
+    # and ("spi", 0) -> "MSSP" are one module, which a model uses as one of them.
+    bus_modules: dict[tuple[str, int], str] = field(default_factory=dict)
     pin_name: str = r"^(.*?)(\d+)$"  # a pin's port and bit, for pin ranges in messages ("P43": r"^(P.)(\d)$")
 
     @property
@@ -190,6 +194,7 @@ def _bus_pins(part: Part, claim: Claim, lead: str, problems: list[str]) -> list[
         problems.append(f"{lead} a device on an SPI bus is named by its chip-select pin: spi[{idx}] cs \"PB2\"")
         return None
     if kind == "spi" and how == "cs":
+        where = part.own_pin(where)
         if not isinstance(where, str) or where not in part.pins:
             problems.append(f"{lead} its chip select {where} is not a pin of the {name}; pins: "
                             f"{pin_ranges(part.pins)}")
@@ -211,6 +216,25 @@ def _shared_line(part: Part, claim: Claim, pin: str) -> tuple | None:
     if buses is None or pin not in buses.get(claim.index, ()):
         return None
     return (claim.kind, claim.index)
+
+
+def _module_taken(part: Part, claim: Claim, modules: dict[str, Claim], problems: list[str]) -> bool:
+    """Whether the claim's bus is on a module (part.bus_modules) that an
+    earlier claim uses as another bus (a problem naming both is recorded)."""
+    if claim.kind not in ("i2c", "spi"):
+        return False
+    module = part.bus_modules.get((claim.kind, claim.index))
+    if module is None:
+        return False
+    first = modules.setdefault(module, claim)
+    if (first.kind, first.index) == (claim.kind, claim.index):
+        return False
+    problems.append(f"{claim.where()}error: {claim.owner} claims {claim.text}, but the {part.name}'s "
+                    f"{first.kind}[{first.index}] and {claim.kind}[{claim.index}] are one {module}, which "
+                    f"{first.owner}{f' ({first.location})' if first.location else ''} uses as {first.text}: "
+                    f"a model uses the {module} as one bus, {first.kind}[{first.index}] or "
+                    f"{claim.kind}[{claim.index}]")
+    return True
 
 
 def resolve(program: Program, board: str, part: Part, drivers: dict[str, dict]) -> Resolved:
@@ -240,7 +264,10 @@ def resolve(program: Program, board: str, part: Part, drivers: dict[str, dict]) 
             claims.append(Claim(parsed[0], parsed[1], iface.resource, f"interface '{iface.kind.replace('-', ' ')}'",
                                 loc))
     shared: dict[str, tuple | None] = {}  # pin -> the bus whose line it is
+    modules: dict[str, Claim] = {}  # a module serving several buses -> the first claim of one of them
     for claim in claims:
+        if _module_taken(part, claim, modules, res.problems):
+            continue
         pins = _physical_pins(board, part, claim, res.problems)
         if pins is not None and claim.kind in ("i2c", "spi"):
             res.buses.setdefault((claim.kind, claim.index), []).append(claim)

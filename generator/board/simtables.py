@@ -5,10 +5,6 @@ the simulated MCU's RAM. A harness reads the values straight from the
 MCU's memory at each instant and writes them with the host board's own
 trace code, so its trace files equal the host board's byte for byte.
 
-The chips a harness runs (sim/sim_chips.h: a model's own chip models and
-the std ones, :func:`sim_chips`) are generic too: ``sim_chip_table``, and
-``SIM_HW_CHIP`` rows that route a device datum's stimulus to its chip.
-
 The address tables use the types of a harness's ``sim_model.h``::
 
     typedef struct { uint16_t addr; uint16_t size; } sim_addr_t;
@@ -16,15 +12,9 @@ The address tables use the types of a harness's ``sim_model.h``::
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
-from pathlib import Path
-from typing import Callable
-
 from ..codegen.c_syntax import C_KIND_ENUM, C_TYPE_ENUM, c_string, ident
 from ..core.errors import BuildError
-from ..core.paths import sim_dir
-from ..ir.program import Device, Program
-from .claims import parse_claim, parse_select
+from ..ir.program import Program
 
 TYPE_BYTES = {"bool": 1, "int8": 1, "uint8": 1, "int16": 2, "uint16": 2, "int32": 4, "uint32": 4, "float32": 4,
               "time": 4}
@@ -156,124 +146,68 @@ def no_model_tables(simulator: str, empty_pin: str) -> list[str]:
         "const uint16_t sim_pin_count = 0u;"]
 
 
-# ====================================================================== chips
-
-# The std chip models of sim/chips/ (docs/boards.md, "Chip models"): what
-# answers on a bus where a device claims a place and its type brings no chip
-# model of its own. An LM75 / TMP102-class sensor at I2C addresses
-# 0x48..0x4F, a 24LC256-class EEPROM at 0x50..0x57, a 25LC256-class SPI
-# EEPROM behind the chip select of std's SpiEepromLog.
-STD_CHIPS = {"tmp102": "chips/tmp102.c", "eeprom_i2c": "chips/eeprom_24lc256.c",
-             "eeprom_spi": "chips/eeprom_25lc256.c"}
-TEMPERATURE_ADDRESSES = range(0x48, 0x50)
-EEPROM_ADDRESSES = range(0x50, 0x58)
-_SENSOR_TYPES = ("int8", "uint8", "int16", "uint16", "int32", "uint32")
+# ---------------------------------------------------------------- chip models
 
 
-@dataclass
-class SimChip:
-    """One chip of a simulation build: a row of ``sim_chip_table``
-    (sim/sim_chips.h). ``values`` are (name, item id) of the device data
-    whose stimulus reaches the chip, value k at index k."""
-
-    device: Device
-    file: Path          # the chip model's C file
-    symbol: str         # its descriptor, EL_CHIP when it is compiled
-    kind: str           # SIM_CHIP_I2C, SIM_CHIP_SPI, SIM_CHIP_UART, SIM_CHIP_PINS
-    bus: int = 0
-    address: int = 0
-    cs: int = 0
-    cs_name: str = ""
-    values: list[tuple[str, int]] = field(default_factory=list)
+def chip_devices(program: Program | None) -> list:
+    """The devices whose types bring a chip model (`sim "FILE.c"`), in
+    device order: index k is sim_chip_table[k] and the symbol el_chip_<k>
+    (none for a program without a model)."""
+    return [] if program is None else [dev for dev in program.devices if dev.chip]
 
 
-def _place(device: Device) -> tuple[str, int, object] | None:
-    """(bus kind, bus, place) of the device's first claim of a place on a bus."""
-    for text in device.claims:
-        claim, select = parse_claim(text), parse_select(text)
-        if claim and select and claim[0] in ("i2c", "spi") and isinstance(claim[1], int):
-            return claim[0], claim[1], select[1]
-    return None
+def chip_symbol(index: int) -> str:
+    """The descriptor a chip file defines under the name EL_CHIP (sim/el_chip.h)."""
+    return f"el_chip_{index}"
 
 
-def _scalar_outs(program: Program, device: Device) -> list[tuple[str, int]]:
-    """The device's `out` data of one value each, in declaration order, by
-    the name its type gives them."""
-    out = []
-    for i in device.items:
-        it = program.items[i]
-        if it.kind == "dev_out" and it.count == 1:
-            out.append((it.name[len(device.path) + 1:] if it.name.startswith(device.path + ".") else it.name, i))
-    return out
+def chip_files(program: Program | None) -> list[tuple[str, str]]:
+    """(chip model file, its EL_CHIP symbol) of every chip device: the
+    harness compiles each file once per device, with -DEL_CHIP=symbol."""
+    return [(dev.chip, chip_symbol(k)) for k, dev in enumerate(chip_devices(program))]
 
 
-def sim_chips(program: Program, board_name: str, pin_number: Callable[[str], int]) -> list[SimChip]:
-    """The chips a simulator harness runs for a build on ``board_name``:
-    each device's own chip model (``sim "file.c"``), at the place its claims
-    give (an I2C address, a chip select numbered by ``pin_number``, a UART,
-    else its pins), fed with its scalar `out` data; where a device has none,
-    the std chip its place or driver calls for (STD_CHIPS)."""
-    chips: list[SimChip] = []
-    user_files: dict[str, str] = {}
-    for dev in program.devices:
-        place = _place(dev)
-        if dev.chip:
-            symbol = user_files.setdefault(dev.chip, f"el_chip_m{len(user_files)}")
-            chip = SimChip(dev, Path(dev.chip), symbol, "SIM_CHIP_PINS", values=_scalar_outs(program, dev))
-            uart = next((c for c in map(parse_claim, dev.claims) if c and c[0] == "uart"), None)
-            if place and place[0] == "i2c":
-                chip.kind, chip.bus, chip.address = "SIM_CHIP_I2C", place[1], int(place[2])
-            elif place and place[0] == "spi":
-                chip.kind, chip.bus, chip.cs, chip.cs_name = "SIM_CHIP_SPI", place[1], pin_number(place[2]), place[2]
-            elif uart is not None and isinstance(uart[1], int):
-                chip.kind, chip.bus = "SIM_CHIP_UART", uart[1]
-            chips.append(chip)
-            continue
-        std = sim_dir()
-        if place and place[0] == "i2c" and place[2] in TEMPERATURE_ADDRESSES:
-            sensor = next(((n, i) for n, i in _scalar_outs(program, dev)
-                           if program.items[i].type.name in _SENSOR_TYPES), None)
-            chips.append(SimChip(dev, std / STD_CHIPS["tmp102"], "el_chip_std_tmp102", "SIM_CHIP_I2C", place[1],
-                                 place[2], values=[sensor] if sensor else []))
-        elif place and place[0] == "i2c" and place[2] in EEPROM_ADDRESSES:
-            chips.append(SimChip(dev, std / STD_CHIPS["eeprom_i2c"], "el_chip_std_eeprom_i2c", "SIM_CHIP_I2C",
-                                 place[1], place[2]))
-        elif place and place[0] == "spi" and dev.driver == "spi_eeprom_log" and board_name not in dev.handlers:
-            chips.append(SimChip(dev, std / STD_CHIPS["eeprom_spi"], "el_chip_std_eeprom_spi", "SIM_CHIP_SPI",
-                                 place[1], cs=pin_number(place[2]), cs_name=place[2]))
-    return chips
+def chip_table(program: Program | None, pin_number) -> list[str]:
+    """sim_chip_table (sim/sim_chips.h): one entry per chip device, at the
+    I2C address or chip select it claims (``pin_number(name)``: the
+    harness's number of a pin), with the names of its `out` data (the
+    stimulus columns whose values reach the chip)."""
+    from .claims import parse_claim, parse_select
+
+    lines, rows = [], []
+    for k, dev in enumerate(chip_devices(program)):
+        kind, bus, address, cs, cs_name = "0", 0, 0, 0, ""
+        for text in dev.claims:
+            claim, select = parse_claim(text), parse_select(text)
+            if claim and claim[0] == "i2c" and select and select[0] == "addr":
+                kind, bus, address = "SIM_CHIP_I2C", int(claim[1]), int(select[1])
+            elif claim and claim[0] == "spi" and select and select[0] == "cs":
+                kind, bus, cs_name = "SIM_CHIP_SPI", int(claim[1]), str(select[1])
+                cs = pin_number(cs_name)
+            elif claim and claim[0] == "uart":
+                kind, bus = "SIM_CHIP_UART", int(claim[1])
+        outs = [program.items[i] for i in dev.items if program.items[i].kind == "dev_out"]
+        names = ", ".join(c_string(it.name.rsplit(".", 1)[-1]) for it in outs) or "\"\""
+        lines.append(f"extern const el_chip_ops_t {chip_symbol(k)};")
+        lines.append(f"static const char *const sim_chip_values_{k}[] = {{ {names} }};")
+        rows.append(f"    {{ &{chip_symbol(k)}, {kind}, {bus}u, 0x{address:02x}u, {cs}u, {c_string(cs_name)}, "
+                    f"{c_string(dev.path)}, {len(outs)}u, sim_chip_values_{k} }},")
+    if not rows:
+        return ["#include \"sim_chips.h\"",
+                "const sim_chip_entry_t sim_chip_table[1] = { { 0, 0u, 0u, 0u, 0u, \"\", \"\", 0u, 0 } };",
+                "const uint16_t sim_chip_table_count = 0u;"]
+    return ["#include \"sim_chips.h\"", *lines,
+            f"const sim_chip_entry_t sim_chip_table[{len(rows)}] = {{", *rows, "};",
+            f"const uint16_t sim_chip_table_count = {len(rows)}u;"]
 
 
-def chip_sources(chips: list[SimChip]) -> list[tuple[Path, str]]:
-    """Each chip model file once, with its descriptor's name: a harness
-    compiles it with ``-DEL_CHIP=<name>``."""
-    return list(dict.fromkeys((c.file, c.symbol) for c in chips))
-
-
-def chip_value_rows(chips: list[SimChip]) -> dict[int, tuple[int, int]]:
-    """item id -> (chip index, value k): the ``SIM_HW_CHIP`` rows of
-    ``sim_hw`` (the stimulus of a device datum goes to its chip)."""
-    return {item: (n, k) for n, c in enumerate(chips) for k, (_name, item) in enumerate(c.values)}
-
-
-def chip_tables(chips: list[SimChip]) -> list[str]:
-    """``sim_chip_table`` and what its rows point to: the chip models'
-    descriptors, value names, and the devices' integer parameters (which a
-    chip reads with el_chip_param)."""
-    lines = [f"extern const el_chip_ops_t {symbol};" for _file, symbol in chip_sources(chips)]
-    rows = []
-    for n, c in enumerate(chips):
-        names = [c_string(name) for name, _item in c.values]
-        params = [(k, v) for k, (t, v) in c.device.params.items()
-                  if isinstance(v, (bool, int)) and t.name != "float32"]
-        lines.append(f"static const char *const chip{n}_values[{max(1, len(names))}] = "
-                     f"{{ {', '.join(names) or '0'} }};")
-        lines.append(f"static const char *const chip{n}_param_names[{max(1, len(params))}] = "
-                     f"{{ {', '.join(c_string(k) for k, _v in params) or '0'} }};")
-        lines.append(f"static const int64_t chip{n}_param_values[{max(1, len(params))}] = "
-                     f"{{ {', '.join(f'{int(v)}LL' for _k, v in params) or '0'} }};")
-        rows.append(f"    {{ &{c.symbol}, {c.kind}, {c.bus}u, 0x{c.address:02x}u, 0x{c.cs:04x}u, {c_string(c.cs_name)}, "
-                    f"{c_string(c.device.path)}, {len(names)}u, chip{n}_values, {len(params)}u, chip{n}_param_names, "
-                    f"chip{n}_param_values }},")
-    return lines + sim_table("sim_chip_entry_t", "sim_chip_table", "sim_chip_table_count", rows,
-                             "{ 0, 0u, 0u, 0u, 0u, \"\", \"\", 0u, 0, 0u, 0, 0 }")
+def chip_hardware_row(program: Program, item) -> str | None:
+    """The sim_hw row of a device `out` datum whose value the stimulus gives
+    the device's chip model (SIM_HW_CHIP: a the chip, b the value), else None."""
+    devices = chip_devices(program)
+    dev = program.devices[item.device]
+    if not dev.chip or item.kind != "dev_out":
+        return None
+    outs = [i for i in dev.items if program.items[i].kind == "dev_out"]
+    return (f"    {{ {item.id}u, SIM_HW_CHIP, {devices.index(dev)}u, {outs.index(item.id)}u, 0UL }}, "
+            f"/* {item.name} (its chip model) */")

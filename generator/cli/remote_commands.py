@@ -59,6 +59,10 @@ def add_parsers(sub) -> None:
     r.add_argument("--fast", action="store_true",
                    help="lock-step virtual time: the proxy waits for each answer (simulated devices only); "
                         "default: real time, paced by the proxy's clock")
+    r.add_argument("--realtime", action="store_true",
+                   help="real-time scheduling (SCHED_FIFO) and locked memory for this process where the system "
+                        "allows them; at 1 kHz on a busy machine use it with a TCP link (socket://), see "
+                        "docs/remote.md")
     r.add_argument("--watch", action="store_true",
                    help="replace the running application when its files change (an edit of the device model is "
                         "refused: the proxy would have to be rebuilt)")
@@ -171,6 +175,11 @@ def cmd_remote(args) -> int:
     try:
         if watcher:
             watcher.start()
+        if args.realtime and not args.fast:
+            from ..remote.realtime import go_real_time
+
+            for warning in go_real_time(args.target):
+                _say(f"easylab remote: {warning}")
         engine.boot()  # before START: the proxy's clock runs from then on, the first deadlines included
         link.start(lock_step=args.fast)
         engine.run(duration, clock)

@@ -8,6 +8,7 @@ The interfaces are the producers below, in order: the debug interface
 
 from __future__ import annotations
 
+import functools
 from pathlib import Path
 from typing import Protocol
 
@@ -45,8 +46,16 @@ INTERFACE_HOOKS = (debug.interface_hook, service.interface_hook)
 
 
 def environment(template_dir: Path | None = None) -> jinja2.Environment:
-    """The Jinja2 environment of the C templates."""
-    env = jinja2.Environment(loader=jinja2.FileSystemLoader(str(template_dir or templates_dir())),
+    """The Jinja2 environment of the C templates: one per folder, so that
+    each template is compiled once per process (local execution renders
+    the actor template once per actor specialisation, hundreds per model).
+    Shared: callers must not change it."""
+    return _environment(str(template_dir or templates_dir()))
+
+
+@functools.lru_cache(maxsize=None)
+def _environment(template_dir: str) -> jinja2.Environment:
+    env = jinja2.Environment(loader=jinja2.FileSystemLoader(template_dir),
                              undefined=jinja2.StrictUndefined, trim_blocks=True, lstrip_blocks=True,
                              keep_trailing_newline=True)
     env.filters["c_ident"] = ident

@@ -212,9 +212,8 @@ class DriverImpl(Node):
 
 @dataclass(frozen=True)
 class ChipModel(Node):
-    """``sim "file.c"`` after a driver: the chip model the simulator
-    harnesses run for each device of the type, from a C file beside the
-    declaring model file."""
+    """``sim "file.c"`` after a driver: the model of the device's chip that
+    the simulator harnesses run (sim/el_chip.h), beside the declaring file."""
 
     file: str
 
@@ -230,7 +229,7 @@ class DeviceType(Named):
     driver_span: Span | None
     impls: tuple[DriverImpl, ...] = ()
     states: tuple["StateVar", ...] = ()
-    chips: tuple[ChipModel, ...] = ()  # `sim "file.c"`: at most one (the checker says so)
+    chips: tuple[ChipModel, ...] = ()  # at most one (the checker says so)
 
 
 @dataclass(frozen=True)

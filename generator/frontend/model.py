@@ -120,7 +120,7 @@ class PrimitiveDevice:
     span: object  # where the instance or part is declared
     handlers: dict[str, str] = field(default_factory=dict)  # board -> its handler file (absolute)
     states: list[tuple[str, ValueType, int | None]] = field(default_factory=list)  # (name, type, array size)
-    chip: str | None = None  # the type's chip model for the simulator harnesses (absolute), if any
+    chip: str | None = None  # its chip model for the simulator harnesses (absolute), `sim "FILE.c"`
 
 
 @dataclass

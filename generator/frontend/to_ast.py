@@ -277,22 +277,20 @@ class ToAst(Transformer):
                         args=ch[2])
 
     def driver(self, meta, ch):
-        impls = tuple(c for c in ch[1:] if isinstance(c, ast.DriverImpl))
-        sims = tuple(c for c in ch[1:] if isinstance(c, ast.ChipModel))
-        return ("driver", self._string(ch[0]), self._span(meta), impls, sims)
-
-    def driver_sim(self, meta, ch):
-        return ast.ChipModel(self._span(meta), self._string(ch[0]))
+        return ("driver", self._string(ch[0]), self._span(meta), tuple(ch[1:]))
 
     def driver_impl(self, meta, ch):
         return ast.DriverImpl(self._span(meta), str(ch[0]), self._tspan(ch[0]), self._string(ch[1]))
+
+    def driver_sim(self, meta, ch):
+        return ast.ChipModel(self._span(meta), self._string(ch[0]))
 
     def device_type(self, meta, ch):
         name, params, members = ch[0], ch[1], ch[2:]
         claims, ports, exports, parts, states = [], [], [], [], []
         driver = driver_span = None
         impls: tuple = ()
-        sims: tuple = ()
+        chips: tuple = ()
         for m in members:
             if isinstance(m, ast.DataPort):
                 ports.append(m)
@@ -307,11 +305,13 @@ class ToAst(Transformer):
             elif m[0] == "driver":
                 if driver is not None:
                     raise ModelError([Diagnostic(m[2], "a device type has at most one 'driver'")])
-                driver, driver_span, impls, sims = m[1], m[2], m[3], m[4]
+                driver, driver_span = m[1], m[2]
+                impls = tuple(x for x in m[3] if isinstance(x, ast.DriverImpl))
+                chips = tuple(x for x in m[3] if isinstance(x, ast.ChipModel))
         return ast.DeviceType(**self._named(meta, name), params=params, claims=tuple(claims),
                               ports=tuple(ports), exports=tuple(exports), parts=tuple(parts),
                               driver=driver, driver_span=driver_span, impls=impls, states=tuple(states),
-                              chips=sims)
+                              chips=chips)
 
     def device_decl(self, meta, ch):
         return ast.DeviceInstance(**self._named(meta, ch[0]), type_name=str(ch[1]),

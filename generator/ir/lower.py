@@ -68,8 +68,8 @@ class _Lowering:
                             location(dev.span), handlers=dict(dev.handlers),
                             params={k: (formal_types[k], _runtime_value(formal_types[k], v))
                                     for k, v in dev.args.items()},
-                            states=list(dev.states), chip=dev.chip,
-                            array_ports=[p.name for p in dev.ports.values() if p.array])
+                            states=list(dev.states),
+                            array_ports=[p.name for p in dev.ports.values() if p.array], chip=dev.chip)
             self.devices.append(device)
             for port in dev.ports.values():
                 datum = self.m.device_data[f"{dev.path}.{port.name}"]

@@ -80,10 +80,7 @@ class Device:
     handlers there (docs/language.md, "Device handlers"); on a board with
     none the board's own driver ``driver`` runs. ``params`` are the
     arguments with their types (run-time units, as items' initial values)
-    and ``states`` what the model's handlers keep per device. ``chip`` is
-    the type's chip model (``sim "file.c"``, absolute), which the boards'
-    simulator harnesses run for the device (docs/boards.md, "Chip
-    models"); it changes nothing of the firmware."""
+    and ``states`` what the model's handlers keep per device."""
 
     id: int
     path: str
@@ -99,7 +96,7 @@ class Device:
     params: dict[str, tuple[T.ValueType, object]] = field(default_factory=dict)
     states: list[tuple[str, T.ValueType, int | None]] = field(default_factory=list)
     array_ports: list[str] = field(default_factory=list)  # data declared with a rate (arrays in C)
-    chip: str | None = None  # chip model file (absolute), for the simulator harnesses
+    chip: str | None = None  # the model of its chip the simulator harnesses run (absolute; sim/el_chip.h)
 
 
 # ====================================================================== actors
@@ -366,8 +363,6 @@ def to_json(program: Program) -> dict:
             return _expr_json(value)
         if isinstance(value, Fraction):
             return str(value)
-        if isinstance(value, Device):  # the chip model is the simulators' only: nothing of the firmware
-            return {k: conv(getattr(value, k)) for k in value.__dataclass_fields__ if k != "chip"}
         if hasattr(value, "__dataclass_fields__"):
             return {k: conv(getattr(value, k)) for k in value.__dataclass_fields__}
         if isinstance(value, dict):

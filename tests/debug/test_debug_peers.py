@@ -19,7 +19,7 @@ import pytest
 import realtime_peers
 from debug_testlib import built
 from easylab.host_tools.debug_protocol import DebugClient, K, encode_frame
-from realtime_peers import non_reading_client, overruns, real_time_prefix
+from realtime_peers import flood_without_reading, overruns, real_time_prefix
 
 # Long enough to fill the kernel's buffers and then some; the task runs 800
 # activations meanwhile, each of which must keep its deadline.
@@ -114,30 +114,20 @@ def test_a_debugger_that_never_reads_over_tcp_costs_a_5ms_task_no_activation(tmp
     prefix = real_time_prefix()
     skip_unless_deadlines_hold(exe, prefix, tmp_path)
     proc, port = start_tcp(exe, prefix)
-    drops = 0
-    served = False
-    seq = 0
-    client = non_reading_client(port)
-    try:
-        end = time.monotonic() + RUN_SECONDS - 1.5
-        while time.monotonic() < end and proc.poll() is None:
-            try:
-                client.send(burst(seq, TCP_BURST))
-                seq += TCP_BURST
-            except BlockingIOError:
-                time.sleep(0.001)  # both socket buffers full: the program has stopped taking requests
-            except (ConnectionResetError, BrokenPipeError):
-                drops += 1
-                client.close()
-                if not served:  # a client that reads is served meanwhile
-                    reader = DebugClient.open(f"socket://127.0.0.1:{port}", 2.0)
-                    try:
-                        served = reader.hello().version == K.PROTOCOL_VERSION
-                    finally:
-                        reader.close()
-                client = non_reading_client(port)
-    finally:
-        client.close()
+    sent = [0]
+
+    def next_burst() -> bytes:
+        sent[0] += TCP_BURST
+        return burst(sent[0] - TCP_BURST, TCP_BURST)
+
+    def served_by_reader() -> bool:
+        reader = DebugClient.open(f"socket://127.0.0.1:{port}", 2.0)
+        try:
+            return reader.hello().version == K.PROTOCOL_VERSION
+        finally:
+            reader.close()
+
+    drops, served = flood_without_reading(proc, port, RUN_SECONDS - 1.5, next_burst, served_by_reader)
     _, err = proc.communicate(timeout=RUN_SECONDS + 30)
     assert proc.returncode == 0, err
     assert overruns(err) == 0, err

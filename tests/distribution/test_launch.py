@@ -85,10 +85,13 @@ def test_a_real_time_launch_keeps_time_or_says_which_node_cannot(tmp_path):
         return
     blocked = re.search(r"robot\.planner: bus: the round blocked this program's loop (\d+) ms of the (\d+) ms run "
                         r"\((\d+) %\): (\d+) ms of silence before frames \(EASYLAB_BUS_GAP_US\), (\d+) ms waiting for "
-                        r"node 'joint1', (\d+) ms waiting for node 'joint2'", run.stderr)
+                        r"node 'joint1' \((\d+) answers, ([\d.]+) ms each\), (\d+) ms waiting for node 'joint2' "
+                        r"\((\d+) answers, ([\d.]+) ms each\)", run.stderr)
     assert blocked, run.stderr
-    total, run_ms, _, gaps, joint1, joint2 = map(int, blocked.groups())
+    total, run_ms, _, gaps, joint1, answers1, each1, joint2, answers2, each2 = map(float, blocked.groups())
     assert total == pytest.approx(gaps + joint1 + joint2, abs=3) and 0 < total <= run_ms
+    for waited, answers, each in ((joint1, answers1, each1), (joint2, answers2, each2)):
+        assert answers > 0 and waited == pytest.approx(answers * each, abs=answers * 0.05 + 1)
     for pace in re.finditer(r"robot\.(joint[12])-sim: the simulation fell (\d+) ms behind the wall clock in (\d+) ms "
                             r"of simulated time: this machine ran it at (\d\.\d\d)x real time", run.stderr):
         assert int(pace.group(2)) > 50 and 0 < float(pace.group(4)) < 1

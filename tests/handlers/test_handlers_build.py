@@ -213,12 +213,59 @@ def test_the_avr_board_checks_chip_selects(tmp_path, cs, problem):
     assert problem in err, err
 
 
-def test_a_board_that_builds_its_own_drivers_only_refuses_handler_files_at_their_line(tmp_path):
-    """The PIC18 board builds no handler files: a device that brings one
-    for it is a problem at the device's line, not a traceback."""
-    path = write_model(tmp_path, TYPE.replace("IMPLS", 'impl pic18 "gauge_host.c"').replace(
-        "    claims i2c[bus] addr address\n", "") + USE, {"gauge_host.c": GAUGE_HOST})
+def test_the_pic18_board_builds_handler_files_with_sdcc(tmp_path):
+    """A device that brings handlers for the PIC18 runs them: el_handlers.c
+    goes through sdcc (the board's passes, as model.c does), model.c calls
+    the functions el_pic18_devices.h declares (sdcc takes no declaration
+    inside a block), and the MSSP is the I2C master its handlers use."""
+    path = model(tmp_path, 'impl pic18 "gauge_pic18.c"', {"gauge_pic18.c": GAUGE_AVR})
+    build(path, "pic18", tmp_path / "out")
+    out = tmp_path / "out"
+    assert "void el_mdev0_read(void)\n{" in (out / "el_handlers.c").read_text()
+    assert "void el_mdev1_read(void);" in (out / "el_pic18_devices.h").read_text()
+    assert "{ el_mdev0_read(); /* a */ }" in (out / "model.c").read_text()
+    config = (out / "el_pic18_config.h").read_text()
+    assert "/* i2c[0] on the MSSP: device 'a', device 'b' */" in config
+    assert "#define EL_PIC18_I2C_SSPADD 24u /* 400000 Hz */" in config
+    assert (out / "m.hex").is_file()
+
+
+def test_a_compiler_error_in_a_pic18_handler_names_the_users_file_and_line(tmp_path):
+    path = model(tmp_path, 'impl pic18 "gauge_pic18.c"',
+                 {"gauge_pic18.c": "/* one */\nEL_READ {\n    reads++;\n    level = not_declared;\n}\n"})
     err = build(path, "pic18", tmp_path / "out", ok=False).proc.stderr
-    assert re.search(r"model\.elab:8: error: device 'a' \(Gauge\) brings its own handlers for the pic18 board "
-                     r"\(gauge_host\.c\), but the pic18 board builds its own drivers only", err), err
+    assert re.search(r"gauge_pic18\.c:4: error \d+: .*not_declared", err), err
+
+
+SPI_TYPE = dedent("""\
+    device type SpiStatus(cs: string) {
+        claims spi[0] cs cs
+        out status: uint8
+        driver "spi_status" impl pic18 "spi_status.c"
+    }
+    """)
+
+
+@pytest.mark.parametrize("use, problem", [
+    ('device a: Gauge()\ndevice adc: SpiStatus(cs = "RB2")\nvar x: int16\nvar s: uint8\n'
+     'dataflow D { a.level -> x  adc.status -> s }\ntask t period 10 ms { run D }\n',
+     "model.elab:15: error: device 'adc' claims spi[0] cs \"RB2\", but the pic18f4520's i2c[0] and spi[0] are one "
+     "MSSP, which device 'a' (MODEL:14) uses as i2c[0] addr 0x48: a model uses the MSSP as one bus, i2c[0] or "
+     "spi[0]"),
+    ('device adc: SpiStatus(cs = "RC3")\nvar s: uint8\ndataflow D { adc.status -> s }\ntask t period 10 ms { run D }\n',
+     "device 'adc' claims spi[0] cs \"RC3\", but RC3 is the bus's SCK: a chip select is a pin of its own"),
+    ('device a: Gauge()\ndevice led: DigitalOut(pin = "RC4")\nvar x: int16\n'
+     'dataflow D { a.level -> x  w = SquareWave(half_period = 2)  w.y -> led.level }\n'
+     'task t period 10 ms { run D }\n',
+     "pin RC4 is claimed twice on the pic18f4520: as pin[\"RC4\"] by device 'led' and as i2c[0] addr 0x48 by "
+     "device 'a'"),
+])
+def test_the_pic18_board_checks_the_mssp_claims(tmp_path, use, problem):
+    """I2C and SPI share the MSSP's pins (SCL is SCK, SDA is SDI): a model
+    uses one of them, and the message names both devices."""
+    path = model(tmp_path, 'impl pic18 "gauge_pic18.c"', {"gauge_pic18.c": GAUGE_AVR,
+                                                          "spi_status.c": "EL_READ { status = 0u; }\n"},
+                 SPI_TYPE + use)
+    err = build(path, "pic18", tmp_path / "out", ok=False).proc.stderr
+    assert problem.replace("MODEL", str(path)) in err, err
     assert "Traceback" not in err

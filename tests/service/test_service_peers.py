@@ -15,7 +15,7 @@ from pathlib import Path
 import pytest
 
 import realtime_peers
-from realtime_peers import non_reading_client, overruns, real_time_prefix
+from realtime_peers import flood_without_reading, overruns, real_time_prefix
 from svc_testlib import RawPty, RawTcp, free_port, host_only, mbap, read_regs_pdu, rtu_frame
 
 GAIN = read_regs_pdu(0x03, 0, 1)  # holding 0 = gain, 3 at boot (tests/service/data/service_peers.elab)
@@ -67,26 +67,15 @@ def test_a_client_that_never_reads_costs_a_5ms_task_no_activation(builds):
     port = free_port()
     proc = start_firmware(exe, port, prefix)
     burst = b"".join(mbap(tid, 1, IDENTIFY) for tid in range(100))
-    drops = 0
-    served = False
-    client = non_reading_client(port)
-    try:
-        end = time.monotonic() + RUN_SECONDS - 2
-        while time.monotonic() < end and proc.poll() is None:
-            try:
-                client.send(burst)
-            except BlockingIOError:
-                time.sleep(0.001)  # both socket buffers full: the firmware has stopped taking requests
-            except (ConnectionResetError, BrokenPipeError):
-                drops += 1
-                client.close()
-                if not served:  # a client that reads is served meanwhile
-                    reader = RawTcp(port)
-                    served = reader.ask(GAIN) == GAIN_REPLY
-                    reader.close()
-                client = non_reading_client(port)
-    finally:
-        client.close()
+
+    def served_by_reader() -> bool:
+        reader = RawTcp(port)
+        try:
+            return reader.ask(GAIN) == GAIN_REPLY
+        finally:
+            reader.close()
+
+    drops, served = flood_without_reading(proc, port, RUN_SECONDS - 2, lambda: burst, served_by_reader)
     _, err = proc.communicate(timeout=RUN_SECONDS + 30)
     assert proc.returncode == 0, err
     assert drops >= 1, "the client that does not read was never dropped"

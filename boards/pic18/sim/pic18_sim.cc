@@ -28,7 +28,11 @@
  *   harness completes them (map_eeadrh, eeprom_read_fix).
  * - LATA..LATE, TRISA..TRISE, CCPR1L, CCP1CON, CCPR2L, CCP2CON, PR2: the
  *   traced pins' levels and PWM duties (--pins), stamped with the cycle
- *   (a duty PWM_SETTLE_CYCLES after a CCP write: it spans two registers).
+ *   (a duty PWM_SETTLE_CYCLES after a CCP write: it spans two registers);
+ *   the chip selects of the SPI's chips.
+ * - SSPCON1, SSPCON2, SSPSTAT, SSPADD, SSPBUF are not gpsim's at all: the
+ *   harness plays the MSSP and the chips on its buses (sim/sim_chips.h;
+ *   "the MSSP" below).
  * Bytes from the link enter the EUSART's receive FIFO one frame time apart
  * (the baud rate the firmware set), when reception is on, and only into an
  * empty FIFO: with two bytes queued gpsim 0.31 hands the firmware a wrong
@@ -53,6 +57,7 @@
 #include <gpsim/stimuli.h>
 #include <gpsim/uart.h>
 #include <gpsim/eeprom.h>
+#include <gpsim/pir.h>
 
 #include <fcntl.h>
 #include <unistd.h>
@@ -68,8 +73,9 @@
 
 extern "C" {
 #include "sim_model.h"
+#include "sim_chips.h"
 
-/* No chips on buses are modelled here: --chips is refused. */
+/* The chips on the buses keep no memories yet: --chips is refused. */
 extern const char sim_chips_help[];
 const char sim_chips_help[] = "";
 }
@@ -342,6 +348,275 @@ private:
 
 RxPump rx_pump;
 
+/* ---- the MSSP: the harness plays it, and the chips on its buses ----
+ *
+ * gpsim 0.31 emulates the MSSP at the pins: with nothing on them (no
+ * pull-ups, no chip) an I2C START ends in a bus collision (BCLIF: the
+ * firmware's jobs fail with EL_BUS_ERROR) and SPI reads 0x00 (SDI low).
+ * The harness therefore takes the module's five registers (SSPCON1,
+ * SSPCON2, SSPSTAT, SSPADD, SSPBUF) from gpsim: its MSSP never sees a
+ * write, and the pins stay plain port pins. The harness completes each
+ * step the firmware asks for as the MSSP would, after the time it takes
+ * on the wire (the baud rate generator's SSPADD, the SPI clock's SSPM),
+ * and raises SSPIF, with what the chips of sim_chip_table answered
+ * (sim/sim_chips.h):
+ * - I2C master (SSPM 1000): SEN and RSEN are START (the next byte written
+ *   to SSPBUF is the address: sim_chips_i2c_start), a byte written to
+ *   SSPBUF goes to the addressed chip (sim_chips_i2c_write) and ACKSTAT
+ *   says whether it acknowledged; RCEN receives a byte (sim_chips_i2c_read)
+ *   into SSPBUF with BF set; ACKEN sends ACKDT; PEN is the STOP
+ *   (sim_chips_i2c_stop). An address nobody acknowledges reads ACKSTAT 1.
+ * - SPI master (SSPM 0000..0011): a byte written to SSPBUF is clocked out
+ *   to the selected chip (sim_chips_spi_byte); its answer is in SSPBUF,
+ *   BF and SSPIF set, 8 SCK periods later: 0xFF when no chip is selected
+ *   (an idle SDI, pulled up). The chip selects are the pins of the table's
+ *   SPI chips, as the firmware drives them (LATx, TRISx; an input selects
+ *   nothing): each change goes to sim_chips_spi_select.
+ * Switching SSPEN off abandons what the module was doing (a STOP for the
+ * chip addressed). Writing SSPBUF while a step is under way sets WCOL. */
+const unsigned SSPCON2_ADDR = 0xFC5u, SSPCON1_ADDR = 0xFC6u, SSPSTAT_ADDR = 0xFC7u, SSPADD_ADDR = 0xFC8u,
+               SSPBUF_ADDR = 0xFC9u, PIR1_ADDR = 0xF9Eu;
+const unsigned SSPIF = 0x08u;                                                 /* PIR1 */
+const unsigned SEN = 0x01u, RSEN = 0x02u, PEN = 0x04u, RCEN = 0x08u, ACKEN = 0x10u, ACKDT = 0x20u,
+               ACKSTAT = 0x40u;                                               /* SSPCON2 */
+const unsigned SSPEN = 0x20u, WCOL = 0x80u;                                   /* SSPCON1 */
+const unsigned BF = 0x01u, RW = 0x04u, S_BIT = 0x08u, P_BIT = 0x10u;          /* SSPSTAT */
+
+class Mssp : public TriggerObject {
+public:
+    unsigned con1 = 0, con2 = 0, stat = 0, add = 0, buf = 0;
+
+    bool i2c() const { return (con1 & SSPEN) != 0u && (con1 & 0x0Fu) == 0x08u; }
+    bool spi() const { return (con1 & SSPEN) != 0u && (con1 & 0x0Fu) <= 0x03u; }
+
+    void write_con1(unsigned v)
+    {
+        bool was_on = (con1 & SSPEN) != 0u;
+        con1 = v & 0xFFu;
+        if (was_on && (con1 & SSPEN) == 0u)
+            off();
+    }
+
+    void write_con2(unsigned v)
+    {
+        unsigned asked = v & (SEN | RSEN | PEN | RCEN | ACKEN) & ~con2;
+        con2 = (con2 & ~(ACKDT | 0x80u)) | (v & (ACKDT | 0x80u)); /* ACKDT, GCEN */
+        if (!i2c() || asked == 0u || step != NONE)
+            return; /* an MSSP that is busy ignores a second request */
+        /* one at a time, in the module's order of priority */
+        unsigned bit = (asked & SEN) ? SEN : (asked & RSEN) ? RSEN : (asked & PEN) ? PEN : (asked & RCEN) ? RCEN : ACKEN;
+        con2 |= bit;
+        guint64 half = brg();
+        switch (bit) {
+        case SEN: begin(START, 2u * half); break;
+        case RSEN: begin(START, 3u * half); break;
+        case PEN: begin(STOP, 3u * half); break;
+        case RCEN: begin(RECEIVE, 16u * half); break;
+        default: begin(ACK, 2u * half); break;
+        }
+    }
+
+    void write_stat(unsigned v)
+    {
+        stat = (stat & 0x3Fu) | (v & 0xC0u); /* SMP, CKE: the rest is the module's */
+    }
+
+    void write_buf(unsigned v)
+    {
+        v &= 0xFFu;
+        if (step != NONE || (con2 & (SEN | RSEN | PEN | RCEN | ACKEN)) != 0u) {
+            con1 |= WCOL;
+            return;
+        }
+        if (i2c()) {
+            out = v;
+            stat |= BF | RW; /* the byte goes out */
+            begin(SEND, 18u * brg() + 1u);
+        } else if (spi()) {
+            out = v;
+            begin(SPI_BYTE, 8u * spi_bit());
+        }
+    }
+
+    unsigned read_buf()
+    {
+        stat &= ~BF;
+        return buf;
+    }
+
+    void callback() override
+    {
+        Step done = step;
+        step = NONE;
+        switch (done) {
+        case START:
+            con2 &= ~(SEN | RSEN);
+            stat = (stat & ~P_BIT) | S_BIT;
+            address_next = true;
+            break;
+        case STOP:
+            con2 &= ~PEN;
+            stat = (stat & ~S_BIT) | P_BIT;
+            if (in_transaction)
+                sim_chips_i2c_stop(0u);
+            in_transaction = false;
+            address_next = false;
+            break;
+        case SEND: {
+            bool ack;
+            if (address_next) {
+                ack = sim_chips_i2c_start(0u, (uint8_t)(out >> 1), (out & 1u) != 0u);
+                in_transaction = true;
+                address_next = false;
+            } else {
+                ack = sim_chips_i2c_write(0u, (uint8_t)out);
+            }
+            con2 = ack ? (con2 & ~ACKSTAT) : (con2 | ACKSTAT);
+            stat &= ~(BF | RW);
+            break;
+        }
+        case RECEIVE:
+            con2 &= ~RCEN;
+            buf = sim_chips_i2c_read(0u);
+            stat |= BF;
+            break;
+        case ACK:
+            con2 &= ~ACKEN;
+            break;
+        case SPI_BYTE:
+            buf = sim_chips_spi_byte(0u, (uint8_t)out);
+            stat |= BF;
+            break;
+        default:
+            return;
+        }
+        PIR *pir1 = dynamic_cast<PIR *>(cpu->registers[PIR1_ADDR]->getReg());
+        if (pir1 != nullptr)
+            pir1->setInterrupt(SSPIF);
+    }
+
+private:
+    enum Step { NONE, START, STOP, SEND, RECEIVE, ACK, SPI_BYTE } step = NONE;
+    unsigned out = 0;
+    bool address_next = false;  /* the next byte sent is an address (after a START) */
+    bool in_transaction = false; /* a chip may be addressed: its STOP is due */
+
+    void begin(Step s, guint64 cycles)
+    {
+        step = s;
+        get_cycles().set_break(get_cycles().get() + (cycles ? cycles : 1u), this);
+    }
+
+    /* The baud rate generator's period, TBRG: half an SCL period, in instruction cycles. */
+    guint64 brg() const
+    {
+        guint64 half = (add + 1u) / 2u;
+        return half ? half : 1u;
+    }
+
+    /* One SCK period in instruction cycles: Fosc / 4, 16, 64 (SSPM 0..2), TMR2's output / 2 (3). */
+    guint64 spi_bit() const
+    {
+        switch (con1 & 0x03u) {
+        case 0u: return 1u;
+        case 1u: return 4u;
+        case 2u: return 16u;
+        default: return 2u * (reg(PR2) + 1u);
+        }
+    }
+
+    void off()
+    {
+        if (step != NONE)
+            get_cycles().clear_break(this);
+        step = NONE;
+        if (in_transaction)
+            sim_chips_i2c_stop(0u);
+        in_transaction = false;
+        address_next = false;
+        con2 = 0u;
+        stat &= 0xC0u;
+    }
+};
+
+Mssp mssp;
+
+/* One of the MSSP's registers, the harness's instead of gpsim's. */
+class MsspRegister : public Register {
+public:
+    MsspRegister(Processor *p, Register *original) : Register(p, original->name().c_str(), "EasyLab MSSP")
+    {
+        address = original->address;
+    }
+    unsigned int get() override
+    {
+        return address == SSPBUF_ADDR ? mssp.read_buf() : get_value();
+    }
+    unsigned int get_value() override
+    {
+        switch (address) {
+        case SSPCON1_ADDR: return mssp.con1;
+        case SSPCON2_ADDR: return mssp.con2;
+        case SSPSTAT_ADDR: return mssp.stat;
+        case SSPADD_ADDR: return mssp.add;
+        default: return mssp.buf;
+        }
+    }
+    void put(unsigned int v) override
+    {
+        v &= 0xFFu;
+        switch (address) {
+        case SSPCON1_ADDR: mssp.write_con1(v); break;
+        case SSPCON2_ADDR: mssp.write_con2(v); break;
+        case SSPSTAT_ADDR: mssp.write_stat(v); break;
+        case SSPADD_ADDR: mssp.add = v; break;
+        default: mssp.write_buf(v); break;
+        }
+    }
+    void put_value(unsigned int v) override { put(v); }
+    RegisterValue getRV() override { return RegisterValue(get(), 0u); }
+    RegisterValue getRV_notrace() override { return RegisterValue(get_value(), 0u); }
+    RegisterValue getRVN() override { return getRV_notrace(); }
+    RegisterValue getRVN_notrace() override { return getRV_notrace(); }
+    void putRV(RegisterValue rv) override { put(rv.data); }
+    void putRV_notrace(RegisterValue rv) override { put(rv.data); }
+    void setbit(unsigned int bit, bool v) override
+    {
+        unsigned m = 1u << bit;
+        put(v ? (get_value() | m) : (get_value() & ~m));
+    }
+    bool get_bit(unsigned int bit) override { return (get_value() >> bit) & 1u; }
+};
+
+/* The chip selects of the table's SPI chips: the level each is at (an
+ * input is high: selects nothing). */
+std::vector<int> cs_level; /* by pin number: -1 not a chip select, 0 low, 1 high */
+
+void cs_update()
+{
+    for (unsigned pin = 0; pin < cs_level.size(); pin++) {
+        if (cs_level[pin] < 0)
+            continue;
+        unsigned bit = 1u << (pin & 7u);
+        int level = (reg(TRISA + (pin >> 3)) & bit) != 0u ? 1 : (reg(LATA + (pin >> 3)) & bit) != 0u;
+        if (level != cs_level[pin]) {
+            cs_level[pin] = level;
+            sim_chips_spi_select(0u, (uint16_t)pin, level == 0);
+        }
+    }
+}
+
+void mssp_take()
+{
+    const unsigned regs[] = {SSPCON1_ADDR, SSPCON2_ADDR, SSPSTAT_ADDR, SSPADD_ADDR, SSPBUF_ADDR};
+    for (unsigned a : regs)
+        cpu->registers[a] = new MsspRegister(cpu, cpu->registers[a]);
+    cs_level.assign(64, -1);
+    for (uint16_t k = 0; k < sim_chip_table_count; k++)
+        if (sim_chip_table[k].kind == SIM_CHIP_SPI && sim_chip_table[k].cs < cs_level.size())
+            cs_level[sim_chip_table[k].cs] = 1;
+}
+
 /* ---- instants ---- */
 
 /* The instant's tick: el_pic18_sim_tick, 32 bits (EL_TICK_32), little-endian. */
@@ -402,6 +677,7 @@ void on_write(unsigned address, unsigned value)
         pwm_settle.after_write();
     } else {
         record_pins();
+        cs_update();
     }
 }
 
@@ -462,6 +738,26 @@ void eeprom_store(const uint8_t *image)
 }
 
 } // namespace
+
+/* ---- what the chips need of the board (sim/sim_chips.h) ---- */
+
+extern "C" uint64_t sim_board_now_us(void)
+{
+    return get_cycles().get() * 1000000u / sim_clock_hz;
+}
+
+extern "C" void sim_board_uart_receive(uint8_t uart, uint8_t byte)
+{
+    sim_link_t *u = &sim_links[0];
+    if (uart == 0u && u->in_len < sizeof u->in) /* into the EUSART as the link's bytes go */
+        u->in[u->in_len++] = byte;
+}
+
+extern "C" void sim_board_pin_drive(uint16_t pin, bool level)
+{
+    if (pin < pin_driven.size())
+        drive_level(pin, level);
+}
 
 /* ---- what sim_harness.c needs of the simulator ---- */
 
@@ -553,9 +849,10 @@ int main(int argc, char **argv)
     encoders.resize(sim_hw_count ? sim_hw_count : 1u);
 
     std::vector<uint8_t> erased(sim_nv_size, 0xFFu); /* gpsim starts the EEPROM at 0; a chip's erased bytes are 0xFF */
-    if (!sim_start(erased.data()))
+    if (!sim_chips_start(sim_opt.chips) || !sim_start(erased.data()))
         return SIM_EXIT_USAGE;
     eeprom_store(erased.data());
+    mssp_take();
 
     if (sim_mark_addr != 0xFFFFu)
         hook(sim_mark_addr);
@@ -598,5 +895,7 @@ int main(int argc, char **argv)
             break;
         rx_pump.pump();
     }
+    if (!sim_chips_finish() && sim_exit_status == SIM_EXIT_OK)
+        sim_exit_status = SIM_EXIT_RUN;
     return sim_finish(get_cycles().get(), 0u, eeprom_image());
 }

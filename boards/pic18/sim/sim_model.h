@@ -13,6 +13,7 @@
 #define SIM_MODEL_H
 
 #include "sim_harness.h"
+#include "sim_chips.h" /* sim_chip_table: the chips on the MSSP's buses */
 
 /* A pin traced by --pins: a level, or a PWM output (its duty 0..255 from
  * the CCP module's 10-bit compare value against Timer2's period). */

@@ -61,15 +61,16 @@ class DeviceRules:
                                       f"(looked at {short_name(str(path), 200)})")
             else:
                 self.report_c_file(path, DEVICE_BLOCKS, impl.span, f"handler file '{short_name(impl.file)}'")
-        for extra in decl.chips[1:]:
-            self.error(extra.span, f"device type '{decl.name}' has two chip models: a type has at most one "
-                                   "'sim' file", notes=[note(decl.chips[0].span, "the first is here")])
-        if decl.chips:
-            path = self.chip_path(decl, decl.chips[0])
+        for k, chip in enumerate(decl.chips):
+            if k:
+                self.error(chip.span, f"device type '{decl.name}' has two chip models (sim \"FILE.c\")",
+                           notes=[note(decl.chips[0].span, "the first is here")])
+                continue
+            path = module_dir(FsPath(self.declaration_files[id(decl)])) / chip.file
             problem = missing_file(path)
             if problem:
-                self.error(decl.chips[0].span, f"chip model '{short_name(decl.chips[0].file)}' {problem} "
-                                               f"(looked at {short_name(str(path), 200)})")
+                self.error(chip.span, f"chip model '{short_name(chip.file)}' {problem} "
+                                      f"(looked at {short_name(str(path), 200)})")
         for st in decl.states:
             self.resolve_type(st.type)
         if decl.states and not decl.impls:
@@ -88,10 +89,6 @@ class DeviceRules:
     def handler_path(self, decl: ast.DeviceType, impl: ast.DriverImpl) -> FsPath:
         """Where a handler file is: relative to the file declaring the type."""
         return module_dir(FsPath(self.declaration_files[id(decl)])) / impl.file
-
-    def chip_path(self, decl: ast.DeviceType, chip: ast.ChipModel) -> FsPath:
-        """Where a chip model is: relative to the file declaring the type."""
-        return module_dir(FsPath(self.declaration_files[id(decl)])) / chip.file
 
     def elaborate_device(self, decl: ast.DeviceInstance) -> None:
         """Flatten a device instance into primitive devices and data paths."""
@@ -250,7 +247,8 @@ class DeviceRules:
                 if t is not None:
                     states.append((st.name, t, size))
             handlers = {i.board: str(self.handler_path(dtype, i)) for i in dtype.impls}
-            chip = str(self.chip_path(dtype, dtype.chips[0])) if dtype.chips else None
+            chip = (str(module_dir(FsPath(self.declaration_files[id(dtype)])) / dtype.chips[0].file)
+                    if dtype.chips else None)
             device = PrimitiveDevice(path, dtype, dtype.driver, args, ports, claims, span, handlers, states, chip)
             self.devices.append(device)
             for port in ports.values():
