@@ -11,7 +11,7 @@ from pathlib import Path
 
 from easylab.board.cbuild import require_tool, run, write_files
 from easylab.board.registry import load_board
-from easylab.board.simtables import (c_string, chip_files, chip_hardware_row, chip_table, no_model_tables,
+from easylab.board.simtables import (c_string, chip_hardware_row, chip_table, no_model_tables,
                                      ram_tables, sim_table, trace_tables)
 from easylab.core.errors import BuildError
 from easylab.core.paths import data_dir, runtime_dir
