@@ -5,6 +5,11 @@ the simulated MCU's RAM. A harness reads the values straight from the
 MCU's memory at each instant and writes them with the host board's own
 trace code, so its trace files equal the host board's byte for byte.
 
+The chips a harness runs on its buses are generic too (sim/sim_chips.h):
+``sim_chip_table`` with a model's own chip models and, for a harness that
+runs them, the std ones (:func:`sim_chips`), and the ``SIM_HW_CHIP`` rows
+that take a device datum's stimulus to its chip.
+
 The address tables use the types of a harness's ``sim_model.h``::
 
     typedef struct { uint16_t addr; uint16_t size; } sim_addr_t;
