@@ -68,9 +68,10 @@ typedef struct {
     size_t state_size;
     /* After the state is zeroed, before the MCU's first instruction. */
     void (*reset)(el_chip_t *chip);
-    /* The stimulus set the value of the device's `out` datum `k` (a stimulus
-     * column); false (after el_chip_error) for a value the chip cannot have:
-     * the run ends with that message. */
+    /* The stimulus value of the device's `out` datum `k` (a stimulus
+     * column; value_names[k]), at each instant the stimulus is applied;
+     * false (after el_chip_error) for a value the chip cannot have: the run
+     * ends with that message. */
     bool (*value)(el_chip_t *chip, uint8_t k, const el_chip_value_t *value);
 
     /* I2C, at the chip's address only. `start`: its address with R/W (a
@@ -110,6 +111,10 @@ void el_chip_uart_send(el_chip_t *chip, uint8_t byte);
 /* Drive a pin the device claims (an input of the MCU) to `level`. */
 void el_chip_pin_drive(el_chip_t *chip, uint16_t pin, bool level);
 
+/* The device's integer (or bool) parameter `name` as the model gives it
+ * (`bytes` of an EEPROM log); `otherwise` when it has none of that name. */
+int64_t el_chip_param(const el_chip_t *chip, const char *name, int64_t otherwise);
+
 /* `size` bytes of memory that outlive the run: with --chips DIR they are
  * loaded from and saved to DIR/<device>.bin, otherwise 0xFF (erased) each
  * run. The same pointer on every call (one memory per chip); NULL (after a
@@ -117,7 +122,7 @@ void el_chip_pin_drive(el_chip_t *chip, uint16_t pin, bool level);
 uint8_t *el_chip_memory(el_chip_t *chip, size_t size);
 
 /* Report a problem of the chip (printf-style), prefixed with the device's
- * path. */
+ * path: "adc (chip model): ...". */
 void el_chip_error(const el_chip_t *chip, const char *format, ...)
 #if defined(__GNUC__)
     __attribute__((format(printf, 2, 3)))

@@ -21,6 +21,8 @@ typedef struct {
 
 static chip_slot_t *slots;
 static const char *chip_dir;
+/* A chip reported a problem (el_chip_error, a memory it cannot have). */
+static bool chip_failed;
 /* The chip addressed on each I2C bus since its last START (-1: none). */
 static int32_t i2c_addressed[SIM_BUSES] = { -1, -1, -1, -1 };
 /* The chip selected on each SPI bus (-1: none). */
@@ -58,10 +60,13 @@ bool sim_chips_start(const char *dir)
         c->value_count = e->value_count;
         c->value_names = e->value_names;
         c->harness = &slots[k];
-        if (e->ops->reset != NULL)
-            e->ops->reset(c);
     }
-    return true;
+    /* Every chip's state is there before any reset runs (a chip's reset may
+     * ask for its memory, which reports problems naming the device). */
+    for (k = 0; k < sim_chip_table_count; k++)
+        if (sim_chip_table[k].ops->reset != NULL)
+            sim_chip_table[k].ops->reset(&slots[k].chip);
+    return !chip_failed;
 }
 
 static void memory_path(const el_chip_t *c, char *out, size_t n)
@@ -102,6 +107,7 @@ uint8_t *el_chip_memory(el_chip_t *chip, size_t size)
         if (errno == ENOENT)
             return s->memory;
         el_host_error("--chips: cannot read %s: %s", path, strerror(errno));
+        chip_failed = true;
         return NULL;
     }
     {
@@ -110,6 +116,7 @@ uint8_t *el_chip_memory(el_chip_t *chip, size_t size)
         fclose(f);
         if (n != size || extra != EOF) {
             el_host_error("--chips: %s is not the %lu-byte memory of '%s'", path, (unsigned long)size, chip->device);
+            chip_failed = true;
             return NULL;
         }
     }
@@ -234,6 +241,16 @@ void sim_chips_pin_edge(uint16_t pin, bool level)
             ops_of(k)->pin_edge(&slots[k].chip, pin, level);
 }
 
+int64_t el_chip_param(const el_chip_t *chip, const char *name, int64_t otherwise)
+{
+    const sim_chip_entry_t *e = &sim_chip_table[(const chip_slot_t *)chip->harness - slots];
+    uint8_t k;
+    for (k = 0; k < e->param_count; k++)
+        if (strcmp(e->param_names[k], name) == 0)
+            return e->param_values[k];
+    return otherwise;
+}
+
 uint64_t el_chip_now_us(const el_chip_t *chip)
 {
     (void)chip;
@@ -258,5 +275,6 @@ void el_chip_error(const el_chip_t *chip, const char *format, ...)
     va_start(ap, format);
     vsnprintf(text, sizeof text, format, ap);
     va_end(ap);
+    chip_failed = true;
     el_host_error("%s (chip model): %s", chip->device, text);
 }

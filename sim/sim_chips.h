@@ -38,6 +38,9 @@ typedef struct {
     const char *device;             /* the device's path */
     uint8_t value_count;            /* the device's `out` data */
     const char *const *value_names;
+    uint8_t param_count;            /* the device's integer parameters (el_chip_param) */
+    const char *const *param_names;
+    const int64_t *param_values;
 } sim_chip_entry_t;
 
 extern const sim_chip_entry_t sim_chip_table[];

@@ -501,7 +501,13 @@ static bool chip_value(uint16_t k)
     case EL_T_F32: { float x; memcpy(&x, it->addr, 4); v.is_float = true; v.f = x; break; }
     default: { uint32_t x; memcpy(&x, it->addr, 4); v.i = x; break; }
     }
-    return sim_chips_value(sim_hw[k].a, (uint8_t)sim_hw[k].b, &v);
+    if (!v.is_float)
+        v.f = (double)v.i;
+    if (sim_chips_value(sim_hw[k].a, (uint8_t)sim_hw[k].b, &v))
+        return true;
+    el_host_error("%s: the stimulus at %llu us gives the chip model a value it refuses", it->name,
+                  (unsigned long long)el_sim_now_us);
+    return false;
 }
 
 void sim_instant_inputs(uint64_t tick)

@@ -42,7 +42,6 @@ enum {
     SIM_HW_CAMERA,  /* a: UART; c: baud; line camera frames */
     SIM_HW_ENCODER, /* a, b: pins A and B; quadrature edges */
     SIM_HW_PWM,     /* the firmware drives a PWM output */
-    SIM_HW_I2C_TEMP, /* a: bus, b: address; the temperature of a sensor chip there, 1/16 degC (harnesses with chip models) */
     SIM_HW_CHIP     /* a: the chip (sim_chip_table), b: its value k; the value reaches the device's chip model (sim/el_chip.h) */
 };
 

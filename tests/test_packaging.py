@@ -79,8 +79,8 @@ def test_wheel_carries_the_package_data(installed):
                 "templates/actor.c.j2", "runtime_c/el_dispatch.c", "runtime_c/el_debug_protocol.h",
                 "boards/host/board.toml", "boards/host/host_port.c", "boards/avr/board.toml",
                 "boards/avr/sim/avr_sim.c", "host_tools/debug_console.py", "interp/engine.py",
-                # the chips on the simulators' buses, which the PIC18 harness compiles in
-                "sim/sim_chips.c", "sim/sim_chips.h", "sim/el_chip.h",
+                # the harnesses' core, the chips on their buses and the std chip models
+                "sim/sim_chips.c", "sim/sim_chips.h", "sim/el_chip.h", "sim/chips/tmp102.c", "sim/sim_harness.c",
                 # local execution's interfaces library is built from these at run time
                 "templates/interp_interfaces.c.j2", "boards/host/host_interp.c", "boards/host/host_load.c",
                 "boards/host/host_serve.c", "interp/interfaces.py",

@@ -182,7 +182,7 @@ class AvrBoard(BoardBase):
 
     def build_simulator(self, program: Program, checked: object, out_dir: Path, compiled: Compiled) -> Simulator:
         exe = simulator.build_harness(self, out_dir, simulator.sim_model_source(program, self, compiled.executable),
-                                      out_dir / f"{program.name}-sim", chip_files(program))
+                                      out_dir / f"{program.name}-sim", chip_files(program, self.name))
         return Simulator(exe, simulator.simulation_warnings(program, self))
 
     def simulator_command(self, out_dir: Path, program: Program) -> list[str]:

@@ -9,12 +9,10 @@ import subprocess
 from easylab.codegen.c_syntax import c_comment
 from pathlib import Path
 
-from easylab.board import handlers
 from easylab.board.cbuild import require_tool, run, write_files
 from easylab.board.registry import load_board
-from easylab.board.resources import parse_claim, parse_select
-from easylab.board.simtables import (c_string, chip_hardware_row, chip_table, no_model_tables, ram_tables,
-                                     sim_table, trace_tables)
+from easylab.board.simtables import (c_string, chip_hardware_row, chip_table, no_model_tables,
+                                     ram_tables, sim_table, trace_tables)
 from easylab.board.stimulus_columns import driven_items, unread_table
 from easylab.core.errors import BuildError
 from easylab.core.paths import data_dir, runtime_dir
@@ -50,78 +48,21 @@ def ram_symbols(nm: str, elf: Path) -> dict[str, tuple[int, int]]:
     return syms
 
 
-# The chips the harness models on an I2C bus, by the addresses their kind
-# takes (sim/avr_chips.h): LM75 / TMP102-class sensors and 24LC256-class EEPROMs.
-TEMPERATURE_ADDRESSES = range(0x48, 0x50)
-EEPROM_ADDRESSES = range(0x50, 0x58)
-_SENSOR_TYPES = ("int8", "uint8", "int16", "uint16", "int32", "uint32")
-
-
-def _i2c_places(program: Program) -> list[tuple[object, int, int]]:
-    """(device, bus, address) of every claim of a place on an I2C bus."""
-    places = []
-    for dev in program.devices:
-        for text in dev.claims:
-            claim, select = parse_claim(text), parse_select(text)
-            if claim and claim[0] == "i2c" and select and select[0] == "addr":
-                places.append((dev, claim[1], select[1]))
-    return places
-
-
-def _memory(dev) -> tuple[int, int]:
-    """An EEPROM's size and page: its log device's, or a 24LC256's."""
-    return int(dev.params.get("bytes", (None, 32768))[1]), int(dev.params.get("page", (None, 64))[1])
-
-
-def _chip_rows(program: Program, board) -> list[str]:
-    """sim_chips: a chip model at every claimed I2C address of a kind the
-    harness models, and behind the chip select of every std SPI EEPROM log
-    the board drives; an EEPROM log's size and page come from its device."""
-    rows = []
-    for dev, bus, addr in _i2c_places(program):
-        if addr in TEMPERATURE_ADDRESSES:
-            rows.append(f"    {{ {bus}u, 0x{addr:02x}u, SIM_CHIP_TEMPERATURE, 0UL, 0u, 0 }}, /* {dev.path} */")
-        elif addr in EEPROM_ADDRESSES:
-            size, page = _memory(dev)
-            rows.append(f"    {{ {bus}u, 0x{addr:02x}u, SIM_CHIP_EEPROM, {size}UL, {page}u, 0 }}, /* {dev.path} */")
-    for dev in program.devices:
-        if dev.driver != "spi_eeprom_log" or handlers.handler_file(dev, board.name) is not None:
-            continue
-        bus, (_how, pin) = parse_claim(dev.claims[0])[1], parse_select(dev.claims[0])
-        size, page = _memory(dev)
-        rows.append(f"    {{ {bus}u, {pin[2]}u, SIM_CHIP_SPI_EEPROM, {size}UL, {page}u, '{pin[1]}' }}, "
-                    f"/* {dev.path}: cs {pin} */")
-    return rows
-
-
-def _sensor_item(program: Program, device) -> int | None:
-    """The datum whose stimulus is the temperature of a sensor chip the
-    device claims: its first `out` datum of an integer type."""
-    if not any(addr in TEMPERATURE_ADDRESSES for dev, _b, addr in _i2c_places(program) if dev is device):
-        return None
-    return next((i for i in device.items if program.items[i].kind == "dev_out"
-                 and program.items[i].type.name in _SENSOR_TYPES and program.items[i].count == 1), None)
-
-
-def _hardware(program: Program, views: dict) -> list[tuple[str, int, str]]:
-    """sim_hw: how each device datum reaches the hardware the harness
-    drives; each row with its item id and kind (which data the harness
-    drives: stimulus_columns.driven_items)."""
+def _hardware_rows(program: Program, views: dict, board_name: str) -> list[tuple[str, int, str]]:
+    """sim_hw: how each device datum reaches the hardware the harness drives
+    (the harness runs the std chip models too: easylab.board.simtables);
+    each row with its item id and kind (which data the harness drives:
+    stimulus_columns.driven_items)."""
     rows = []
     for it in program.items:
         if it.device is None:
             continue
-        dev = program.devices[it.device]
-        if _sensor_item(program, dev) == it.id:  # a sensor on the I2C bus, whatever drives it
-            bus, addr = next((b, a) for d, b, a in _i2c_places(program)
-                             if d is dev and a in TEMPERATURE_ADDRESSES)
-            rows.append((f"    {{ {it.id}u, SIM_HW_I2C_TEMP, {bus}u, 0x{addr:02x}u, 0UL }}, /* {it.name} */", it.id,
-                         "SIM_HW_I2C_TEMP"))
+        chip = chip_hardware_row(program, it, board_name)  # a chip on a bus, whatever drives the device
+        if chip is not None:
+            rows.append((chip, it.id, "SIM_HW_CHIP"))
             continue
         if it.device not in views:  # a device that runs handlers from the model's folder
-            chip = chip_hardware_row(program, it)
-            rows.append((chip, it.id, "SIM_HW_CHIP") if chip else
-                        (f"    {{ {it.id}u, SIM_HW_NONE, 0u, 0u, 0UL }}, /* {it.name} (handlers of the model) */",
+            rows.append((f"    {{ {it.id}u, SIM_HW_NONE, 0u, 0u, 0UL }}, /* {it.name} (handlers of the model) */",
                          it.id, "SIM_HW_NONE"))
             continue
         v = views[it.device]
@@ -182,16 +123,14 @@ def sim_model_source(program: Program, board, elf: Path) -> str:
     symbols = ram_symbols(board.description.toolchain.tool("nm", "avr-nm"), elf)
     lines += ram_tables(program, symbols, TICK_SYMBOL, str(elf))
     lines.append(f"const uint8_t sim_tick_size = {symbols.get(TICK_SYMBOL, (0, 4))[1]}u;")
-    hardware = _hardware(program, views)
+    hardware = _hardware_rows(program, views, board.name)
     lines += sim_table("sim_hw_t", "sim_hw", "sim_hw_count", [row for row, _item, _kind in hardware],
                        "{ 0xffffu, SIM_HW_NONE, 0u, 0u, 0UL }")
     lines += unread_table(program, driven_items([(item, kind) for _row, item, kind in hardware]), "simavr",
                           board.name)
-    lines += sim_table("sim_chip_t", "sim_chips", "sim_chip_count", _chip_rows(program, board),
-                       "{ 0u, 0u, 0u, 0UL, 0u, 0 }")
     lines += sim_table("sim_pin_t", "sim_pins", "sim_pin_count", _pin_rows(mcu, views),
                        "{ 0, 0u, SIM_PIN_LEVEL, 0u, 0u, 0u, \"\", \"\" }")
-    lines += chip_table(program, pin_number)
+    lines += chip_table(program, pin_number, board.name)
     lines += harness_constants(board, elf)
     return "\n".join(lines) + "\n"
 
@@ -261,8 +200,6 @@ def port_program_tables(board, elf: Path) -> str:
     contract program): nothing to trace, no devices; UART 0 carries what
     the program prints."""
     return "\n".join([*no_model_tables("simavr", '{ 0, 0u, SIM_PIN_LEVEL, 0u, 0u, 0u, "", "" }'),
-                      "const sim_chip_t sim_chips[1] = { { 0u, 0u, 0u, 0UL, 0u, 0 } };",
-                      "const uint16_t sim_chip_count = 0u;",
                       *chip_table(None, pin_number),
                       "const uint8_t sim_tick_size = 4u;",
                       *harness_constants(board, elf), ""])

@@ -5,6 +5,11 @@ the simulated MCU's RAM. A harness reads the values straight from the
 MCU's memory at each instant and writes them with the host board's own
 trace code, so its trace files equal the host board's byte for byte.
 
+The chips a harness runs on its buses are generic too (sim/sim_chips.h):
+``sim_chip_table`` with a model's own chip models and, for a harness that
+runs them, the std ones (:func:`sim_chips`), and the ``SIM_HW_CHIP`` rows
+that take a device datum's stimulus to its chip.
+
 The address tables use the types of a harness's ``sim_model.h``::
 
     typedef struct { uint16_t addr; uint16_t size; } sim_addr_t;
@@ -12,9 +17,13 @@ The address tables use the types of a harness's ``sim_model.h``::
 
 from __future__ import annotations
 
+from dataclasses import dataclass, field
+
 from ..codegen.c_syntax import C_KIND_ENUM, C_TYPE_ENUM, c_string, ident
 from ..core.errors import BuildError
-from ..ir.program import Program
+from ..core.paths import sim_dir
+from ..ir.program import Device, Program
+from .claims import parse_claim, parse_select
 
 TYPE_BYTES = {"bool": 1, "int8": 1, "uint8": 1, "int16": 2, "uint16": 2, "int32": 4, "uint32": 4, "float32": 4,
               "time": 4}
@@ -148,12 +157,82 @@ def no_model_tables(simulator: str, empty_pin: str) -> list[str]:
 
 # ---------------------------------------------------------------- chip models
 
+# The std chip models of sim/chips/ (docs/boards.md, "Chip models"): what a
+# harness that runs them (``std_for``: the board's name) puts where a device
+# claims a place on a bus and its type brings no chip model of its own: an
+# LM75 / TMP102-class sensor at I2C addresses 0x48..0x4F, a 24LC256-class
+# EEPROM at 0x50..0x57, a 25LC256-class SPI EEPROM behind the chip select of
+# a std SpiEepromLog the board drives itself.
+STD_CHIPS = {"el_chip_std_tmp102": "chips/tmp102.c", "el_chip_std_24lc256": "chips/eeprom_24lc256.c",
+             "el_chip_std_25lc256": "chips/eeprom_25lc256.c"}
+TEMPERATURE_ADDRESSES = range(0x48, 0x50)
+EEPROM_ADDRESSES = range(0x50, 0x58)
+_SENSOR_TYPES = ("int8", "uint8", "int16", "uint16", "int32", "uint32")
 
-def chip_devices(program: Program | None) -> list:
-    """The devices whose types bring a chip model (`sim "FILE.c"`), in
-    device order: index k is sim_chip_table[k] and the symbol el_chip_<k>
-    (none for a program without a model)."""
-    return [] if program is None else [dev for dev in program.devices if dev.chip]
+
+@dataclass
+class SimChip:
+    """A row of sim_chip_table (sim/sim_chips.h): the device, its chip
+    model's file and descriptor, its place, and the items whose stimulus
+    reaches it (value k is ``values[k]``)."""
+
+    device: Device
+    file: str
+    symbol: str
+    kind: str = "0"
+    bus: int = 0
+    address: int = 0
+    cs_name: str = ""
+    values: list[int] = field(default_factory=list)
+
+
+def _place(chip: SimChip) -> SimChip:
+    """The chip at the place its device claims: an I2C address, a chip
+    select, else a UART."""
+    for text in chip.device.claims:
+        claim, select = parse_claim(text), parse_select(text)
+        if claim and claim[0] == "i2c" and select and select[0] == "addr":
+            chip.kind, chip.bus, chip.address = "SIM_CHIP_I2C", int(claim[1]), int(select[1])
+        elif claim and claim[0] == "spi" and select and select[0] == "cs":
+            chip.kind, chip.bus, chip.cs_name = "SIM_CHIP_SPI", int(claim[1]), str(select[1])
+        elif claim and claim[0] == "uart" and chip.kind == "0":
+            chip.kind, chip.bus = "SIM_CHIP_UART", int(claim[1])
+    return chip
+
+
+def sim_chips(program: Program | None, std_for: str | None = None) -> list[SimChip]:
+    """The chips of a simulation build, in device order: every device whose
+    type brings a chip model (`sim "FILE.c"`: the symbol el_chip_<k>, fed
+    with all its `out` data), and with ``std_for`` (the board's name) the std
+    chip a device without one calls for (STD_CHIPS; a sensor fed with its
+    first integer `out` datum)."""
+    chips: list[SimChip] = []
+    for dev in [] if program is None else program.devices:
+        if dev.chip:
+            outs = [i for i in dev.items if program.items[i].kind == "dev_out"]
+            chips.append(_place(SimChip(dev, dev.chip, chip_symbol(len(chips)), values=outs)))
+            continue
+        if std_for is None:
+            continue
+        chip = _place(SimChip(dev, "", ""))
+        if chip.kind == "SIM_CHIP_I2C" and chip.address in TEMPERATURE_ADDRESSES:
+            chip.symbol = "el_chip_std_tmp102"
+            chip.values = [i for i in dev.items if program.items[i].kind == "dev_out"
+                           and program.items[i].type.name in _SENSOR_TYPES and program.items[i].count == 1][:1]
+        elif chip.kind == "SIM_CHIP_I2C" and chip.address in EEPROM_ADDRESSES:
+            chip.symbol = "el_chip_std_24lc256"
+        elif chip.kind == "SIM_CHIP_SPI" and dev.driver == "spi_eeprom_log" and std_for not in dev.handlers:
+            chip.symbol = "el_chip_std_25lc256"
+        else:
+            continue
+        chip.file = str(sim_dir() / STD_CHIPS[chip.symbol])
+        chips.append(chip)
+    return chips
+
+
+def chip_devices(program: Program | None, std_for: str | None = None) -> list:
+    """The devices of sim_chip_table, in its order (:func:`sim_chips`)."""
+    return [c.device for c in sim_chips(program, std_for)]
 
 
 def chip_symbol(index: int) -> str:
@@ -161,53 +240,51 @@ def chip_symbol(index: int) -> str:
     return f"el_chip_{index}"
 
 
-def chip_files(program: Program | None) -> list[tuple[str, str]]:
-    """(chip model file, its EL_CHIP symbol) of every chip device: the
-    harness compiles each file once per device, with -DEL_CHIP=symbol."""
-    return [(dev.chip, chip_symbol(k)) for k, dev in enumerate(chip_devices(program))]
+def chip_files(program: Program | None, std_for: str | None = None) -> list[tuple[str, str]]:
+    """(chip model file, its EL_CHIP symbol) to compile into the harness,
+    each with -DEL_CHIP=symbol: a model's chip file once per device, a std
+    chip once whatever the devices using it."""
+    return list(dict.fromkeys((c.file, c.symbol) for c in sim_chips(program, std_for)))
 
 
-def chip_table(program: Program | None, pin_number) -> list[str]:
-    """sim_chip_table (sim/sim_chips.h): one entry per chip device, at the
-    I2C address or chip select it claims (``pin_number(name)``: the
-    harness's number of a pin), with the names of its `out` data (the
-    stimulus columns whose values reach the chip)."""
-    from .claims import parse_claim, parse_select
-
+def chip_table(program: Program | None, pin_number, std_for: str | None = None) -> list[str]:
+    """sim_chip_table (sim/sim_chips.h): one entry per chip of
+    :func:`sim_chips`, at the I2C address or chip select it claims
+    (``pin_number(name)``: the harness's number of a pin), with the names of
+    the data whose stimulus reaches it and its device's integer parameters
+    (el_chip_param)."""
     lines, rows = [], []
-    for k, dev in enumerate(chip_devices(program)):
-        kind, bus, address, cs, cs_name = "0", 0, 0, 0, ""
-        for text in dev.claims:
-            claim, select = parse_claim(text), parse_select(text)
-            if claim and claim[0] == "i2c" and select and select[0] == "addr":
-                kind, bus, address = "SIM_CHIP_I2C", int(claim[1]), int(select[1])
-            elif claim and claim[0] == "spi" and select and select[0] == "cs":
-                kind, bus, cs_name = "SIM_CHIP_SPI", int(claim[1]), str(select[1])
-                cs = pin_number(cs_name)
-            elif claim and claim[0] == "uart":
-                kind, bus = "SIM_CHIP_UART", int(claim[1])
-        outs = [program.items[i] for i in dev.items if program.items[i].kind == "dev_out"]
-        names = ", ".join(c_string(it.name.rsplit(".", 1)[-1]) for it in outs) or "\"\""
-        lines.append(f"extern const el_chip_ops_t {chip_symbol(k)};")
+    chips = sim_chips(program, std_for)
+    for symbol in dict.fromkeys(c.symbol for c in chips):
+        lines.append(f"extern const el_chip_ops_t {symbol};")
+    for k, c in enumerate(chips):
+        names = ", ".join(c_string(program.items[i].name.rsplit(".", 1)[-1]) for i in c.values) or "\"\""
+        params = [(name, v) for name, (t, v) in c.device.params.items()
+                  if isinstance(v, (bool, int)) and t.name != "float32"]
         lines.append(f"static const char *const sim_chip_values_{k}[] = {{ {names} }};")
-        rows.append(f"    {{ &{chip_symbol(k)}, {kind}, {bus}u, 0x{address:02x}u, {cs}u, {c_string(cs_name)}, "
-                    f"{c_string(dev.path)}, {len(outs)}u, sim_chip_values_{k} }},")
+        lines.append(f"static const char *const sim_chip_param_names_{k}[] = "
+                     f"{{ {', '.join(c_string(n) for n, _v in params) or '0'} }};")
+        lines.append(f"static const int64_t sim_chip_param_values_{k}[] = "
+                     f"{{ {', '.join(f'{int(v)}LL' for _n, v in params) or '0'} }};")
+        cs = pin_number(c.cs_name) if c.cs_name else 0
+        rows.append(f"    {{ &{c.symbol}, {c.kind}, {c.bus}u, 0x{c.address:02x}u, {cs}u, {c_string(c.cs_name)}, "
+                    f"{c_string(c.device.path)}, {len(c.values)}u, sim_chip_values_{k}, {len(params)}u, "
+                    f"sim_chip_param_names_{k}, sim_chip_param_values_{k} }},")
     if not rows:
         return ["#include \"sim_chips.h\"",
-                "const sim_chip_entry_t sim_chip_table[1] = { { 0, 0u, 0u, 0u, 0u, \"\", \"\", 0u, 0 } };",
+                "const sim_chip_entry_t sim_chip_table[1] = { { 0, 0u, 0u, 0u, 0u, \"\", \"\", 0u, 0, 0u, 0, 0 } };",
                 "const uint16_t sim_chip_table_count = 0u;"]
     return ["#include \"sim_chips.h\"", *lines,
             f"const sim_chip_entry_t sim_chip_table[{len(rows)}] = {{", *rows, "};",
             f"const uint16_t sim_chip_table_count = {len(rows)}u;"]
 
 
-def chip_hardware_row(program: Program, item) -> str | None:
+def chip_hardware_row(program: Program, item, std_for: str | None = None) -> str | None:
     """The sim_hw row of a device `out` datum whose value the stimulus gives
-    the device's chip model (SIM_HW_CHIP: a the chip, b the value), else None."""
-    devices = chip_devices(program)
-    dev = program.devices[item.device]
-    if not dev.chip or item.kind != "dev_out":
-        return None
-    outs = [i for i in dev.items if program.items[i].kind == "dev_out"]
-    return (f"    {{ {item.id}u, SIM_HW_CHIP, {devices.index(dev)}u, {outs.index(item.id)}u, 0UL }}, "
-            f"/* {item.name} (its chip model) */")
+    a chip (SIM_HW_CHIP: a the chip, b the value), else None."""
+    for k, c in enumerate(sim_chips(program, std_for)):
+        if item.id in c.values:
+            what = "its chip model" if c.device.chip else f"the std chip {c.symbol[len('el_chip_std_'):]}"
+            return (f"    {{ {item.id}u, SIM_HW_CHIP, {k}u, {c.values.index(item.id)}u, 0UL }}, "
+                    f"/* {item.name} ({what}) */")
+    return None

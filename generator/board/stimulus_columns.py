@@ -30,7 +30,7 @@ from .handlers import handler_file
 
 # The sim_hw kinds (sim/sim_harness.h) whose hardware a harness
 # drives from a device `out` datum's stimulus value.
-DRIVEN_KINDS = frozenset({"SIM_HW_ADC", "SIM_HW_PIN_IN", "SIM_HW_CAMERA", "SIM_HW_ENCODER", "SIM_HW_I2C_TEMP",
+DRIVEN_KINDS = frozenset({"SIM_HW_ADC", "SIM_HW_PIN_IN", "SIM_HW_CAMERA", "SIM_HW_ENCODER",
                           "SIM_HW_CHIP"})
 
 # Names longer than this are not compared for "did you mean" (the C reader

@@ -30,6 +30,12 @@ def runtime_dir() -> Path:
     return data_dir("runtime_c")
 
 
+def sim_dir() -> Path:
+    """sim/: what the boards' simulator harnesses share (their core, the
+    chip-model API and its dispatch, the std chip models)."""
+    return data_dir("sim")
+
+
 def templates_dir() -> Path:
     """templates/: the Jinja2 templates of the generated C."""
     return data_dir("templates")

@@ -58,7 +58,7 @@ def test_the_logger_writes_its_records_to_the_i2c_eeprom_and_goes_on_after_a_res
     avr, _host = logger
     args = ["--fast", "--duration", "4s", "--stimulus", LOGGER_STIMULUS, "--chips", tmp_path]
     run(avr.simulator, *args, "--trace", tmp_path / "first.csv")
-    image = (tmp_path / "i2c0-0x50.bin").read_bytes()
+    image = (tmp_path / "log.bin").read_bytes()
     assert len(image) == 32768
     first = eeprom_log(image, values=4, slot=16)
     published = _published_records(tmp_path / "first.csv")
@@ -67,7 +67,7 @@ def test_the_logger_writes_its_records_to_the_i2c_eeprom_and_goes_on_after_a_res
     assert published[2] == [625, 1056, 867, 240]  # min, max, mean of the third second; 24.0 degC
     # A second run (a reset) finds the newest record and goes on after it.
     run(avr.simulator, *args, "--trace", tmp_path / "second.csv")
-    second = eeprom_log((tmp_path / "i2c0-0x50.bin").read_bytes(), values=4, slot=16)
+    second = eeprom_log((tmp_path / "log.bin").read_bytes(), values=4, slot=16)
     assert second[:3] == first
     assert second[3:] == [(3 + k, record) for k, record in enumerate(_published_records(tmp_path / "second.csv"))]
 
@@ -107,7 +107,7 @@ def test_a_sensor_is_read_at_every_instant_while_the_eeprom_is_busy_writing(busy
     run(avr.simulator, *args, "--trace", tmp_path / "avr.csv", "--chips", tmp_path)
     run(host.executable, *args, "--trace", tmp_path / "host.csv")
     assert (tmp_path / "avr.csv").read_bytes() == (tmp_path / "host.csv").read_bytes()
-    stored = eeprom_log((tmp_path / "i2c0-0x53.bin").read_bytes(), values=2, slot=8)
+    stored = eeprom_log((tmp_path / "log.bin").read_bytes(), values=2, slot=8)
     _, rows = trace_rows(tmp_path / "host.csv")
     published = [[int(r["log.record[0]"])] * 2 for r in rows]
     assert 6 <= len(stored) <= 15  # about one in five: the write cycle takes 5 ms
@@ -184,13 +184,14 @@ def test_the_simulator_refuses_a_temperature_the_sensor_cannot_measure(busy, tmp
     stim.write_text("time_us,room.temperature\n0,100\n3000,2401\n")
     proc = run(avr.simulator, "--fast", "--duration", "10ms", "--stimulus", stim, ok=False)
     assert proc.returncode == 1
-    assert "room.temperature = 2401 at 3000 us: the temperature sensor at i2c[0] 0x4a measures -55 .. 150 degC " \
-           "(-880 .. 2400 sixteenths)" in proc.stderr
+    assert "room (chip model): temperature = 2401: the TMP102-class sensor at i2c[0] 0x4a measures -55 .. 150 " \
+           "degC (-880 .. 2400 sixteenths)" in proc.stderr
+    assert "room.temperature: the stimulus at 3000 us gives the chip model a value it refuses" in proc.stderr
     (tmp_path / "chips").mkdir()
-    (tmp_path / "chips" / "i2c0-0x53.bin").write_bytes(b"\xff" * 100)
+    (tmp_path / "chips" / "log.bin").write_bytes(b"\xff" * 100)
     proc = run(avr.simulator, "--fast", "--duration", "10ms", "--chips", tmp_path / "chips", ok=False)
     assert proc.returncode == 2
-    assert "not the memory of a 32768-byte EEPROM" in proc.stderr
+    assert "log.bin is not the 32768-byte memory of 'log'" in proc.stderr
 
 
 SPI = dedent("""\
@@ -248,7 +249,7 @@ def test_the_spi_bus_carries_an_eeprom_log_and_a_devices_own_handlers(tmp_path):
     assert (tmp_path / "avr.csv").read_bytes() == (tmp_path / "host.csv").read_bytes()
     _, rows = trace_rows(tmp_path / "host.csv")
     assert rows[-1]["s"] == "255"
-    stored = eeprom_log((tmp_path / "spi0-PB1.bin").read_bytes(), values=2, slot=8)
+    stored = eeprom_log((tmp_path / "log.bin").read_bytes(), values=2, slot=8)
     # Records at the deadlines 10 .. 50 ms (the last one goes out at the instant the run ends).
     assert stored == [(0, [100, 100]), (1, [100, 100]), (2, [100, 100]), (3, [-200, -200]), (4, [-200, -200])]
 
@@ -266,3 +267,29 @@ def test_a_chip_select_nothing_answers_reads_0xff_without_any_chip_modelled(tmp_
     run(avr.simulator, "--fast", "--duration", "30ms", "--trace", tmp_path / "avr.csv")
     _, rows = trace_rows(tmp_path / "avr.csv")
     assert rows[-1]["s"] == "255"
+
+
+SIZES = dedent("""\
+    model sizes
+    import std
+    device room: I2cTemperature()
+    device small: I2cEepromLog(address = 0x51, values = 1, bytes = 4096, page = 32)
+    device tiny: SpiEepromLog(cs = "PB1", values = 1, bytes = 2048, page = 16)
+    dataflow D { room.temperature -> small.record  room.temperature -> tiny.record }
+    task t period 10 ms { run D }
+    """)
+
+
+def test_the_std_chip_models_take_their_size_from_the_devices_parameters(tmp_path):
+    """The EEPROM chip models read `bytes` and `page` of their device
+    (el_chip_param): each memory in --chips DIR is the device's size, named
+    after the device, and holds its records."""
+    path = write_model(tmp_path, SIZES)
+    avr = build(path, "avr", tmp_path / "avr", "--sim")
+    stim = tmp_path / "s.csv"
+    stim.write_text("time_us,room.temperature\n0,321\n")
+    run(avr.simulator, "--fast", "--duration", "35ms", "--stimulus", stim, "--chips", tmp_path)
+    small, tiny = (tmp_path / "small.bin").read_bytes(), (tmp_path / "tiny.bin").read_bytes()
+    assert (len(small), len(tiny)) == (4096, 2048)
+    assert eeprom_log(small, values=1, slot=4)[:2] == [(0, [321]), (1, [321])]
+    assert eeprom_log(tiny, values=1, slot=4)[:2] == [(0, [321]), (1, [321])]

@@ -18,7 +18,7 @@
  * params and vars are written into the MCU's RAM, device `out` data are put
  * on the hardware the build maps them to (an ADC channel's voltage, an input
  * pin's level, line camera frames on a UART, quadrature edges on encoder
- * pins, the temperature of a sensor on the I2C bus: avr_chips.c), and the
+ * pins, a value of a chip on a bus: avr_chips.c, sim/sim_chips.c), and the
  * firmware's own drivers read them. While UART frames or
  * encoder edges are still on their way it keeps GPIOR1 nonzero, and the
  * firmware waits. At the instant marker it copies every item and chart
@@ -49,8 +49,8 @@
 #include "sim_chips.h"
 
 const char sim_chips_help[] =
-    "  --chips DIR       the memories of the EEPROMs on the buses (DIR/i2cB-0xAA.bin,\n"
-    "                    DIR/spiB-PXn.bin), read at start (erased when absent) and written at the end\n";
+    "  --chips DIR       the memories of the chips on the buses (DIR/DEVICE.bin: an EEPROM's),\n"
+    "                    read at start (erased when absent) and written at the end\n";
 
 #include "sim_avr.h"
 #include "sim_elf.h"
@@ -200,18 +200,6 @@ bool sim_drive_hardware(uint16_t k)
         }
         return true;
     }
-    case SIM_HW_I2C_TEMP: {
-        int32_t v = 0;
-        switch (it->type) { /* a device's first `out` datum, of an integer type */
-        case EL_T_I8: { int8_t x; memcpy(&x, it->addr, 1); v = x; break; }
-        case EL_T_U8: { uint8_t x; memcpy(&x, it->addr, 1); v = x; break; }
-        case EL_T_I16: { int16_t x; memcpy(&x, it->addr, 2); v = x; break; }
-        case EL_T_U16: { uint16_t x; memcpy(&x, it->addr, 2); v = x; break; }
-        case EL_T_I32: { int32_t x; memcpy(&x, it->addr, 4); v = x; break; }
-        default: { uint32_t x; memcpy(&x, it->addr, 4); v = x > 0x7FFFFFFFu ? 0x7FFFFFFF : (int32_t)x; break; }
-        }
-        return sim_chips_temperature((uint8_t)h->a, (uint8_t)h->b, v, it->name);
-    }
     case SIM_HW_ENCODER: {
         int32_t v;
         memcpy(&v, it->addr, sizeof v);
@@ -344,6 +332,7 @@ static void uart_output(struct avr_irq_t *irq, uint32_t value, void *param)
     (void)irq;
     uart_log_byte((sim_link_t *)param, "tx", (uint8_t)value);
     sim_link_output((sim_link_t *)param, (uint8_t)value);
+    sim_chips_uart_byte((uint8_t)((sim_link_t *)param - sim_links), (uint8_t)value);
 }
 
 static void uart_xon(struct avr_irq_t *irq, uint32_t value, void *param)
@@ -526,7 +515,7 @@ int main(int argc, char **argv)
     uart_log_open();
     /* Inputs first (the chips' memories, then sim_start's): a failed start
      * creates no trace file. */
-    if (!sim_chips_start(sim_opt.chips) || !sim_chips_init(avr, sim_opt.chips) || !sim_start(eeprom))
+    if (!avr_chips_attach(avr) || !sim_chips_start(sim_opt.chips) || !sim_start(eeprom))
         return SIM_EXIT_USAGE;
     watch_pins();
     avr_register_io_write(avr, GPIOR0_ADDR, gpior0_write, NULL);
@@ -552,7 +541,7 @@ int main(int argc, char **argv)
                       (unsigned)avr->pc);
         sim_exit_status = SIM_EXIT_RUN;
     }
-    if (!sim_chips_save() || !sim_chips_finish())
+    if (!sim_chips_finish())
         sim_exit_status = SIM_EXIT_RUN;
     if (uart_log != NULL && fclose(uart_log) != 0)
         el_host_error("EASYLAB_UART_LOG: writing the log failed");

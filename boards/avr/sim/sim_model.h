@@ -15,6 +15,7 @@
 #ifndef SIM_MODEL_H
 #define SIM_MODEL_H
 
+#include "sim_chips.h"
 #include "sim_harness.h"
 
 /* A pin traced by --pins: a level, or a PWM output (its duty 0..255 from
@@ -31,22 +32,6 @@ typedef struct {
     const char *what;  /* the device */
 } sim_pin_t;
 
-/* A chip on a bus (avr_chips.h): one per address a device claims on an
- * I2C bus where a chip of a kind the harness models answers, one per chip
- * select of a device whose chip it models on an SPI bus. */
-enum { SIM_CHIP_TEMPERATURE = 1, SIM_CHIP_EEPROM = 2, SIM_CHIP_SPI_EEPROM = 3 };
-
-typedef struct {
-    uint8_t bus;
-    uint8_t address; /* I2C: its address; SPI: its chip select's bit */
-    uint8_t kind;    /* SIM_CHIP_... */
-    uint32_t bytes;  /* EEPROM: its memory (a power of two) */
-    uint16_t page;   /* EEPROM: its page */
-    char port;       /* SPI: its chip select's port ('B') */
-} sim_chip_t;
-
-extern const sim_chip_t sim_chips[];
-extern const uint16_t sim_chip_count;
 extern const sim_pin_t sim_pins[];
 /* Bytes of the firmware's el_avr_sim_tick: 2 or 4 (el_types.h: el_tick_t). */
 extern const uint8_t sim_tick_size;
