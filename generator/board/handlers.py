@@ -24,7 +24,7 @@ from pathlib import Path
 from typing import Callable
 
 from ..codegen.c_syntax import c_comment, c_literal, c_string
-X
+from ..codegen.device_state import state_devices, state_items, state_type_lines  # noqa: F401 (re-exported: the boards use them through this module)
 from ..core.impl_files import DEVICE_BLOCKS, split_impl
 from ..core import types as T
 from ..core.errors import BuildError
