@@ -53,8 +53,27 @@ def write_case(folder: Path, name: str, text: str, stimulus: str, duration_ms: i
     model = folder / f"{name}.elab"
     model.write_text(text)
     stim = folder / f"{name}.stimulus.csv"
-    stim.write_text(stimulus)
+    stim.write_text(read_columns(model, stimulus))
     return Case(name, model, stim, duration_ms)
+
+
+def read_columns(model: Path, stimulus: str) -> str:
+    """The stimulus without the columns of devices no task reads: every
+    mode refuses those (board/stimulus_columns.py), and the generator's
+    stimuli name every device datum. Nothing else changes: such a device
+    never samples, in any mode."""
+    from easylab.board.stimulus_columns import unread_items
+    from easylab.pipeline import lower_file
+
+    program, _ = lower_file(model)
+    if program is None:
+        return stimulus
+    unread = {program.items[i].name for i in unread_items(program)}
+    rows = [line.split(",") for line in stimulus.splitlines()]
+    if not rows or not unread:
+        return stimulus
+    keep = [k for k, col in enumerate(rows[0]) if col.split("[", 1)[0] not in unread]
+    return "".join(",".join(row[k] for k in keep) + "\n" for row in rows)
 
 
 def first_difference(a: bytes, b: bytes) -> str:
