@@ -108,36 +108,6 @@ def test_the_avr_proxy_in_real_time_gives_the_native_trace(name, mcu, baud, buil
 
 
 @pytest.mark.realtime
-def test_blink_at_1_khz_over_1_mbaud_holds_real_time(build_cache, tmp_path):
-    """blink's 1 ms task through the AVR proxy at 1 Mbaud for 3 s (3,000
-    instants) in real time: not one overrun, so the proxy applied the
-    firmware's values at the firmware's instants (its own trace), and the
-    host's trace is the native one. A run with overruns is tried again (the
-    machine is shared), at most REAL_TIME_ATTEMPTS in all."""
-    stimulus = EXAMPLES / "blink.stimulus.csv"
-    native = tmp_path / "native.csv"
-    run_native(native_of(build_cache, BLINK), native, "3s", stimulus)
-    built = avr_proxy(build_cache, BLINK, "atmega328p", 1_000_000)
-    missed = []
-    for attempt in range(REAL_TIME_ATTEMPTS):
-        run_dir = tmp_path / f"run{attempt}"
-        run_dir.mkdir()
-        proxy = avr_proxy_process(built, run_dir / "link", "--trace", str(run_dir / "proxy.csv"))
-        try:
-            proc = remote(BLINK, proxy.link, "--baud", "1000000", "--duration", "3s", "--stimulus", str(stimulus),
-                          "--trace", str(run_dir / "remote.csv"))
-        finally:
-            err = proxy.end()
-        if proc.returncode != 0 or "overruns" in proc.stderr:
-            missed.append(proc.stderr.strip())
-            continue
-        assert (run_dir / "remote.csv").read_bytes() == native.read_bytes(), err
-        assert changes(run_dir / "proxy.csv", "led.level", 3_000_000) == changes(native, "led.level", 3_000_000)
-        return
-    pytest.fail(f"1 kHz missed deadlines in every one of {REAL_TIME_ATTEMPTS} runs:\n" + "\n".join(missed))
-
-
-@pytest.mark.realtime
 def test_blink_at_1_khz_beside_busy_processes_with_realtime_over_tcp(build_cache, tmp_path):
     """Two busy processes beside it: `easylab remote --realtime` (SCHED_FIFO)
     over a TCP link to the harness (itself under `chrt -f`) keeps blink's
