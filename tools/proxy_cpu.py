@@ -42,6 +42,7 @@ from easylab.remote.proxy import build_proxy
 # received comes alone, each its own pass through the link's code; at 1
 # Mbaud several come at a time and an instant takes fewer cycles.
 CALIBRATION_BAUD = 115200
+REPEATS = 3  # measurements per calibration model (their median)
 HEADROOM = 1.05  # on every coefficient, over what was measured
 
 _REPORT = re.compile(r"cycles (\d+) \(asleep (\d+)\), instants (\d+)")
@@ -153,7 +154,10 @@ def scripted_run(simulator: Path, program, work: Path, instants: int, baud: int)
     model = device_model(program)
     work.mkdir(parents=True, exist_ok=True)
     link_path = work / "link"
-    sim = subprocess.Popen([str(simulator), "--uart0", f"pty:{link_path}", "--fast", "--report"],
+    # Paced by the wall clock where the harness can keep it (simavr): an
+    # instant lasts the host's round trip, not what the harness would run
+    # flat out meanwhile, so the clock's interrupts taken out are few.
+    sim = subprocess.Popen([str(simulator), "--uart0", f"pty:{link_path}", "--report"],
                            stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True, stdin=subprocess.DEVNULL)
     try:
         deadline = time.monotonic() + 30
@@ -190,27 +194,40 @@ def scripted_run(simulator: Path, program, work: Path, instants: int, baud: int)
 
 def measure(program, board: str, work: Path, mcu: str | None = None, instants: int = 100,
             baud: int = CALIBRATION_BAUD) -> Measured:
-    """The proxy of ``program`` on ``board``: its CPU cycles per release
-    instant in the simulator, the slope between ``instants`` and three
+    """The proxy of ``program`` on ``board``, built with ``--sim`` at
+    ``baud``: ``measure_built``."""
+    built = build_proxy(program, board, work / "proxy", mcu=mcu, sim=True, baud=baud)
+    return measure_built(built.simulator, program, work, instants, baud)
+
+
+def measure_built(simulator: Path, program, work: Path, instants: int = 100,
+                  baud: int = CALIBRATION_BAUD) -> Measured:
+    """The proxy of ``program`` in its harness ``simulator``: its CPU
+    cycles per release instant, the slope between ``instants`` and three
     times as many. The clock's interrupts are taken out at their share of
     the cycles (in lock-step an instant lasts as long as the host's round
     trip, in real time its period)."""
-    built = build_proxy(program, board, work / "proxy", mcu=mcu, sim=True, baud=baud)
-    share = tick_share(built.simulator)
-    runs = [scripted_run(built.simulator, program, work / f"run{n}", n, baud) for n in (instants, 3 * instants)]
+    share = tick_share(simulator)
+    runs = [scripted_run(simulator, program, work / f"run{n}", n, baud) for n in (instants, 3 * instants)]
     (c1, w1, _), (c2, w2, _) = runs
     return Measured(((w2 - share * c2) - (w1 - share * c1)) / (2 * instants), share, runs)
 
 
-def measure_text(text: str, board: str, work: Path, mcu: str | None = None, instants: int = 100) -> Measured:
-    """``measure`` for a model given as text (at CALIBRATION_BAUD)."""
+def measure_text(text: str, board: str, work: Path, mcu: str | None = None, instants: int = 100,
+                 repeats: int = REPEATS) -> Measured:
+    """``measure`` for a model given as text (at CALIBRATION_BAUD), the
+    median of ``repeats`` measurements (the host's round trips, longer or
+    shorter, leave some noise: the clock's interrupts meanwhile are taken
+    out at their share, not one by one)."""
     work.mkdir(parents=True, exist_ok=True)
     path = work / "cal.elab"
     path.write_text(text)
     program, result = lower_file(path)
     if program is None:
         raise RuntimeError(result.report())
-    return measure(program, board, work, mcu, instants)
+    found = sorted((measure(program, board, work / f"m{n}", mcu, instants) for n in range(repeats)),
+                   key=lambda m: m.cycles_per_instant)
+    return found[len(found) // 2]
 
 
 def calibrate(board: str, mcu: str | None = None, instants: int = 100) -> dict:
