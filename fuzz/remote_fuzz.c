@@ -124,6 +124,11 @@ el_tick_t el_now_tick(void)
     return now;
 }
 
+el_wtick_t el_port_real_tick(void)
+{
+    return (el_wtick_t)now; /* never behind: the target's clock is its instants */
+}
+
 void el_port_resync(void)
 {
     /* The target's clock is its count of the dispatcher's instants: tick 0

@@ -39,6 +39,7 @@ static uint32_t released_now;
 static uint32_t released_tick;
 static bool up_sent;
 static bool down_done; /* lock-step: the DOWN of the instant being processed came */
+static uint32_t polled_tick; /* the instant at whose wait (or processing) the link was last served */
 
 /* A longer received frame is one the device model cannot produce: the
  * decoder drops it as oversize (counted malformed). */
@@ -257,6 +258,7 @@ void el_remote_poll(void)
 {
     uint8_t chunk[32];
     uint16_t got, i;
+    polled_tick = (uint32_t)el_now_tick();
     while ((got = el_remote_port_read(chunk, (uint16_t)sizeof chunk)) != 0u) {
         for (i = 0u; i < got; i++) {
             uint8_t r = el_cobs_decode_byte(&rx, chunk[i]);
@@ -288,6 +290,7 @@ void el_remote_boot(void)
     last_frame_tick = 0u;
     overruns_in_a_row = 0u;
     released_now = 0u;
+    polled_tick = 0u;
     up_sent = false;
     down_done = false;
     el_cobs_decoder_init(&rx, rx_buf, (uint16_t)sizeof rx_buf);
@@ -298,6 +301,18 @@ void el_remote_boot(void)
         el_port_idle(50u);
     }
     el_port_resync(); /* tick 0 is due now, not when the board started (an MCU's timer runs from boot) */
+}
+
+/* An instant processed after its time (the proxy behind its clock: its
+ * CPU late) has had no wait, so nothing served the link: serve it now,
+ * before the instant's deadlines and releases, so that a DOWN that came is
+ * applied and HELLO, COUNTERS and STOP are answered however late the
+ * proxy runs. An instant that waited served it while it waited. */
+static void serve_late(void)
+{
+    if (polled_tick != (uint32_t)el_now_tick()) {
+        el_remote_poll();
+    }
 }
 
 uint16_t el_remote_overruns(uint8_t task)
@@ -323,6 +338,7 @@ void el_remote_release(uint8_t task)
     if (task >= EL_RMT_TASKS) { /* not a proxy task of this device model */
         return;
     }
+    serve_late();
     watchdog();
     if (released_now == 0u || released_tick != now) {
         released_now = 0u;
@@ -345,6 +361,9 @@ void el_remote_body(uint8_t task)
     }
     up_sent = true;
     frame[EL_RMT_HEADER] = state; /* the host learns at once that the safe values hold */
+    if (mode == EL_RMT_MODE_REAL_TIME && (el_wtick_t)(el_port_real_tick() - (el_wtick_t)released_tick) != 0u) {
+        frame[EL_RMT_HEADER] |= (uint8_t)EL_RMT_STATE_BEHIND; /* this instant's tick has passed: the CPU is late */
+    }
     at = EL_RMT_UP_STATE;
     for (i = 0u; i < el_rmt_out_count; i++) {
         const el_rmt_field_t *f = &el_rmt_out_fields[i];
@@ -381,6 +400,7 @@ void el_remote_publish(uint8_t task)
     if (task >= EL_RMT_TASKS) { /* not a proxy task of this device model */
         return;
     }
+    serve_late();
     got = arrived[task];
     watchdog();
     pending[task] = false;

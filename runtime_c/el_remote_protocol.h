@@ -57,5 +57,8 @@
 /* Proxy states (COUNTERS' answer, first byte). */
 #define EL_RMT_STATE_SAFE 0u
 #define EL_RMT_STATE_RUNNING 1u
+/* UP's state byte also has this bit when the proxy built the frame after
+ * its instant's tick had passed (real time): its CPU is behind its clock. */
+#define EL_RMT_STATE_BEHIND 0x80u
 
 #endif /* EL_REMOTE_PROTOCOL_H */

@@ -125,6 +125,12 @@ void el_pic18_eeprom_update(uint16_t address, uint8_t value);
 #define EL_PIC18_SIM_INPUTS 1u  /* el_port_inputs: apply the stimulus due now */
 #define EL_PIC18_SIM_INSTANT 2u /* el_port_instant: record the instant */
 #define EL_PIC18_SIM_BOOT 3u    /* el_port_init: the firmware (re)started, its RAM cleared */
+/* An iteration of a wait loop begins (el_port_wait_tick, el_port_idle): the
+ * harness counts them and their shortest span, the bare loop's cost, so
+ * that --report can tell the cycles spent waiting from the CPU's work (the
+ * PIC18 polls where the AVR sleeps). */
+#define EL_PIC18_SIM_WAIT 4u
+#define EL_PIC18_SIM_IDLE 5u
 #define EL_PIC18_SIM_HALT 0xA5u /* el_pic18_sim_busy at start: the harness's --halt */
 
 #endif /* PIC18_HW_H */

@@ -19,8 +19,10 @@
  * harness keeps el_pic18_sim_busy nonzero (it is delivering input: UART
  * bytes, encoder edges); el_port_instant writes EL_PIC18_SIM_INSTANT;
  * el_port_init writes EL_PIC18_SIM_BOOT (a RESET cleared the RAM). The
- * harness reads the items from RAM at that moment. Other builds do nothing
- * there.
+ * harness reads the items from RAM at that moment. Each iteration of the
+ * wait loops writes EL_PIC18_SIM_WAIT or EL_PIC18_SIM_IDLE before it polls
+ * (the harness's count of the cycles spent waiting). Other builds do
+ * nothing there.
  */
 #include "el_port.h"
 #include "el_dispatch.h"
@@ -28,6 +30,12 @@
 
 #if defined(EL_DEBUG) && EL_DEBUG && !(defined(EL_RELEASE) && EL_RELEASE)
 #include "el_debug.h" /* EL_DEBUG_SERVER: whether to open the debug UART */
+#endif
+
+#if defined(EL_PIC18_SIM) && EL_PIC18_SIM
+#define SIM_SPIN(mark) (el_pic18_sim_mark = (uint8_t)(mark))
+#else
+#define SIM_SPIN(mark) ((void)0)
 #endif
 
 #if defined(EL_PIC18_SIM) && EL_PIC18_SIM
@@ -99,6 +107,7 @@ bool el_port_wait_tick(uint32_t tick)
         if ((int32_t)(el_pic18_ticks() - tick) >= 0) {
             return true;
         }
+        SIM_SPIN(EL_PIC18_SIM_WAIT);
         el_idle();
     }
 }
@@ -109,6 +118,13 @@ void el_port_idle(uint16_t max_ms)
     uint32_t span = (uint32_t)max_ms * (EL_PIC18_FCY / 1000u);
     do {
         el_pic18_watchdog_kick();
+        SIM_SPIN(EL_PIC18_SIM_IDLE);
+#if defined(EL_REMOTE_PROXY) && EL_REMOTE_PROXY && defined(EL_PIC18_REMOTE_UART)
+        if (el_pic18_uart_available() != 0u) {
+            el_idle();
+            return; /* the link brought something: the proxy looks at once (a lock-step DOWN) */
+        }
+#endif
         el_idle();
     } while (el_pic18_clock() - start < span);
 }

@@ -48,6 +48,8 @@ def add_parsers(sub) -> None:
                    help="the proxy's link: a serial device, a pty, socket://HOST:PORT (as pyserial opens them)")
     r.add_argument("--baud", type=int, default=DEFAULT_BAUD,
                    help=f"the link's baud rate, as the proxy was built (default {DEFAULT_BAUD})")
+    add_board_options(r, mcu_help="the proxy's MCU, as it was built (default: the board's own)",
+                      board_help="; the proxy's board, as it was built: the link budget counts its CPU")
     r.add_argument("--connect-timeout", metavar="S", type=float, default=5.0,
                    help="seconds to repeat HELLO until the proxy answers (default 5: opening a serial port "
                         "resets many boards)")
@@ -89,22 +91,37 @@ def cmd_proxy(args) -> int:
                             baud=args.baud, check=args.check)
     except BuildError as err:
         raise CliError(str(err)) from None
-    _say_budget(program, args.baud)
+    _say_budget(program, args.baud, built.board, args.board)
     return report_built(built)
 
 
-def _say_budget(program, baud: int) -> None:
+def _say_budget(program, baud: int, board, board_name: str) -> None:
     """Warn when `easylab remote` will refuse a real-time run
-    at ``baud`` (budget.refusal, the same check): the proxy serves
-    lock-step runs (--fast) only. The build stands: lock-step runs need no
-    budget."""
-    from ..remote.budget import refusal
+    at ``baud`` on ``board`` (budget.refusal, the same check): the proxy
+    serves lock-step runs (--fast) only. The build stands: lock-step runs
+    need no budget."""
+    from ..remote.budget import cpu_coefficients, refusal
     from ..remote.device_model import device_model
 
-    why = refusal(program, device_model(program), baud)
+    why = refusal(program, device_model(program), baud, board)
     if why is not None:
-        _say(f"easylab proxy: warning: `easylab remote` will refuse a real-time run at {baud} baud: {why}; "
+        # The options that make `easylab remote` count this board's CPU, where it has figures.
+        said = (f" --board {board_name}{f' --mcu {board.mcu}' if board.mcu else ''}"
+                if cpu_coefficients(board) is not None else "")
+        _say(f"easylab proxy: warning: `easylab remote{said}` will refuse a real-time run at {baud} baud: {why}; "
              f"this proxy serves lock-step runs (easylab remote --fast) only")
+
+
+def budget_board(args):
+    """The board whose proxy `easylab remote` drives (--board, --mcu), for
+    the CPU's share of the link budget; a CliError when it is unknown."""
+    from ..board.registry import BoardError, load_board
+    from ..core.errors import BuildError
+
+    try:
+        return load_board(args.board, args.board_path).configure(args.mcu)
+    except (BoardError, BuildError) as err:
+        raise CliError(str(err)) from None
 
 
 def _overruns_said(program, model, counters: dict) -> str:
@@ -133,8 +150,8 @@ def cmd_remote(args) -> int:
         duration = duration_arg(args, "remote")
         program = lower_model(args.file)
         model = device_model(program)
-        if not args.fast:  # real time: the proxy's clock paces, the link must keep up
-            why = refusal(program, model, args.baud)
+        if not args.fast:  # real time: the proxy's clock paces, the link and its CPU must keep up
+            why = refusal(program, model, args.baud, budget_board(args))
             if why is not None:
                 raise SetupError(f"easylab remote: {why}", EXIT_ERROR)
         cache = plugins_of(program)
@@ -187,6 +204,8 @@ def cmd_remote(args) -> int:
         engine.take_counters(counters, engine.last_time_us or 0)  # the last counts: status items and trace
         if counters["overruns"] or counters["watchdog"]:
             _say(f"easylab remote: {_overruns_said(program, model, counters)}")
+        if engine.behind:
+            _say(f"easylab remote: {engine.behind_said()}")
     except (RemoteError, OSError, ValueError) as err:  # the link, the trace, a frame not of this model
         _say(f"easylab remote: {err}")
         status = EXIT_ERROR

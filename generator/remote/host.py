@@ -112,6 +112,7 @@ class RemoteEngine(Engine):
         # In real time UP frames come at the proxy's pace: wait for the longest gap, and more.
         self.up_timeout = up_timeout or max(5.0, 2 * model.hyperperiod * model.tick_us / 1e6)
         self.frames = 0
+        self.behind = 0  # UP frames the proxy built after their instant's tick (its CPU behind its clock)
         self.proxy_overruns = [0] * len(self.program.status)  # per proxy task, as the proxy last counted them
         self._asked_us: int | None = None  # logical time of the last COUNTERS request
         self._status_io = None  # the interfaces library that holds the counts
@@ -138,10 +139,15 @@ class RemoteEngine(Engine):
         tick = t // self.devices.model.tick_us
         if released:
             up = self.link.up(tick, self.up_timeout)
-            if not up or up[0] != K.STATE_RUNNING:
-                raise RemoteError(f"{self.link.url}: at {t / 1e6:.6f} s the proxy applied its safe values (the "
-                                  f"host's values came late {self.devices.model.overrun_limit} times in a row, or "
-                                  "its watchdog expired); the run ends")
+            if up and up[0] & K.STATE_BEHIND:
+                self.behind += 1
+            if not up or up[0] & ~K.STATE_BEHIND != K.STATE_RUNNING:
+                why = (f"the host's values came late {self.devices.model.overrun_limit} times in a row, or its "
+                       "watchdog expired")
+                if self.behind:  # the proxy's own CPU made them late: say so first
+                    why = f"{self.behind_said()}; so {why}"
+                raise RemoteError(f"{self.link.url}: at {t / 1e6:.6f} s the proxy applied its safe values ({why}); "
+                                  "the run ends")
             self.devices.take(released, up[1:])
         super().step()
         model = self.devices.model  # the program's (a swap in this step rebinds it)
@@ -163,6 +169,12 @@ class RemoteEngine(Engine):
         if self.link.latest_counters is not None:
             self.take_counters(self.link.latest_counters, t)
             self.link.latest_counters = None
+
+    def behind_said(self) -> str:
+        """The proxy's own lateness in the words of docs/remote.md."""
+        return (f"the proxy was behind its clock at {self.behind} instant{'s' if self.behind != 1 else ''} "
+                "(instants processed after their time: its CPU cannot keep the device model's period; "
+                "`easylab remote --board B` counts it in the link budget)")
 
     def take_counters(self, counters: dict, time_us: int) -> None:
         """The proxy's overrun counts into the status items

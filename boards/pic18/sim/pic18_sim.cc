@@ -39,6 +39,9 @@
  * one (seen at 1 Mbaud, 100 cycles a byte); a byte the firmware has not
  * taken yet waits (no overrun is modelled).
  *
+ * - el_pic18_sim_mark's EL_PIC18_SIM_WAIT and _IDLE: the iterations of the
+ *   firmware's wait loops, counted at their bare cost as "asleep" by
+ *   --report (cycles_waiting): the rest is the CPU's work.
  * Time: gpsim counts instruction cycles exactly (10 MHz at 40 MHz).
  * --fast runs flat out; otherwise the harness keeps the simulated time in
  * step with the wall clock. Exit status: 0 the run ended, 1 an error during
@@ -86,6 +89,7 @@ namespace {
 const unsigned MARK_INPUTS = 1u;
 const unsigned MARK_INSTANT = 2u;
 const unsigned MARK_BOOT = 3u;
+const unsigned MARK_WAIT = 4u, MARK_IDLE = 5u; /* an iteration of a wait loop */
 const unsigned KEPT_SIM_HALT = 0xA5u;
 
 /* Special function registers (the same on both parts). */
@@ -650,9 +654,44 @@ bool stack_guard_intact()
     return true;
 }
 
+/* The cycles spent waiting, for --report's "asleep" (the PIC18 polls
+ * where the AVR sleeps): each wait loop's iterations (a mark each, before
+ * it polls), each at the loop's bare cost, the shortest span between two
+ * of its marks in a row. What an iteration takes beyond that (a received
+ * byte decoded, an interrupt) is the CPU's work. */
+struct SpinLoop {
+    guint64 count = 0u;
+    guint64 shortest = ~(guint64)0u;
+};
+SpinLoop spin_loops[2];
+int spin_open = -1; /* the loop whose iteration the last mark began, if it did */
+guint64 spin_at;
+
+void spin_mark(unsigned value)
+{
+    guint64 now = get_cycles().get();
+    int loop = value == MARK_WAIT ? 0 : value == MARK_IDLE ? 1 : -1;
+    if (loop >= 0 && loop == spin_open && now - spin_at < spin_loops[loop].shortest)
+        spin_loops[loop].shortest = now - spin_at;
+    if (loop >= 0)
+        spin_loops[loop].count++;
+    spin_open = loop;
+    spin_at = now;
+}
+
+guint64 cycles_waiting()
+{
+    guint64 total = 0u;
+    for (const SpinLoop &l : spin_loops)
+        if (l.shortest != ~(guint64)0u)
+            total += l.count * l.shortest;
+    return total;
+}
+
 void on_write(unsigned address, unsigned value)
 {
     if (address == sim_mark_addr) {
+        spin_mark(value);
         if (value == MARK_INPUTS) {
             if (!stack_guard_intact()) {
                 sim_exit_status = SIM_EXIT_RUN;
@@ -897,5 +936,5 @@ int main(int argc, char **argv)
     }
     if (!sim_chips_finish() && sim_exit_status == SIM_EXIT_OK)
         sim_exit_status = SIM_EXIT_RUN;
-    return sim_finish(get_cycles().get(), 0u, eeprom_image());
+    return sim_finish(get_cycles().get(), cycles_waiting(), eeprom_image());
 }
