@@ -45,7 +45,7 @@ static void usage(FILE *f, const char *firmware_option, const char *simulator)
 {
     fprintf(f,
             "usage: %s [--fast] [--duration T] [--cycles N] [--stimulus FILE.csv] [--trace FILE.csv|FILE.vcd]\n"
-            "          [--pins FILE.csv|FILE.vcd] [--nvram FILE] [--uartN pty:LINK|tcp:PORT|file:PATH|null]\n"
+            "          [--trace-state] [--pins FILE.csv|FILE.vcd] [--nvram FILE] [--uartN pty:LINK|tcp:PORT|file:PATH|null]\n"
             "          [--rtu-frames] [--wait] [--halt] [%s FILE] [--report] [--help]\n"
             "Runs the %s firmware of model %s in %s.\n"
             "  --fast            flat out (default: in step with the wall clock)\n"
@@ -53,6 +53,8 @@ static void usage(FILE *f, const char *firmware_option, const char *simulator)
             "  --cycles N        end after N CPU cycles\n"
             "  --stimulus FILE   device data, params and vars over time (the host board's format)\n"
             "  --trace FILE      items and charts at every instant (.csv or .vcd, the host board's format)\n"
+            "  --trace-state     the trace also records the devices' `state` fields (DEVICE.FIELD, after the\n"
+            "                    items), read from the MCU's RAM, as the host board's --trace-state\n"
             "  --pins FILE       the model's pins as they change (.csv: cycle,time_us,pin,value; .vcd);\n"
             "                    a PWM output as its duty 0..255\n"
             "  --nvram FILE      the EEPROM (%lu bytes), read at start and written at the end\n"
@@ -135,6 +137,8 @@ int sim_parse_args(int argc, char **argv, const char *firmware_option, const cha
             sim_opt.halt = true;
         } else if (strcmp(a, "--report") == 0) {
             sim_opt.report = true;
+        } else if (strcmp(a, "--trace-state") == 0) {
+            el_host_trace_state = true;
         } else if (!takes_value(a, firmware_option)) {
             el_host_error("unknown option '%s' (--help lists them)", a);
             return SIM_EXIT_USAGE;
@@ -472,6 +476,18 @@ static void mirror_from_mcu(unsigned kinds, bool charts)
                 sim_ram_read(sim_chart_addr[c].addr, (void *)el_charts[c].active, sim_chart_addr[c].size);
 }
 
+/* --trace-state: copy the devices' state fields from the MCU into the
+ * host-side mirrors of el_host_state_items. */
+static void mirror_states_from_mcu(void)
+{
+    uint16_t i;
+    if (!el_host_trace_state)
+        return;
+    for (i = 0; i < sim_state_addr_count && i < el_host_state_item_count; i++)
+        if (sim_state_addr[i].addr != 0xFFFFu)
+            sim_ram_read(sim_state_addr[i].addr, (void *)el_host_state_items[i].addr, sim_state_addr[i].size);
+}
+
 uint64_t sim_tick_extend_bits(uint32_t tick, unsigned bits)
 {
     static uint64_t last;
@@ -581,6 +597,7 @@ void sim_instant_record(uint64_t tick)
     if (sim_opt.trace == NULL)
         return;
     mirror_from_mcu(0xFu, true);
+    mirror_states_from_mcu();
     el_host_trace_instant(tick);
 }
 

@@ -58,6 +58,11 @@ enum { SIM_PIN_LEVEL = 0, SIM_PIN_PWM = 1 };
 extern const sim_addr_t sim_item_addr[];
 extern const sim_addr_t sim_chart_addr[];
 extern const uint16_t sim_tick_addr;
+/* Where each device state field of el_host_state_items (host_internal.h:
+ * the trace of --trace-state) lives in the MCU: its device's state plus the
+ * field's offset, which the firmware's compiler checked (el_state_layout.c). */
+extern const sim_addr_t sim_state_addr[];
+extern const uint16_t sim_state_addr_count;
 extern const sim_hw_t sim_hw[];
 extern const uint16_t sim_hw_count;
 extern const uint16_t sim_pin_count;

@@ -23,6 +23,7 @@ import subprocess
 from pathlib import Path
 
 from easylab.board import handlers, resources
+from easylab.codegen.device_state import state_layout_source
 from easylab.board.base import BoardBase
 from easylab.board.cbuild import (compile_objects, dispatcher_width_flags, elf_sections, include_flags, mode_flags,
                                   require_tool, run,
@@ -69,7 +70,8 @@ class AvrBoard(BoardBase):
         """The device tables and configuration, and the handlers a model
         brings for the board (they may use the I2C bus: el_bus.h)."""
         return {**devices.files(program, self, checked, release),
-                **handlers.source(program, self.name, includes=("el_bus.h",), chip_select=self.chip_select)}
+                **handlers.source(program, self.name, includes=("el_bus.h",), chip_select=self.chip_select),
+                **(state_layout_source(program, self.name) if self.sim else {})}
 
     def chip_select(self, pin: str) -> str:
         """A chip select for handler files (EL_CS): struct el_pin of el_board.h."""
@@ -89,9 +91,10 @@ class AvrBoard(BoardBase):
         objects = compile_objects(compiler, flags, sources, out_dir / "obj", out_dir,
                                   self.description.toolchain.file_cflags)
         elf = out_dir / f"{program.name}.elf"
-        # Every item and chart stays in a simulation build, even one no code
-        # reads: the harness traces it from RAM.
-        keep = [f"-Wl,--undefined={s}" for s in kept_symbols(program) + [simulator.TICK_SYMBOL]] if self.sim else []
+        # Every item, chart and device state stays in a simulation build, even
+        # one no code reads: the harness traces it from RAM.
+        keep = [f"-Wl,--undefined={s}" for s in kept_symbols(program, self.name) + [simulator.TICK_SYMBOL]] \
+            if self.sim else []
         link = [compiler, f"-mmcu={self.part.name}", "-Os", "-o", str(elf), *map(str, objects),
                 *self.description.toolchain.ldflags, *keep]
         proc = subprocess.run(link, capture_output=True, text=True)

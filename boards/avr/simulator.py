@@ -12,7 +12,7 @@ from pathlib import Path
 from easylab.board.cbuild import require_tool, run, write_files
 from easylab.board.registry import load_board
 from easylab.board.simtables import (c_string, chip_hardware_row, chip_table, no_model_tables,
-                                     ram_tables, sim_table, trace_tables)
+                                     ram_tables, sim_table, state_tables, trace_tables)
 from easylab.board.stimulus_columns import driven_items, unread_table
 from easylab.core.errors import BuildError
 from easylab.core.paths import data_dir, runtime_dir
@@ -122,6 +122,7 @@ def sim_model_source(program: Program, board, elf: Path) -> str:
     lines += trace_tables(program)
     symbols = ram_symbols(board.description.toolchain.tool("nm", "avr-nm"), elf)
     lines += ram_tables(program, symbols, TICK_SYMBOL, str(elf))
+    lines += state_tables(program, board.name, symbols, str(elf))
     lines.append(f"const uint8_t sim_tick_size = {symbols.get(TICK_SYMBOL, (0, 4))[1]}u;")
     hardware = _hardware_rows(program, views, board.name)
     lines += sim_table("sim_hw_t", "sim_hw", "sim_hw_count", [row for row, _item, _kind in hardware],

@@ -23,6 +23,7 @@ import subprocess
 from pathlib import Path
 
 from easylab.board import handlers, resources
+from easylab.codegen.device_state import state_layout_source
 from easylab.board.base import BoardBase
 from easylab.board.cbuild import mode_flags, require_tool, runtime_sources, write_files
 from easylab.board.contract import Compiled, CompileOptions, SizeReport, Simulator
@@ -64,7 +65,8 @@ class Pic18Board(BoardBase):
         brings for the board (el_handlers.c: portable C, lowered and
         compiled as model.c is; they may use the MSSP's buses, el_bus.h)."""
         return {**devices.files(program, self, checked, release),
-                **handlers.source(program, self.name, includes=("el_bus.h",), chip_select=self.chip_select)}
+                **handlers.source(program, self.name, includes=("el_bus.h",), chip_select=self.chip_select),
+                **(state_layout_source(program, self.name) if self.sim else {})}
 
     def device_call(self, device, handler: str) -> str:
         """A handler file's function is called by its name: el_pic18_devices.h

@@ -20,6 +20,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 from ..codegen.c_syntax import C_KIND_ENUM, C_TYPE_ENUM, c_string, ident
+from ..codegen.device_state import packed_fields, state_devices
 from ..core.errors import BuildError
 from ..core.paths import sim_dir
 from ..ir.program import Device, Program
@@ -114,6 +115,39 @@ def ram_tables(program: Program, symbols: dict[str, tuple[int, int]], tick_symbo
     return lines
 
 
+def state_tables(program: Program, board: str, symbols: dict[str, tuple[int, int]], where: str) -> list[str]:
+    """``el_host_state_items`` over host-side mirrors ``m_s<k>`` (the
+    `state` fields of the devices running ``board``'s handler files, named
+    ``DEVICE.FIELD`` in device then field order, as the host board's trace
+    has them: host_internal.h) and ``sim_state_addr``, each field's RAM
+    address in the MCU: its device's ``el_mdev<id>_state`` from the linked
+    program's ``symbols`` plus the field's offset in the layout the firmware
+    checks (device_state.layout_check_lines); ``where`` names the program
+    in the error when a state is missing."""
+    mirrors, rows, addresses, missing = [], [], [], []
+    for dev in state_devices(program, board):
+        base = symbols.get(state_symbol(dev))
+        if base is None:
+            missing.append(state_symbol(dev))
+        for name, t, count, offset in packed_fields(dev):
+            k = len(rows)
+            mirrors.append(f"static {t.c_name} m_s{k}[{count}];")
+            rows.append(f"    {{ {c_string(f'{dev.path}.{name}')}, m_s{k}, {C_TYPE_ENUM[t.name]}, EL_K_DEV_STATE, "
+                        f"{dev.id}u, {count}u }},")
+            addr = 0xFFFF if base is None else base[0] + offset
+            addresses.append(f"    {{ 0x{addr:04x}u, {t.bits // 8 * count}u }}, /* {state_symbol(dev)}.{name} */")
+    if missing:
+        raise BuildError(f"{where}: symbols the simulator needs are missing: {', '.join(missing)}")
+    return mirrors + sim_table("el_item_t", "el_host_state_items", "el_host_state_item_count", rows,
+                               '{ "", (void *)0, 0u, 0u, EL_NO_DEVICE, 0u }') \
+        + sim_table("sim_addr_t", "sim_state_addr", "sim_state_addr_count", addresses, "{ 0xffffu, 0u }")
+
+
+def state_symbol(device: Device) -> str:
+    """The firmware's variable holding a device's state (board/handlers.py)."""
+    return f"el_mdev{device.id}_state"
+
+
 def sim_table(c_type: str, name: str, count_name: str, rows: list[str], empty_row: str) -> list[str]:
     """A harness table and its row count: C has no empty arrays, so a table
     without rows holds ``empty_row`` (an unused row) and a count of 0."""
@@ -121,10 +155,13 @@ def sim_table(c_type: str, name: str, count_name: str, rows: list[str], empty_ro
             + ["};", f"const uint16_t {count_name} = {len(rows)}u;"])
 
 
-def kept_symbols(program: Program) -> list[str]:
-    """Every item and chart symbol: a simulation build keeps them all, even
-    one no code reads, since the harness traces them from RAM."""
-    return [item_symbol(program, it.id) for it in program.items] + [chart_symbol(c.id) for c in program.charts]
+def kept_symbols(program: Program, board: str | None = None) -> list[str]:
+    """Every item and chart symbol, and with ``board`` every device state
+    there: a simulation build keeps them all, even one no code reads, since
+    the harness traces them from RAM."""
+    states = [state_symbol(d) for d in state_devices(program, board)] if board is not None else []
+    return [item_symbol(program, it.id) for it in program.items] + [chart_symbol(c.id) for c in program.charts] \
+        + states
 
 
 def no_model_tables(simulator: str, empty_pin: str) -> list[str]:
@@ -149,6 +186,10 @@ def no_model_tables(simulator: str, empty_pin: str) -> list[str]:
         "const sim_addr_t sim_item_addr[1] = { { 0xffffu, 2u } };",
         "const sim_addr_t sim_chart_addr[1] = { { 0xffffu, 0u } };",
         "const uint16_t sim_tick_addr = 0xffffu;",
+        "const el_item_t el_host_state_items[1] = { { \"\", (void *)0, 0u, 0u, EL_NO_DEVICE, 0u } };",
+        "const uint16_t el_host_state_item_count = 0u;",
+        "const sim_addr_t sim_state_addr[1] = { { 0xffffu, 0u } };",
+        "const uint16_t sim_state_addr_count = 0u;",
         "const sim_hw_t sim_hw[1] = { { 0xffffu, SIM_HW_NONE, 0u, 0u, 0UL } };",
         "const uint16_t sim_hw_count = 0u;",
         f"const sim_pin_t sim_pins[1] = {{ {empty_pin} }};",

@@ -57,6 +57,9 @@ def add_parsers(sub) -> None:
                    help="params and vars from a CSV file (the host board's format; device columns are the "
                         "proxy's and are ignored here)")
     r.add_argument("--trace", metavar="FILE", help="record every item and chart at each instant (.csv or .vcd)")
+    r.add_argument("--trace-state", action="store_true",
+                   help="refused: the devices' `state` fields live on the proxy, whose frames carry only their "
+                        "data (docs/remote.md)")
     r.add_argument("--duration", metavar="T", help="stop before logical time T (10s, 500ms, ...); default: endless")
     r.add_argument("--fast", action="store_true",
                    help="lock-step virtual time: the proxy waits for each answer (simulated devices only); "
@@ -74,6 +77,12 @@ def add_parsers(sub) -> None:
     add_debug_arguments(served)
     add_service_arguments(served)
     r.set_defaults(func=cmd_remote)
+
+
+# Why `easylab remote --trace-state` is refused (docs/remote.md, "Device states").
+TRACE_STATE_REFUSED = ("--trace-state: the devices' `state` fields live in the proxy's RAM on the target and its "
+                       "UP frames carry only the devices' data; trace them with the firmware's or `easylab run`'s "
+                       "--trace-state")
 
 
 def _say(text: str) -> None:
@@ -146,6 +155,9 @@ def cmd_remote(args) -> int:
     from .run_command import (SetupError, _on_signals, _restore, boot_served, duration_arg, finish_run, plugins_of,
                               stimulus_arg)
 
+    if args.trace_state:
+        _say(f"easylab remote: {TRACE_STATE_REFUSED}")
+        return EXIT_USAGE
     try:
         duration = duration_arg(args, "remote")
         program = lower_model(args.file)
