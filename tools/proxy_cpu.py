@@ -214,8 +214,8 @@ def measure_built(simulator: Path, program, work: Path, instants: int = 100,
 
 
 def measure_text(text: str, board: str, work: Path, mcu: str | None = None, instants: int = 100,
-                 repeats: int = REPEATS) -> Measured:
-    """``measure`` for a model given as text (at CALIBRATION_BAUD), the
+                 repeats: int = REPEATS, baud: int = CALIBRATION_BAUD) -> Measured:
+    """``measure`` for a model given as text (at ``baud``), the
     median of ``repeats`` measurements (the host's round trips, longer or
     shorter, leave some noise: the clock's interrupts meanwhile are taken
     out at their share, not one by one)."""
@@ -225,38 +225,38 @@ def measure_text(text: str, board: str, work: Path, mcu: str | None = None, inst
     program, result = lower_file(path)
     if program is None:
         raise RuntimeError(result.report())
-    found = sorted((measure(program, board, work / f"m{n}", mcu, instants) for n in range(repeats)),
+    found = sorted((measure(program, board, work / f"m{n}", mcu, instants, baud) for n in range(repeats)),
                    key=lambda m: m.cycles_per_instant)
     return found[len(found) // 2]
 
 
-def calibrate(board: str, mcu: str | None = None, instants: int = 100) -> dict:
+def calibrate(board: str, mcu: str | None = None, instants: int = 100, baud: int = CALIBRATION_BAUD) -> dict:
     """The coefficients of ``board`` (board.toml's [remote_cpu], rounded up
     with HEADROOM): ``instant``, a release instant of one proxy task that
     reads one device (its frames' fixed bytes, the dispatcher, the link's
     code); ``task``, each further task released at it; ``drivers``, each
     device's share by its driver (its read or its write and its data's
     bytes in the frames); ``clock_share``, the share of every cycle its
-    clock's interrupts take at a 1 ms tick."""
+    clock's interrupts take at a 1 ms tick; all with the link at ``baud``."""
     measured = []
     with tempfile.TemporaryDirectory() as tmp:
         work = Path(tmp)
-        base = measure_text(calibration_model(board, None), board, work / "base", mcu, instants)
+        base = measure_text(calibration_model(board, None), board, work / "base", mcu, instants, baud=baud)
         measured.append(base)
         drivers = {}
         for kind in _kinds(PINS[board]):
-            m = measure_text(calibration_model(board, kind), board, work / kind, mcu, instants)
+            m = measure_text(calibration_model(board, kind), board, work / kind, mcu, instants, baud=baud)
             measured.append(m)
             drivers[kind] = m.cycles_per_instant - base.cycles_per_instant
             print(f"{kind}: {m.cycles_per_instant:.0f} cycles per instant ({drivers[kind]:+.0f})", file=sys.stderr)
-        two = measure_text(two_task_model(board), board, work / "two_tasks", mcu, instants)
+        two = measure_text(two_task_model(board), board, work / "two_tasks", mcu, instants, baud=baud)
         measured.append(two)
         task = two.cycles_per_instant - base.cycles_per_instant - drivers["digital_in"]
         print(f"task: {two.cycles_per_instant:.0f} cycles per instant ({task:+.0f})", file=sys.stderr)
     # The base model's digital input is one more digital_in.
     instant = base.cycles_per_instant - drivers["digital_in"]
     share = max(m.tick_share for m in measured)
-    return {"baud": CALIBRATION_BAUD, "clock_share": math.ceil(share * HEADROOM * 10000) / 10000,
+    return {"baud": baud, "clock_share": math.ceil(share * HEADROOM * 10000) / 10000,
             "instant": math.ceil(instant * HEADROOM), "task": math.ceil(task * HEADROOM),
             "drivers": {k: math.ceil(max(v, 0.0) * HEADROOM) for k, v in drivers.items()}}
 
@@ -266,12 +266,16 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("board", choices=sorted(PINS))
     parser.add_argument("--mcu")
     parser.add_argument("--instants", type=int, default=100)
+    parser.add_argument("--baud", type=int, default=CALIBRATION_BAUD,
+                        help=f"the link's rate of the measurements (default {CALIBRATION_BAUD})")
     args = parser.parse_args(argv)
-    found = calibrate(args.board, args.mcu, args.instants)
+    found = calibrate(args.board, args.mcu, args.instants, args.baud)
     print("[remote_cpu]")
-    for k in ("baud", "clock_share", "instant", "task"):
+    print(f"clock_share = {found['clock_share']}  # board.toml keeps the largest of its rates'")
+    print(f"[remote_cpu.at_{found['baud']}]")
+    for k in ("instant", "task"):
         print(f"{k} = {found[k]}")
-    print("[remote_cpu.drivers]")
+    print(f"[remote_cpu.at_{found['baud']}.drivers]")
     for k, v in found["drivers"].items():
         print(f"{k} = {v}")
     return 0

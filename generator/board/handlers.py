@@ -24,7 +24,7 @@ from pathlib import Path
 from typing import Callable
 
 from ..codegen.c_syntax import c_comment, c_literal, c_string
-from ..codegen.device_state import state_devices, state_items, state_type_lines  # noqa: F401 (re-exported: the boards use them through this module)
+from ..codegen.device_state import state_devices, state_items, state_symbol, state_type_lines  # noqa: F401 (re-exported: the boards use them through this module)
 from ..core.impl_files import DEVICE_BLOCKS, split_impl
 from ..core import types as T
 from ..core.errors import BuildError
@@ -131,7 +131,7 @@ class Binding:
 
 def firmware_binding(program: Program, device: Device) -> Binding:
     """Firmware: the items of model.c and a static state per device."""
-    return Binding(lambda item: item_symbol(program, item.id), f"el_mdev{device.id}_state")
+    return Binding(lambda item: item_symbol(program, item.id), state_symbol(device))
 
 
 def device_block(program: Program, device: Device, code: HandlerCode, binding: Binding,

@@ -20,7 +20,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 from ..codegen.c_syntax import C_KIND_ENUM, C_TYPE_ENUM, c_string, ident
-from ..codegen.device_state import packed_fields, state_devices
+from ..codegen.device_state import packed_fields, state_devices, state_symbol
 from ..core.errors import BuildError
 from ..core.paths import sim_dir
 from ..ir.program import Device, Program
@@ -141,11 +141,6 @@ def state_tables(program: Program, board: str, symbols: dict[str, tuple[int, int
     return mirrors + sim_table("el_item_t", "el_host_state_items", "el_host_state_item_count", rows,
                                '{ "", (void *)0, 0u, 0u, EL_NO_DEVICE, 0u }') \
         + sim_table("sim_addr_t", "sim_state_addr", "sim_state_addr_count", addresses, "{ 0xffffu, 0u }")
-
-
-def state_symbol(device: Device) -> str:
-    """The firmware's variable holding a device's state (board/handlers.py)."""
-    return f"el_mdev{device.id}_state"
 
 
 def sim_table(c_type: str, name: str, count_name: str, rows: list[str], empty_row: str) -> list[str]:

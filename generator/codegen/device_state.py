@@ -20,6 +20,12 @@ def state_type_lines(device: Device) -> list[str]:
             + [f"}} el_mdev{device.id}_state_t;"])
 
 
+def state_symbol(device: Device) -> str:
+    """The firmware's variable holding a device's state (its handlers' code,
+    the debug tables, a simulator's harness reading it from RAM)."""
+    return f"el_mdev{device.id}_state"
+
+
 def state_devices(program: Program, board: str) -> list[Device]:
     """The devices that keep a state on ``board``: those running a handler
     file of the model's there whose type declares ``state`` fields."""
@@ -33,7 +39,7 @@ def state_items(program: Program, board: str) -> list[tuple[Device, str, T.Value
     out = []
     for dev in state_devices(program, board):
         for name, t, size in dev.states:
-            where = f"el_mdev{dev.id}_state.{name}"
+            where = f"{state_symbol(dev)}.{name}"
             out.append((dev, name, t, size or 1, where if size else f"&{where}"))
     return out
 

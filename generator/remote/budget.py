@@ -91,29 +91,44 @@ class InstantBudget:
 
 @dataclass
 class CpuCoefficients:
-    """A board's [remote_cpu] (board.toml): cycles of its CPU per release
-    instant (one task reading one device), per further task released then,
-    per device by its driver; the share of the cycles its clock's
-    interrupts take at a 1 ms tick; the CPU's cycles per second."""
+    """A board's [remote_cpu] (board.toml) at one baud rate: cycles of its
+    CPU per release instant (one task reading one device), per further task
+    released then, per device by its driver, as measured with the link at
+    ``baud``; the share of the cycles its clock's interrupts take at a 1 ms
+    tick; the CPU's cycles per second."""
 
     cycle_hz: int
     instant: int
     task: int
     clock_share: float
     drivers: dict[str, int] = field(default_factory=dict)
+    baud: int = DEFAULT_BAUD
 
     def driver(self, name: str) -> int:
         """A driver's cycles; one not measured counts as the dearest measured."""
         return self.drivers.get(name, max(self.drivers.values(), default=0))
 
 
-def cpu_coefficients(board) -> CpuCoefficients | None:
-    """The configured ``board``'s coefficients, or None when it has none."""
+CALIBRATION_PREFIX = "at_"  # [remote_cpu.at_115200]: the figures measured at 115200 baud
+
+
+def cpu_coefficients(board, baud: int = DEFAULT_BAUD) -> CpuCoefficients | None:
+    """The configured ``board``'s coefficients for a link at ``baud``, or
+    None when it has none. A board measures them at a few rates
+    ([remote_cpu.at_BAUD]); the link's code costs less per instant the
+    faster its bytes come (several per pass through it), so the figures of
+    the fastest rate not above ``baud`` count (those of the slowest for a
+    slower link: below it every byte comes alone, as at that rate)."""
     table = board.description.table("remote_cpu") if board is not None else {}
-    if not table:
+    rates = {int(k[len(CALIBRATION_PREFIX):]): v for k, v in table.items()
+             if k.startswith(CALIBRATION_PREFIX) and isinstance(v, dict)}
+    if not rates:
         return None
-    return CpuCoefficients(int(table["cycle_hz"]), int(table["instant"]), int(table["task"]),
-                           float(table["clock_share"]), {k: int(v) for k, v in table.get("drivers", {}).items()})
+    at = max((r for r in rates if r <= baud), default=min(rates))
+    chosen = rates[at]
+    return CpuCoefficients(int(table["cycle_hz"]), int(chosen["instant"]), int(chosen["task"]),
+                           float(table["clock_share"]), {k: int(v) for k, v in chosen.get("drivers", {}).items()},
+                           at)
 
 
 def cpu_share(model: DeviceModel, coefficients: CpuCoefficients, released: list[int], part: str,
@@ -149,7 +164,7 @@ def link_budget(program: Program, model: DeviceModel, baud: int, board=None) -> 
     """The budget of every release instant of the device model's table, the
     proxy's CPU counted when ``board`` (configured: its MCU chosen) has
     coefficients."""
-    coefficients = cpu_coefficients(board)
+    coefficients = cpu_coefficients(board, baud)
     part = _part_name(board)
     clock_hz = int(board.description.raw.get("clock_hz", 0)) if board is not None else 0
     releases = [i for i in model.instants if i.release]

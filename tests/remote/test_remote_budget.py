@@ -46,13 +46,19 @@ def wheel_proxy(build_cache, baud: int):
     return build_cache.get(("pic18-proxy", str(WHEEL), MCU, baud), make)
 
 
+def measure_wheel(build_cache, work: Path, baud: int):
+    """A fresh gpsim measurement of the wheel drive's proxy (30 and 90
+    release instants in lock-step with the link at ``baud``)."""
+    program, _ = lower_file(WHEEL)
+    built = wheel_proxy(build_cache, baud)
+    return proxy_cpu.measure_built(built.simulator, program, work, instants=30, baud=baud)
+
+
 @pytest.fixture
 def measured(build_cache, tmp_path):
-    """A fresh gpsim measurement of the wheel drive's proxy (30 and 90
-    release instants in lock-step at the coefficients' baud rate)."""
-    program, _ = lower_file(WHEEL)
-    built = wheel_proxy(build_cache, proxy_cpu.CALIBRATION_BAUD)
-    return proxy_cpu.measure_built(built.simulator, program, tmp_path / "measure", instants=30)
+    """The wheel drive's proxy measured at 1 Mbaud, the rate the refusals
+    below are asked about."""
+    return measure_wheel(build_cache, tmp_path / "measure", 1_000_000)
 
 
 def measured_ms(m) -> float:
@@ -61,13 +67,35 @@ def measured_ms(m) -> float:
     return m.cycles_per_instant / (10e6 * (1 - m.tick_share)) * 1e3
 
 
-def test_the_coefficients_bound_a_fresh_measurement(measured):
+@pytest.mark.parametrize("baud", [115200, 1_000_000])
+def test_the_coefficients_bound_a_fresh_measurement(build_cache, tmp_path, baud):
+    """At each rate the board has figures for, those figures bound the
+    proxy's cycles measured at that rate."""
     program, _ = lower_file(WHEEL)
     board = load_board("pic18").configure(MCU)
-    (instant,) = link_budget(program, device_model(program), proxy_cpu.CALIBRATION_BAUD, board)
-    assert measured.cycles_per_instant <= instant.cpu.cycles <= MARGIN * measured.cycles_per_instant, \
-        (instant.cpu.parts, measured)
-    assert measured.tick_share <= instant.cpu.clock_share <= MARGIN * measured.tick_share, measured
+    m = measure_wheel(build_cache, tmp_path / "measure", baud)
+    (instant,) = link_budget(program, device_model(program), baud, board)
+    assert measured_cycles_bound(m, instant.cpu.cycles), (instant.cpu.parts, m)
+    assert m.tick_share <= instant.cpu.clock_share <= MARGIN * m.tick_share, m
+
+
+def measured_cycles_bound(m, cycles: int) -> bool:
+    """Do the budget's ``cycles`` bound measurement ``m``, not above MARGIN of it?"""
+    return m.cycles_per_instant <= cycles <= MARGIN * m.cycles_per_instant
+
+
+def test_the_figures_of_the_fastest_rate_not_above_the_links_count():
+    """A link between two measured rates counts the slower rate's figures
+    (more cycles: bytes come fewer per pass); one slower than every rate
+    the slowest's."""
+    program, _ = lower_file(WHEEL)
+    board = load_board("pic18").configure(MCU)
+
+    def cycles(baud: int) -> int:
+        (instant,) = link_budget(program, device_model(program), baud, board)
+        return instant.cpu.cycles
+
+    assert cycles(9600) == cycles(115200) == cycles(500_000) > cycles(1_000_000) == cycles(2_000_000)
 
 
 def test_the_wheel_drive_at_1_ms_is_refused_with_the_measured_numbers(measured, tmp_path):
@@ -149,3 +177,24 @@ def test_a_proxy_behind_its_clock_still_serves_its_link(build_cache, tmp_path):
     assert re.search(r"the proxy was behind its clock at \d+ instants? \(instants processed after their time: its "
                      r"CPU cannot keep the device model's period; `easylab remote --board B` counts it in the link "
                      r"budget\)", proc.stderr), (proc.stderr, err)
+
+
+def test_blink_through_the_avr_proxy_fits_at_1_mbaud_as_measured(tmp_path):
+    """blink's 1 ms task through the ATmega328P's proxy, which the suite's
+    real-time tests run at 1 Mbaud to the native trace: the budget with
+    `--board avr` takes it, its figures for 1 Mbaud bound a fresh
+    measurement in simavr, and at 115200 baud (where the wire alone is too
+    slow) it is refused."""
+    blink = ROOT / "examples" / "blink.elab"
+    program, _ = lower_file(blink)
+    board = load_board("avr").configure("atmega328p")
+    (instant,) = link_budget(program, device_model(program), 1_000_000, board)
+    assert instant.fits, (instant.need_us, instant.cpu.parts)
+    m = proxy_cpu.measure(program, "avr", tmp_path / "measure", mcu="atmega328p", instants=30, baud=1_000_000)
+    assert measured_cycles_bound(m, instant.cpu.cycles), (instant.cpu.parts, m)
+    assert instant.wire_us + m.cycles_per_instant / 16.0 < 1000
+    proc = remote(blink, tmp_path / "no-link", "--board", "avr", "--mcu", "atmega328p", "--baud", "1000000",
+                  "--connect-timeout", "0.2")
+    assert "cannot keep up" not in proc.stderr and "cannot open" in proc.stderr, proc.stderr
+    proc = remote(blink, tmp_path / "no-link", "--board", "avr", "--mcu", "atmega328p", "--baud", "115200")
+    assert proc.returncode == 1 and "the proxy cannot keep up" in proc.stderr, proc.stderr
