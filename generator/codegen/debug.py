@@ -57,6 +57,7 @@ _KIND_ENUM = {"param": "EL_DBG_K_PARAM", "var": "EL_DBG_K_VAR", "dev_out": "EL_D
 # which only its handlers change; so is a chart's state (its active steps,
 # its steps' times), which only its evolutions change.
 WRITABLE_KINDS = ("param", "var", "dev_out", "state")
+CHART_KINDS = ("chart", "step_time")
 
 
 def has_debug_interface(program: Program) -> bool:
@@ -292,7 +293,8 @@ def buffer_sizes(program: Program, items: list[DebugItem], actors: int) -> Simpl
     protocol's limits: ``value``, its largest element (bytes); ``tx`` and
     ``writes``, the entries of a transaction and of the queue of single
     writes (at most TX_MAX and WRITE_QUEUE, and at most one per element of
-    the model's items: a transaction that touches every element once fits);
+    the model's items, the charts' state aside: a transaction that touches
+    every element of them once fits);
     ``breakpoints``, the slots (at most BP_MAX, and at most the model's
     probe points: the instant, its tasks, charts, steps, transitions and
     the ``actors`` instances; a point holds one slot at most);
@@ -302,7 +304,9 @@ def buffer_sizes(program: Program, items: list[DebugItem], actors: int) -> Simpl
     read of its largest item, a transaction's reads), at most MAX_FRAME."""
     k = protocol_constants()
     value = max((_element_bytes(d.type) for d in items), default=1)
-    elements = max(1, sum(d.count for d in items))
+    # the charts' state is read-only and read by few: it does not grow the queues (a transaction that reads
+    # it as well may find them full, E_QUEUE_FULL)
+    elements = max(1, sum(d.count for d in items if d.kind not in CHART_KINDS))
     tx, writes = min(k.TX_MAX, elements), min(k.WRITE_QUEUE, elements)
     points = 1 + len(program.tasks) + actors + sum(1 + len(c.steps) + len(c.transitions) for c in program.charts)
     breakpoints = min(k.BP_MAX, points)
