@@ -114,6 +114,47 @@ def test_chart_items_are_read_only(builds, firmware):
     assert getattr(e.value, "status", None) == K.E_READ_ONLY
 
 
+def test_the_map_has_the_charts_state_last_and_read_only():
+    from easylab.board.registry import load_board
+    from easylab.codegen import render as cgen
+    from easylab.codegen.debug import buffer_sizes, debug_items
+    from easylab.core.paths import templates_dir
+    from easylab.host_tools.map_schema import DEBUG_MAP_SCHEMA
+    from easylab.pipeline import lower_file
+    import jsonschema
+
+    program, _ = lower_file(ROOT / MODEL)
+    files = cgen.render(program, load_board("host"), templates_dir())
+    m = json.loads(files["debug_map.json"])
+    jsonschema.validate(m, DEBUG_MAP_SCHEMA)
+    chart_state = [i for i in m["items"] if i["kind"] in ("chart", "step_time")]
+    assert m["items"][-len(chart_state):] == chart_state  # after every other item: their ids are unchanged
+    assert [(i["name"], i["type"], i["count"], i["flags"], i.get("step")) for i in chart_state] == [
+        ("Cylinder.active", "uint8", 1, ["read"], None),
+        *((f"Cylinder.{s}.time", "time", 1, ["read"], k)
+          for k, s in enumerate(["Retracted", "Extending", "Extended", "Retracting", "Fault"]))]
+    assert all(i["chart"] == 0 for i in chart_state) and chart_state[2]["location"].endswith(EXTENDING_AT)
+    assert "EL_DEBUG_PROBE(EL_DBG_P_CHART_END, 0u, 0u);" in files["model.c"]
+    # the charts' state does not grow the server's queues
+    from easylab.codegen.c_model import build_view
+    items = debug_items(program, build_view(program, load_board("host"), probes=True))
+    sizes = buffer_sizes(program, items, len(program.instances))
+    without = buffer_sizes(program, [d for d in items if d.kind not in ("chart", "step_time")],
+                           len(program.instances))
+    assert (sizes.tx, sizes.writes) == (without.tx, without.writes)
+
+
+def test_a_map_whose_chart_item_names_no_chart_is_refused(tmp_path):
+    from easylab.host_tools.debug_map import DebugMap, MapError
+
+    m = json.loads((Path(build(ROOT / MODEL, tmp_path / "b")).parent / "debug_map.json").read_text())
+    del next(i for i in m["items"] if i["kind"] == "chart")["chart"]
+    bad = tmp_path / "bad.json"
+    bad.write_text(json.dumps(m))
+    with pytest.raises(MapError, match="chart"):
+        DebugMap.load(bad)
+
+
 # ---------------------------------------------------------------- random charts
 
 def _random_chart_models(count: int):
