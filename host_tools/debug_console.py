@@ -35,20 +35,23 @@ EXIT_OK, EXIT_FAIL, EXIT_USAGE = 0, 1, 2
 
 COMMANDS = {
     "info": "info                      the firmware, the map and the program's state",
-    "vars": "vars [GLOB]               items (params, vars, device data, actor states)",
-    "read": "read NAME...              NAME = VALUE per item (NAME[i]: one element)",
+    "vars": "vars [GLOB]               items (params, vars, device data, actor states, charts' state)",
+    "read": "read NAME...              NAME = VALUE per item (NAME[i]: one element; Chart: its active steps, "
+            "Chart.Step.time: ms since the step was entered)",
     "write": "write NAME VALUE          write an item (at the next instant; at once when halted at one)",
     "watch": "watch NAME... [--every 100ms] [--count N]   a live table (Ctrl-C ends it)",
     "tx": "tx begin|commit|abort     a transaction: reads and writes queued, applied at one instant",
     "stack": "stack                     running task, active steps of every chart, where it halted",
     "run": "run                       let a halted program go on",
     "break": "break | break at ITEM      halt at the next instant | set a breakpoint (step, transition, actor, task)",
-    "step": "step [task|chart|actor|instant]   one task activation (default), chart evolution or actor firing",
+    "step": "step [task|chart|actor|instant]   one task activation (default), actor firing or instant; "
+            "chart: to the end of the next chart evolution, showing the steps it entered",
     "reset": "reset [--halt]            restart the firmware from boot (--halt: halted at its first instant)",
     "load": "load FILE                 replace the running model with FILE (local execution: `easylab run`)",
     "delete": "delete N|all              remove breakpoint N",
     "breakpoints": "breakpoints [--all]       the breakpoints (--all: every place one can go)",
-    "wait": "wait [TIMEOUT]            wait until the program halts (default 10s)",
+    "wait": "wait [TIMEOUT]            wait until the program halts (default 10s); every halt shows the "
+            "element, its file:line and the logical time in ms",
     "counters": "counters                  the firmware's frame and error counters",
     "sleep": "sleep DURATION            pause a script (100ms, 2s)",
     "quit": "quit                      leave (also: exit, Ctrl-D)",
@@ -103,7 +106,20 @@ def parse_value(item: Item, text: str):
     return v
 
 
+def step_names(item: Item, value):
+    """A chart's active steps by name (None for a branch in no step); any
+    other item's value as it is."""
+    if item.labels is None:
+        return value
+    if isinstance(value, list):
+        return [step_names(item, v) for v in value]
+    return item.labels.get(value, str(value))
+
+
 def format_value(item: Item, value) -> str:
+    if item.labels is not None:  # a chart's active steps: `A + B`, `(none)` before it starts
+        names = step_names(item, value if isinstance(value, list) else [value])
+        return " + ".join(n for n in names if n is not None) or "(none)"
     if isinstance(value, list):
         return "[" + ", ".join(format_value(item, v) for v in value) + "]"
     if item.type == "bool":
@@ -175,11 +191,40 @@ class Session:
             return self.map.items
         return [self._item_by_id(i) for i in range(self.c.hello_info.item_count)]
 
-    def where(self, loc, bp) -> str:
+    def where(self, loc, bp, tick: int | None = None) -> str:
+        """Where the program halted: the element and, with a map, its
+        ``file:line`` in the model (an instant: the tasks it releases at
+        ``tick``)."""
         if loc.kind == K.P_NONE:
             return "?"
-        text = self.map.describe(loc.kind, loc.a, loc.b) if self.map else f"{loc.kind_name} {loc.a}.{loc.b}"
+        if self.map is None:
+            return (f"breakpoint {bp} at " if bp is not None else "") + f"{loc.kind_name} {loc.a}.{loc.b}"
+        text = self.map.describe(loc.kind, loc.a, loc.b)
+        source = self.map.location(loc.kind, loc.a, loc.b)
+        if source is not None:
+            text += f" ({source})"
+        elif loc.kind == K.P_INSTANT and tick is not None:
+            tasks = self.map.released(tick)
+            if tasks:
+                text += " (releases " + ", ".join(f"task {t['name']} at {t.get('location', '?')}"
+                                                   for t in tasks) + ")"
         return (f"breakpoint {bp} at " if bp is not None else "") + text
+
+    def when(self, tick: int) -> str:
+        """The logical time of a tick: milliseconds with a map (tick_us),
+        and the tick."""
+        return f"{self.map.ms(tick)} ms (tick {tick})" if self.map is not None and self.map.tick_us else f"tick {tick}"
+
+    def halt_obj(self, f) -> dict:
+        """A halt for --json: why, where, the element's file:line, the time."""
+        loc = f.location
+        return {"halted": True, "why": f.why, "at": self.where(loc, f.breakpoint, f.tick), "tick": f.tick,
+                "ms": float(self.map.ms(f.tick)) if self.map is not None and self.map.tick_us else None,
+                "location": self.map.location(loc.kind, loc.a, loc.b) if self.map is not None else None}
+
+    def halt_text(self, f) -> str:
+        """``halted (WHY) at ELEMENT (FILE:LINE), T ms (tick N)``."""
+        return f"halted ({f.why}) at {self.where(f.location, f.breakpoint, f.tick)}, {self.when(f.tick)}"
 
     # -------------------------------------------------------------- commands
 
@@ -187,7 +232,7 @@ class Session:
         with self.lock:
             h = self.c.hello_info or self.c.hello()
             f = self.c.flags()
-        state = f"halted ({f.why}) at {self.where(f.location, f.breakpoint)}" if f.halted else "running"
+        state = self.halt_text(f) if f.halted else "running"
         obj = {"url": self.url, "model": self.map.model if self.map else None, "program_id": f"0x{h.program_id:08x}",
                "protocol": h.version, "max_frame": h.max_frame, "items": h.item_count, "actors": h.actor_count,
                "charts": h.chart_count, "tasks": h.task_count, "tick": f.tick, "halted": f.halted,
@@ -198,7 +243,7 @@ class Session:
                  + (f" ({self.map.path})" if self.map else ""),
                  f"contents    {h.item_count} items, {h.actor_count} actors, {h.chart_count} charts, "
                  f"{h.task_count} tasks",
-                 f"state       {state}, tick {f.tick}"]
+                 f"state       {state}" + ("" if f.halted else f", {self.when(f.tick)}")]
         self.emit("\n".join(lines), obj)
 
     def cmd_vars(self, args):
@@ -235,7 +280,7 @@ class Session:
             return
         for (it, elem), v in zip(targets, self._read_values(targets)):
             name = f"{it.name}[{elem}]" if elem is not None else it.name
-            self.emit(f"{name} = {format_value(it, v)}", {"name": name, "value": v})
+            self.emit(f"{name} = {format_value(it, v)}", {"name": name, "value": step_names(it, v)})
 
     def cmd_write(self, args):
         if len(args) != 2:
@@ -310,9 +355,9 @@ class Session:
             steps = [m.step_name(cid, x) if m else str(x) for x in slots if x is not None]
             charts.append({"chart": name, "active": steps})
         obj = {"tick": s.tick, "halted": s.halted, "why": s.why or None,
-               "at": self.where(s.location, s.breakpoint) if s.halted else None, "task": task, "actor": actor,
-               "charts": charts}
-        lines = [f"tick {s.tick}: " + (f"halted ({s.why}) at {obj['at']}" if s.halted else "running"),
+               "at": self.where(s.location, s.breakpoint, s.tick) if s.halted else None, "task": task,
+               "actor": actor, "charts": charts}
+        lines = [f"{self.when(s.tick)}: " + (f"halted ({s.why}) at {obj['at']}" if s.halted else "running"),
                  f"task        {task if task is not None else '-'}"]
         if s.halted and s.location.kind == K.P_ACTOR:
             lines.append(f"actor       {actor} (about to fire)")
@@ -331,8 +376,16 @@ class Session:
 
     def _report_halt(self, f, verb: str):
         if f.halted:
-            self.emit(f"halted ({f.why}) at {self.where(f.location, f.breakpoint)}, tick {f.tick}",
-                      {"halted": True, "why": f.why, "at": self.where(f.location, f.breakpoint), "tick": f.tick})
+            text, obj = self.halt_text(f), self.halt_obj(f)
+            if f.location.kind == K.P_CHART_END:  # `step chart`: the steps the evolution left the chart in
+                with self.lock:
+                    s = self.c.stack()
+                slots = s.charts[f.location.a] if f.location.a < len(s.charts) else []
+                steps = [self.map.step_name(f.location.a, x) if self.map else str(x) for x in slots if x is not None]
+                name = self.map.charts[f.location.a]["name"] if self.map else f"chart {f.location.a}"
+                text += f": {name} in {' + '.join(steps) or '(no step)'}"
+                obj["active"] = steps
+            self.emit(text, obj)
         else:
             self.emit(f"{verb}: not halted yet (tick {f.tick}); `wait` or `stack` later",
                       {"halted": False, "tick": f.tick})
@@ -503,9 +556,11 @@ class Session:
                     values = self._read_values(targets)
                 n += 1
                 if self.json:
-                    self.emit("", {"tick": f.tick, "values": dict(zip(labels, values))})
+                    self.emit("", {"tick": f.tick, "values": dict(zip(labels, (step_names(it, v) for (it, _), v
+                                                                              in zip(targets, values))))})
                 elif live:
-                    rows = [f"{'tick':<{width}}  {f.tick}" + ("   (halted)" if f.halted else "")]
+                    rows = [f"{'tick':<{width}}  {f.tick}" + (f" ({self.map.ms(f.tick)} ms)" if self.map else "")
+                            + ("   (halted)" if f.halted else "")]
                     rows += [f"{lab:<{width}}  {format_value(it, v)}" for lab, (it, _), v in
                              zip(labels, targets, values)]
                     if n > 1:
@@ -513,7 +568,7 @@ class Session:
                     self.out.write("".join(f"{r}\x1b[K\n" for r in rows))
                     self.out.flush()
                 else:
-                    self.emit(f"tick {f.tick}: " + "  ".join(f"{lab} = {format_value(it, v)}" for lab, (it, _), v
+                    self.emit(f"{self.when(f.tick)}: " + "  ".join(f"{lab} = {format_value(it, v)}" for lab, (it, _), v
                                                             in zip(labels, targets, values)), None)
                 if count is None or n < count:
                     time.sleep(every)
@@ -552,6 +607,8 @@ def _why_read_only(it: Item) -> str:
         return "a device `in` datum: the application writes it at every publication"
     if it.kind == "dev_state":
         return "a device's state: only its handlers change it"
+    if it.kind in ("chart", "step_time"):
+        return "a chart's state: only its evolutions change it"
     return "the firmware does not let the debugger write it"
 
 
@@ -602,7 +659,7 @@ class Console(cmd.Cmd):
                 continue
             key = (f.tick, f.location.kind, f.location.a, f.location.b) if f.halted else None
             if key is not None and key != self._known_halt:
-                msg = f"\n[halted ({f.why}) at {self.s.where(f.location, f.breakpoint)}, tick {f.tick}]\n"
+                msg = f"\n[{self.s.halt_text(f)}]\n"
                 try:
                     import readline
                     msg += self.prompt + readline.get_line_buffer()

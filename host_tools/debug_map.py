@@ -34,6 +34,9 @@ class Item:
     unit: str | None = None
     range: list | None = None
     location: str = "?"
+    chart: int | None = None  # a chart's state (kinds chart, step_time): its chart
+    step: int | None = None  # a step's time: its step
+    labels: dict | None = None  # a chart's active steps: step id -> name (NONE8: none)
 
     @property
     def writable(self) -> bool:
@@ -59,13 +62,21 @@ class DebugMap:
         self.model = data.get("model", "?")
         self.program_id = int(str(data["program_id"]), 0)
         self.tick_us = int(data.get("tick_us", 0))
-        self.items = [Item(i["id"], i["name"], i["kind"], i["type"], i["count"], i["flags"], i.get("unit"),
-                           i.get("range"), i.get("location", "?")) for i in data["items"]]
-        self.by_name = {i.name: i for i in self.items}
-        self.by_id = {i.id: i for i in self.items}
         self.charts = data.get("charts", [])
         self.actors = data.get("actors", [])
         self.tasks = data.get("tasks", [])
+        self.items = [Item(i["id"], i["name"], i["kind"], i["type"], i["count"], i["flags"], i.get("unit"),
+                           i.get("range"), i.get("location", "?"), i.get("chart"), i.get("step"),
+                           self._step_labels(i["chart"]) if i["kind"] == "chart" else None)
+                      for i in data["items"]]
+        self.by_name = {i.name: i for i in self.items}
+        self.by_id = {i.id: i for i in self.items}
+        # A chart's name alone names its active steps (`watch Cylinder`).
+        self.aliases = {i.name[:-len(".active")]: i for i in self.items if i.kind == "chart"}
+
+    def _step_labels(self, chart: int) -> dict:
+        c = next((c for c in self.charts if c["id"] == chart), {"steps": []})
+        return {**{s["id"]: s["name"] for s in c["steps"]}, K.NONE8: None}
 
     @classmethod
     def load(cls, path: str | Path) -> "DebugMap":
@@ -82,6 +93,8 @@ class DebugMap:
     def item(self, name: str) -> Item:
         if name in self.by_name:
             return self.by_name[name]
+        if name in self.aliases:
+            return self.aliases[name]
         m = re.fullmatch(r"#(\d+)", name)
         if m and int(m.group(1)) in self.by_id:
             return self.by_id[int(m.group(1))]
@@ -127,10 +140,49 @@ class DebugMap:
 
     def describe(self, kind: int, a: int, b: int) -> str:
         """The name of a probe point (for halts and breakpoint lists)."""
+        if kind == K.P_CHART_END:  # where `step chart` halts: no breakpoint goes there
+            c = self._chart(a)
+            return f"the end of chart:{c['name']}'s evolution" if c else f"the end of chart {a}'s evolution"
         for p in self.points():
             if (p.kind, p.a, p.b) == (kind, a, b):
                 return p.label if p.kind != K.P_STEP else f"step {p.label}"
         return f"{PROBE_NAMES.get(kind, kind)} {a}.{b}"
+
+    def _chart(self, chart: int) -> dict | None:
+        return next((c for c in self.charts if c["id"] == chart), None)
+
+    def location(self, kind: int, a: int, b: int) -> str | None:
+        """``file:line`` of the element of a probe point in the model (the
+        chart of a chart's evolution, the step, the transition, the actor,
+        the task), or None (an instant: see :meth:`released`)."""
+        if kind == K.P_TASK:
+            found = next((t for t in self.tasks if t["id"] == a), None)
+        elif kind == K.P_ACTOR:
+            found = next((x for x in self.actors if x["id"] == a), None)
+        elif kind in (K.P_CHART, K.P_CHART_END, K.P_STEP, K.P_TRANSITION):
+            found = self._chart(a)
+            if found is not None and kind != K.P_CHART and kind != K.P_CHART_END:
+                key = "steps" if kind == K.P_STEP else "transitions"
+                found = next((x for x in found[key] if x["id"] == b), None)
+        else:
+            found = None
+        return found.get("location") if found is not None else None
+
+    def released(self, tick: int) -> list[dict]:
+        """The tasks released at a tick (an instant's: its offset reached,
+        then every period), with their ``location``."""
+        out = []
+        for t in self.tasks:
+            period, offset = t.get("period_us", 0), t.get("offset_us", 0)
+            at = tick * self.tick_us
+            if period and at >= offset and (at - offset) % period == 0:
+                out.append(t)
+        return out
+
+    def ms(self, tick: int) -> str:
+        """A tick as logical time in milliseconds (``25``, ``0.5``)."""
+        us = tick * self.tick_us
+        return str(us // 1000) if us % 1000 == 0 else f"{us / 1000:.3f}".rstrip("0")
 
     def task_name(self, task: int | None) -> str | None:
         if task is None:

@@ -38,9 +38,10 @@ TYPES: dict[str, tuple[int, str]] = {
 }
 TYPE_NAMES = {code: name for name, (code, _) in TYPES.items()}
 KIND_NAMES = {K.K_PARAM: "param", K.K_VAR: "var", K.K_DEV_OUT: "dev_out", K.K_DEV_IN: "dev_in",
-              K.K_STATE: "state", K.K_STATUS: "status", K.K_DEV_STATE: "dev_state"}
+              K.K_STATE: "state", K.K_STATUS: "status", K.K_DEV_STATE: "dev_state", K.K_CHART: "chart",
+              K.K_STEP_TIME: "step_time"}
 PROBE_NAMES = {K.P_NONE: "none", K.P_INSTANT: "instant", K.P_TASK: "task", K.P_CHART: "chart", K.P_STEP: "step",
-               K.P_TRANSITION: "transition", K.P_ACTOR: "actor"}
+               K.P_TRANSITION: "transition", K.P_ACTOR: "actor", K.P_CHART_END: "chart end"}
 WHY_NAMES = {K.WHY_NONE: "", K.WHY_BREAK: "break", K.WHY_BREAKPOINT: "breakpoint", K.WHY_STEP: "step",
              K.WHY_START: "start"}
 STEP_UNITS = {"task": K.STEP_TASK, "chart": K.STEP_CHART, "actor": K.STEP_ACTOR, "instant": K.STEP_INSTANT}

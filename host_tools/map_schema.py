@@ -41,14 +41,21 @@ DEBUG_MAP_SCHEMA = {
             "required": ["id", "name", "kind", "type", "count", "flags"],
             "properties": {
                 "id": _ID, "name": _NAME,
-                "kind": {"enum": ["param", "var", "dev_out", "dev_in", "state", "status", "dev_state"]},
+                "kind": {"enum": ["param", "var", "dev_out", "dev_in", "state", "status", "dev_state", "chart",
+                                  "step_time"]},
                 "type": {"enum": _TYPES},
                 "count": {"type": "integer", "minimum": 1, "maximum": 65535},
                 "flags": {"type": "array", "items": {"enum": ["read", "write", "range"]}},
                 "unit": {"type": ["string", "null"], "maxLength": 1000},
                 "range": _RANGE,
                 "location": _TEXT,
+                "chart": _ID, "step": _ID,
             },
+            # a chart's state names its chart (and a step's time its step)
+            "allOf": [{"if": {"properties": {"kind": {"const": "chart"}}, "required": ["kind"]},
+                       "then": {"required": ["chart"]}},
+                      {"if": {"properties": {"kind": {"const": "step_time"}}, "required": ["kind"]},
+                       "then": {"required": ["chart", "step"]}}],
         }},
         "charts": {"type": "array", "items": {
             "type": "object",

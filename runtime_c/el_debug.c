@@ -937,8 +937,12 @@ static uint8_t dispatch(uint8_t cmd, const uint8_t *p, uint8_t n)
         }
         break;
     case REQ_STEP:
-        if (p[0] != EL_DBG_STEP_TASK && p[0] != EL_DBG_STEP_CHART && p[0] != EL_DBG_STEP_ACTOR
-            && p[0] != EL_DBG_STEP_INSTANT) {
+        /* A model without charts has no evolution to end: STEP_CHART is E_VALUE there. */
+        if (p[0] != EL_DBG_STEP_TASK && p[0] != EL_DBG_STEP_ACTOR && p[0] != EL_DBG_STEP_INSTANT
+#if EL_DBG_HAS_CHARTS
+            && p[0] != EL_DBG_STEP_CHART
+#endif
+            ) {
             return EL_DBG_E_VALUE;
         }
         if (loc_kind == EL_DBG_P_NONE) {

@@ -13,7 +13,7 @@
 #define EL_DEBUG_PROTOCOL_H
 
 /* ---- the protocol ------------------------------------------------------ */
-#define EL_DBG_PROTOCOL_VERSION 1u
+#define EL_DBG_PROTOCOL_VERSION 2u
 
 /* Largest decoded frame (sequence number, command, payload, CRC), bytes.
  * The encoded frame adds at most 1 + ceil(n / 254) COBS bytes and the 0x00
@@ -93,6 +93,8 @@
 #define EL_DBG_K_STATE 4u
 #define EL_DBG_K_STATUS 5u
 #define EL_DBG_K_DEV_STATE 6u
+#define EL_DBG_K_CHART 7u        /* a chart's active steps: per slot, its step's id (NONE8: none), read-only */
+#define EL_DBG_K_STEP_TIME 8u    /* a step's time (ms since its last entry, as its guards see it), read-only */
 
 /* ---- item types (EL_T_... of el_model.h) ------------------------------- */
 #define EL_DBG_T_BOOL 0u
@@ -126,10 +128,13 @@
 #define EL_DBG_P_STEP 4u         /* a step was activated (a = chart, b = step) */
 #define EL_DBG_P_TRANSITION 5u   /* a transition fires (a = chart, b = transition) */
 #define EL_DBG_P_ACTOR 6u        /* an actor fires (a = actor instance) */
+/* A chart evolution ended, its steps entered and its runs done (a = chart):
+ * where STEP_CHART halts; not a breakpoint's point (BP_SET: E_ID). */
+#define EL_DBG_P_CHART_END 7u
 
 /* ---- step units (STEP request) ------------------------------------------ */
 #define EL_DBG_STEP_TASK 2u      /* to the start of the next task activation */
-#define EL_DBG_STEP_CHART 3u     /* to the start of the next chart evolution */
+#define EL_DBG_STEP_CHART 7u     /* to the end of the next chart evolution (P_CHART_END): the steps it entered */
 #define EL_DBG_STEP_ACTOR 6u     /* to the next actor firing */
 #define EL_DBG_STEP_INSTANT 1u   /* to the next instant */
 

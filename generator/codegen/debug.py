@@ -19,7 +19,10 @@ Debug item ids: the IR's items keep their ids (params, vars, device data);
 the state variables of actor instances follow, instance by instance, then
 the program's status items (the links' fault counters, read-only), then
 the `state` fields of the devices that run the model's handlers on the
-board (``DEVICE.FIELD``, read-only: the handlers own them).
+board (``DEVICE.FIELD``, read-only: the handlers own them), then the
+charts' state, chart by chart: ``Chart.active`` (the step of each parallel
+branch) and ``Chart.Step.time`` per step (read-only: the evolutions own
+them).
 """
 
 from __future__ import annotations
@@ -46,13 +49,15 @@ _TYPE_ENUM = {"bool": "EL_DBG_T_BOOL", "int8": "EL_DBG_T_I8", "uint8": "EL_DBG_T
               "float32": "EL_DBG_T_F32", "time": "EL_DBG_T_TIME"}
 _KIND_ENUM = {"param": "EL_DBG_K_PARAM", "var": "EL_DBG_K_VAR", "dev_out": "EL_DBG_K_DEV_OUT",
               "dev_in": "EL_DBG_K_DEV_IN", "state": "EL_DBG_K_STATE", "status": "EL_DBG_K_STATUS",
-              "dev_state": "EL_DBG_K_DEV_STATE"}
+              "dev_state": "EL_DBG_K_DEV_STATE", "chart": "EL_DBG_K_CHART", "step_time": "EL_DBG_K_STEP_TIME"}
 # What the debugger may write (docs/protocol.md "What is writable"): the
 # application's inputs and state. A device `in` datum is the application's
 # output to an actuator, rewritten at every publication: read-only; so is
 # a status item, a fault counter of the links, and a device's state,
-# which only its handlers change.
+# which only its handlers change; so is a chart's state (its active steps,
+# its steps' times), which only its evolutions change.
 WRITABLE_KINDS = ("param", "var", "dev_out", "state")
+CHART_KINDS = ("chart", "step_time")
 
 
 def has_debug_interface(program: Program) -> bool:
@@ -75,6 +80,8 @@ class DebugItem:
     location: str
     actor: int | None = None
     range_index: int | None = None
+    chart: int | None = None  # a chart's state: the chart's id
+    step: int | None = None  # a step's time: the step's id in its chart
 
     @property
     def writable(self) -> bool:
@@ -160,12 +167,28 @@ def debug_items(program: Program, view) -> list[DebugItem]:
         items.append(DebugItem(next_id, f"{dev.path}.{name}", "dev_state", t, count, f"(void *){addr}", decl,
                                None, None, dev.location))
         next_id += 1
+    for c, p in chart_views(program, view):  # the charts' state: read-only, last (docs/protocol.md, "Items")
+        items.append(DebugItem(next_id, f"{c.name}.active", "chart", T.UINT8, c.slots, f"(void *){p}_slot", None,
+                               None, None, c.location, chart=c.id))
+        next_id += 1
+        for st in c.steps:
+            items.append(DebugItem(next_id, f"{c.name}.{st.name}.time", "step_time", T.TIME, 1,
+                                   f"(void *)&{p}_elapsed[{st.id}u]", None, None, "ms", st.location,
+                                   chart=c.id, step=st.id))
+            next_id += 1
     ranged = 0
     for d in items:
         if d.range is not None:
             d.range_index = ranged
             ranged += 1
     return items
+
+
+def chart_views(program: Program, view) -> list:
+    """(chart, its C prefix) of every chart: the prefix of its ``_slot``
+    and ``_elapsed`` arrays in model.c (or the interfaces library)."""
+    prefixes = {c["chart"].id: c["p"] for c in view.charts}
+    return [(c, prefixes[c.id]) for c in program.charts]
 
 
 def debug_map(program: Program, items: list[DebugItem]) -> dict:
@@ -186,6 +209,8 @@ def debug_map(program: Program, items: list[DebugItem]) -> dict:
             "range": list(d.range) if d.range is not None else None,
             "location": d.location,
             **({"actor": d.actor} if d.actor is not None else {}),
+            **({"chart": d.chart} if d.chart is not None else {}),
+            **({"step": d.step} if d.step is not None else {}),
         } for d in items],
         "charts": [{
             "id": c.id, "name": c.name, "task": c.task, "location": c.location, "slots": c.slots,
@@ -268,7 +293,8 @@ def buffer_sizes(program: Program, items: list[DebugItem], actors: int) -> Simpl
     protocol's limits: ``value``, its largest element (bytes); ``tx`` and
     ``writes``, the entries of a transaction and of the queue of single
     writes (at most TX_MAX and WRITE_QUEUE, and at most one per element of
-    the model's items: a transaction that touches every element once fits);
+    the model's items, the charts' state aside: a transaction that touches
+    every element of them once fits);
     ``breakpoints``, the slots (at most BP_MAX, and at most the model's
     probe points: the instant, its tasks, charts, steps, transitions and
     the ``actors`` instances; a point holds one slot at most);
@@ -278,7 +304,9 @@ def buffer_sizes(program: Program, items: list[DebugItem], actors: int) -> Simpl
     read of its largest item, a transaction's reads), at most MAX_FRAME."""
     k = protocol_constants()
     value = max((_element_bytes(d.type) for d in items), default=1)
-    elements = max(1, sum(d.count for d in items))
+    # the charts' state is read-only and read by few: it does not grow the queues (a transaction that reads
+    # it as well may find them full, E_QUEUE_FULL)
+    elements = max(1, sum(d.count for d in items if d.kind not in CHART_KINDS))
     tx, writes = min(k.TX_MAX, elements), min(k.WRITE_QUEUE, elements)
     points = 1 + len(program.tasks) + actors + sum(1 + len(c.steps) + len(c.transitions) for c in program.charts)
     breakpoints = min(k.BP_MAX, points)

@@ -90,6 +90,8 @@ class ChartRunner:
             if slots[step.slot] == step.id:
                 for dataflow in step.runs:
                     self.run_dataflow(dataflow)
+        if probe:
+            probe("chart_end", chart.id, 0)
 
     def publish(self) -> None:
         """The step activity as of now becomes the published one (deadline)."""

@@ -15,9 +15,10 @@ cached like the actor plug-ins. :class:`Interfaces` drives it:
   the library's arrays, :attr:`Interfaces.items`), and the library runs
   only inside the interpreter's calls into it, so a client always sees the
   published values and its writes reach the program at the points the
-  firmware applies them; the charts' slots are copied in before each call;
+  firmware applies them; the charts' slots and steps' times are copied in
+  before each call;
 - the interpreter calls the debugger's hooks where the firmware does
-  (instant, task, chart, step, transition, actor), waits for real time in
+  (instant, task, chart, step, transition, actor, chart end), waits for real time in
   the library (serving the links), and resynchronises its clock after a
   halt;
 - a model sent with the debug protocol's LOAD requests is handed to the
@@ -167,6 +168,8 @@ class Interfaces:
         self.actor_states = [(states[k], sizes[k]) for k in range(n_actors)]
         slots = (ctypes.c_void_p * max(1, len(self.program.charts))).in_dll(lib, "el_interp_chart_slots")
         self.chart_slots = [(ctypes.c_uint8 * c.slots).from_address(slots[c.id]) for c in self.program.charts]
+        times = (ctypes.c_void_p * max(1, len(self.program.charts))).in_dll(lib, "el_interp_step_times")
+        self.step_times = [(ctypes.c_uint32 * len(c.steps)).from_address(times[c.id]) for c in self.program.charts]
         # The devices' state the debug tables read (codegen/debug.py): a copy of each device's, refreshed by push.
         self.device_states = {dev.id: (ctypes.c_uint8 * 1).in_dll(lib, f"el_mdev{dev.id}_state")
                               for dev in handlers.state_devices(self.program, "host")} if self.has_debug else {}
@@ -202,14 +205,15 @@ class Interfaces:
     # ------------------------------------------------------------ items
 
     def push(self, published: list, charts, devices=None) -> None:
-        """The interpreter's published items, chart slots and devices' state
+        """The interpreter's published items, chart slots, steps' times and devices' state
         (``devices``: interp.devices.ModelDevices) into the library (items
         that are the library's own arrays stay as they are)."""
         for array, values in zip(self.items, published):
             if values is not array:
                 array[:] = values
-        for array, runner in zip(self.chart_slots, charts):
+        for array, times, runner in zip(self.chart_slots, self.step_times, charts):
             array[:] = [0xFF if s is None else s for s in runner.slots]
+            times[:] = runner.elapsed
         if devices is not None:
             for dev_id, target in self.device_states.items():
                 dev = devices.devices.get(dev_id)
@@ -272,5 +276,6 @@ class Interfaces:
         self.library.lib.el_interp_load_result(state, program_id, message.encode("utf-8", "replace"))
 
 
-PROBE = {name: getattr(K, f"P_{name.upper()}") for name in ("instant", "task", "chart", "step", "transition", "actor")}
+PROBE = {name: getattr(K, f"P_{name.upper()}")
+         for name in ("instant", "task", "chart", "step", "transition", "actor", "chart_end")}
 LOAD_REFUSED, LOAD_REPLACED = K.LOAD_REFUSED, K.LOAD_REPLACED

@@ -240,11 +240,12 @@ def test_step_advances_exactly_one_unit(builds, firmware):
     # tasks: control (every tick) and lamp (every 20 ticks) are both released at tick 0
     assert [step("task") for _ in range(4)] == [
         (0, K.P_TASK, 0, 0), (0, K.P_TASK, 1, 0), (1, K.P_TASK, 0, 0), (2, K.P_TASK, 0, 0)]
-    assert [step("chart") for _ in range(2)] == [(2, K.P_CHART, 0, 0), (3, K.P_CHART, 0, 0)]
+    # a chart step ends where the evolution does: the one under way (tick 2), then the next one
+    assert [step("chart") for _ in range(2)] == [(2, K.P_CHART_END, 0, 0), (3, K.P_CHART_END, 0, 0)]
     order = [a["id"] for a in m.actors if a["name"].startswith("PositionControl.")]
     fired = [step("actor")[2] for _ in range(6)]
     assert sorted(fired[:3]) == sorted(order) and fired[3:] == fired[:3]  # one firing each, per activation
-    assert [step("instant")[:2] for _ in range(3)] == [(5, K.P_INSTANT), (6, K.P_INSTANT), (7, K.P_INSTANT)]
+    assert [step("instant")[:2] for _ in range(3)] == [(6, K.P_INSTANT), (7, K.P_INSTANT), (8, K.P_INSTANT)]
     c.run()
     with pytest.raises(DebugError) as e:
         time.sleep(0.05)

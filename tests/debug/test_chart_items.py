@@ -1,0 +1,245 @@
+"""Charts' state as debug items (docs/protocol.md, "Items"): `Chart.active`
+and `Chart.Step.time` read and watched in the console on the host board,
+in local execution and on the AVR in simavr; `step chart` halting at the
+end of the evolution with the step it entered; every halt with the
+element's file:line and the logical time in milliseconds; and, over random
+charts, the active steps read through the debug interface equal to the
+trace's `Chart.active` columns."""
+
+from __future__ import annotations
+
+import csv
+import json
+import re
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from debug_testlib import ROOT, board, build, builds, env_with_tools, firmware  # noqa: F401 (fixtures)
+
+from easylab.host_tools.debug_protocol import K
+
+ENV = env_with_tools()
+MODEL = "examples/pneumatic_cylinder.elab"
+CHART_AT = f"{MODEL}:39"  # chart Cylinder
+EXTENDING_AT = f"{MODEL}:44"
+
+
+def console(fw, commands: str, *extra, timeout=60):
+    proc = subprocess.run([sys.executable, "-m", "easylab.host_tools.debug_console", "--map", str(fw.map_path),
+                           str(fw.link), *extra, "-c", commands], capture_output=True, text=True, timeout=timeout,
+                          env=ENV)
+    assert proc.returncode == 0, proc.stderr
+    assert proc.stderr == ""
+    return proc.stdout.splitlines()
+
+
+@pytest.mark.parametrize("board", ["host", "interp", "avr"], indirect=True)
+def test_chart_items_read_and_step_chart_shows_the_entered_step(board, builds, firmware):
+    fw = firmware(builds["pneumatic_cylinder"])  # halted at its first instant
+    lines = console(fw, "read Cylinder Cylinder.active Cylinder.Retracted.time; write start_cmd 1; "
+                        "step chart; step chart; step chart; step chart; "
+                        "read Cylinder Cylinder.Extending.time Cylinder.Retracted.time; vars Cylinder.*")
+    assert lines[:3] == ["Cylinder.active = (none)", "Cylinder.active = (none)", "Cylinder.Retracted.time = 0"]
+    steps = [line for line in lines if line.startswith("halted (step)")]
+    # the first evolution enters the initial step; start_cmd then takes the chart to Extending
+    assert steps == [
+        f"halted (step) at the end of chart:Cylinder's evolution ({CHART_AT}), 0 ms (tick 0): Cylinder in Retracted",
+        f"halted (step) at the end of chart:Cylinder's evolution ({CHART_AT}), 5 ms (tick 1): Cylinder in Extending",
+        f"halted (step) at the end of chart:Cylinder's evolution ({CHART_AT}), 10 ms (tick 2): Cylinder in Extending",
+        f"halted (step) at the end of chart:Cylinder's evolution ({CHART_AT}), 15 ms (tick 3): Cylinder in Extending",
+    ]
+    # Step.time: 0 when entered (tick 1), one period (5 ms) more at each evolution; Retracted keeps its last
+    assert lines[-9:-6] == ["Cylinder.active = Extending", "Cylinder.Extending.time = 10",
+                            "Cylinder.Retracted.time = 5"]
+    listed = lines[-6:]
+    assert listed[0].split()[:4] == ["Cylinder.active", "uint8", "chart", "ro"] and listed[0].endswith(CHART_AT)
+    assert listed[2].split()[:4] == ["Cylinder.Extending.time", "time", "step_time", "ro"]
+    assert listed[2].endswith(EXTENDING_AT) and 'unit "ms"' in listed[2]
+
+
+@pytest.mark.parametrize("board", ["host", "interp", "avr"], indirect=True)
+def test_chart_items_watched_while_the_program_runs(board, builds, firmware):
+    fw = firmware(builds["pneumatic_cylinder"], halt=False, fast=False)  # real time: 5 ms a tick
+    lines = console(fw, "write start_cmd 1; sleep 100ms; watch Cylinder Cylinder.Extending.time --every 100ms "
+                        "--count 4", "--json")
+    rows = [json.loads(line) for line in lines if '"values"' in line]
+    assert len(rows) == 4
+    assert all(r["values"]["Cylinder.active"] == "Extending" for r in rows), rows  # no end switch: 2 s to the Fault
+    times = [r["values"]["Cylinder.Extending.time"] for r in rows]
+    ticks = [r["tick"] for r in rows]
+    assert times == sorted(times) and times[-1] > times[0], rows
+    assert all(t % 5 == 0 for t in times), rows  # grows by the task's period
+    assert all(b > a for a, b in zip(ticks, ticks[1:])), rows
+
+
+@pytest.mark.parametrize("board", ["host", "interp"], indirect=True)
+def test_every_halt_names_the_element_its_line_and_the_time_in_ms(board, builds, firmware):
+    fw = firmware(builds["pneumatic_cylinder"])
+    lines = console(fw, "info; write start_cmd 1; break at Cylinder.Extending; run; wait 5s; stack; "
+                        "step task; step actor; delete all; break at Cylinder:Extending->Fault; run; wait 10s")
+    assert lines[3] == (f"state       halted (start) at instant (releases task control at {MODEL}:71, "
+                        f"task lamp at {MODEL}:72), 0 ms (tick 0)")
+    halts = [line for line in lines if line.startswith("halted")]
+    assert halts[0] == f"halted (breakpoint) at breakpoint 0 at step Cylinder.Extending ({EXTENDING_AT}), 5 ms (tick 1)"
+    assert f"5 ms (tick 1): halted (breakpoint) at breakpoint 0 at step Cylinder.Extending ({EXTENDING_AT})" in lines
+    assert halts[1] == f"halted (step) at task:control ({MODEL}:71), 10 ms (tick 2)"
+    assert re.fullmatch(rf"halted \(step\) at actor:PositionControl\.\w+ \({MODEL}:2[4-6]\), 10 ms \(tick 2\)",
+                        halts[2]), halts[2]
+    # the timeout (2 s) from Extending's entry at 5 ms: the guard `Extending.time > timeout` holds at 2010 ms
+    assert halts[3] == (f"halted (breakpoint) at breakpoint 0 at Cylinder:Extending->Fault ({MODEL}:60), "
+                        f"2010 ms (tick 402)")
+
+
+def test_a_halt_in_json_has_the_location_and_the_time(builds, firmware):
+    fw = firmware(builds["pneumatic_cylinder"])
+    lines = console(fw, "write start_cmd 1; step chart; step chart", "--json")
+    halt = json.loads(lines[-1])
+    assert halt == {"halted": True, "why": "step", "at": f"the end of chart:Cylinder's evolution ({CHART_AT})",
+                    "tick": 1, "ms": 5.0, "location": CHART_AT, "active": ["Extending"]}
+
+
+def test_chart_items_are_read_only(builds, firmware):
+    fw = firmware(builds["pneumatic_cylinder"])
+    for name in ("Cylinder", "Cylinder.Fault.time"):
+        proc = subprocess.run([sys.executable, "-m", "easylab.host_tools.debug_console", "--map", str(fw.map_path),
+                               str(fw.link), "-c", f"write {name} 1"], capture_output=True, text=True, env=ENV,
+                              timeout=30)
+        assert proc.returncode == 1 and "read-only (a chart's state: only its evolutions change it)" in proc.stderr
+    c = fw.client()
+    with pytest.raises(Exception) as e:  # the firmware refuses it too
+        c.write(fw.map.item("Cylinder.Fault.time").id, "time", 1)
+    assert getattr(e.value, "status", None) == K.E_READ_ONLY
+
+
+def test_the_map_has_the_charts_state_last_and_read_only():
+    from easylab.board.registry import load_board
+    from easylab.codegen import render as cgen
+    from easylab.codegen.debug import buffer_sizes, debug_items
+    from easylab.core.paths import templates_dir
+    from easylab.host_tools.map_schema import DEBUG_MAP_SCHEMA
+    from easylab.pipeline import lower_file
+    import jsonschema
+
+    program, _ = lower_file(ROOT / MODEL)
+    files = cgen.render(program, load_board("host"), templates_dir())
+    m = json.loads(files["debug_map.json"])
+    jsonschema.validate(m, DEBUG_MAP_SCHEMA)
+    chart_state = [i for i in m["items"] if i["kind"] in ("chart", "step_time")]
+    assert m["items"][-len(chart_state):] == chart_state  # after every other item: their ids are unchanged
+    assert [(i["name"], i["type"], i["count"], i["flags"], i.get("step")) for i in chart_state] == [
+        ("Cylinder.active", "uint8", 1, ["read"], None),
+        *((f"Cylinder.{s}.time", "time", 1, ["read"], k)
+          for k, s in enumerate(["Retracted", "Extending", "Extended", "Retracting", "Fault"]))]
+    assert all(i["chart"] == 0 for i in chart_state) and chart_state[2]["location"].endswith(EXTENDING_AT)
+    assert "EL_DEBUG_PROBE(EL_DBG_P_CHART_END, 0u, 0u);" in files["model.c"]
+    # the charts' state does not grow the server's queues
+    from easylab.codegen.c_model import build_view
+    items = debug_items(program, build_view(program, load_board("host"), probes=True))
+    sizes = buffer_sizes(program, items, len(program.instances))
+    without = buffer_sizes(program, [d for d in items if d.kind not in ("chart", "step_time")],
+                           len(program.instances))
+    assert (sizes.tx, sizes.writes) == (without.tx, without.writes)
+
+
+def test_a_map_whose_chart_item_names_no_chart_is_refused(tmp_path):
+    from easylab.host_tools.debug_map import DebugMap, MapError
+
+    m = json.loads((Path(build(ROOT / MODEL, tmp_path / "b")).parent / "debug_map.json").read_text())
+    del next(i for i in m["items"] if i["kind"] == "chart")["chart"]
+    bad = tmp_path / "bad.json"
+    bad.write_text(json.dumps(m))
+    with pytest.raises(MapError, match="chart"):
+        DebugMap.load(bad)
+
+
+# ---------------------------------------------------------------- random charts
+
+def _random_chart_models(count: int):
+    """The first `count` random models (tests/crosscheck/modelgen.py) with
+    charts, from seed 1, with a debug interface."""
+    seed = 0
+    while count:
+        seed += 1
+        g = _crosscheck("modelgen").generate(seed, "atmega2560")
+        if "\nchart " in g.text:
+            count -= 1
+            yield g
+
+
+def _crosscheck(module: str):
+    """A module of tests/crosscheck (the random models and their stimuli)."""
+    import importlib
+    sys.path.insert(0, str(ROOT / "tests" / "crosscheck"))
+    try:
+        return importlib.import_module(module)
+    finally:
+        sys.path.pop(0)
+
+
+def _trace_at(rows: list[dict], time_us: int, column: str) -> set[str]:
+    """The trace's value of a column at a time: its last row at or before it
+    (a row is written when a value changes)."""
+    value = ""
+    for row in rows:
+        if int(row["time_us"]) > time_us:
+            break
+        value = row[column]
+    return set(value.split("+")) - {""}
+
+
+@pytest.mark.parametrize("model", list(_random_chart_models(5)), ids=lambda g: g.name)
+def test_chart_items_equal_the_traces_active_columns_on_random_charts(model, firmware, tmp_path):
+    """At the end of every chart evolution (`step chart`), the chart's
+    `active` item is what the trace shows at that activation's deadline
+    (the activity is published then), the stack agrees, and each active
+    step's time is 0 (entered now) or its previous evolution's plus the
+    task's period."""
+    source = tmp_path / f"{model.name}.elab"
+    source.write_text(model.text + "\ndebug on uart0 baud 115200\n")
+    stimulus = tmp_path / f"{model.name}.stimulus.csv"
+    stimulus.write_text(_crosscheck("crosscheck").read_columns(source, model.stimulus))
+    exe = build(source, tmp_path / "build")
+    fw = firmware(exe, "--stimulus", str(stimulus), duration=f"{model.duration_ms}ms")
+    m = fw.map
+    c = fw.client()
+    charts = {ch["id"]: ch for ch in m.charts}
+    active_items = {it.chart: it for it in m.items if it.kind == "chart"}
+    times = {(it.chart, it.step): it for it in m.items if it.kind == "step_time"}
+    deadline_ticks = {t["id"]: t["deadline_us"] // m.tick_us for t in m.tasks}
+    period_ms = {t["id"]: t["period_us"] // 1000 for t in m.tasks}
+    seen, last_time = [], {}
+    # stop stepping while another evolution still comes, and its deadline is traced, before the run ends
+    chart_tasks = {ch["task"] for ch in m.charts}
+    end_tick = (model.duration_ms * 1000 // m.tick_us - 1
+                - max(t["period_us"] // m.tick_us + deadline_ticks[t["id"]] for t in m.tasks if t["id"] in chart_tasks))
+    while True:
+        c.step("chart")
+        f = fw.wait_halted(c)
+        if f.tick > end_tick:
+            break
+        assert f.location.kind == K.P_CHART_END
+        chart = charts[f.location.a]
+        item = active_items[chart["id"]]
+        step_items = [times[chart["id"], s["id"]] for s in chart["steps"]]
+        values = c.read([(item.id, item.type, item.count)] + [(t.id, t.type, 1) for t in step_items])
+        slots = values[0] if item.count > 1 else [values[0]]
+        stack = c.stack().charts[chart["id"]]
+        assert [s for s in slots if s != K.NONE8] == [s for s in stack if s is not None], (f.tick, slots, stack)
+        names = {m.step_name(chart["id"], s) for s in slots if s != K.NONE8}
+        seen.append((f.tick + deadline_ticks[chart["task"]], chart["name"], names))
+        for s in (s for s in slots if s != K.NONE8):
+            now, before = values[1 + s], last_time.get((chart["id"], s))
+            assert now == 0 or (before is not None and now == before + period_ms[chart["task"]]), \
+                (chart["name"], s, f.tick, now, before)
+        last_time = {k: v for k, v in last_time.items() if k[0] != chart["id"]}
+        last_time.update({(chart["id"], s): values[1 + s] for s in slots if s != K.NONE8})
+    c.run()
+    status, _, err = fw.wait_exit(timeout=60)
+    assert status == 0, err
+    rows = fw.rows()
+    assert len(seen) >= 10
+    for tick, name, names in seen:
+        assert _trace_at(rows, tick * m.tick_us, f"{name}.active") == names, (name, tick, names)
