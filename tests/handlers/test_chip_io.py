@@ -234,3 +234,12 @@ def test_the_dispatch_on_a_hand_written_board(tmp_path):
         "error c2 (chip model): sent 0x20 on a UART, but its device claims none",
         "error c2 (chip model): drove pin 7, which its device does not claim",
         "finish 0"]
+
+
+def test_the_pin_example_of_docs_boards_md_is_this_model():
+    docs = (ROOT / "docs" / "boards.md").read_text()
+    chip = (SOURCE / "drivers" / "switches_chip.c").read_text()
+    assert "enum { LOAD, CLOCK, DATA }; /* chip->pins, in the order of the claims */\n" in chip
+    start = chip.index("static void output(")
+    excerpt = chip[start:chip.index("const el_chip_ops_t", start)].rstrip() + "\n```"
+    assert excerpt in docs

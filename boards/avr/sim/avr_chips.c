@@ -13,7 +13,7 @@
  * it; the harness numbers pins (port letter - 'A') << 3 | bit.
  *
  * The pins a chip's device claims: after each write of the firmware to
- * their port's PORTx or DDRx, the level of each of them that is an output
+ * their port's PORTx, DDRx or PINx, the level of each of them that is an output
  * goes to sim_chips_pin_driven (which reports the changes to the chip).
  * A chip's bytes on a UART and the levels it drives are avr_sim.c's
  * (sim_board_uart_receive, sim_board_pin_drive).
@@ -88,7 +88,7 @@ uint16_t avr_port_addr(char port)
     return (uint16_t)(0x22u + 3u * (uint16_t)(port - 'A'));
 }
 
-/* A write to PORTx or DDRx of a port with chip pins (param: the letter). */
+/* A write to PORTx, DDRx or PINx of a port with chip pins (param: the letter). */
 static void on_port_write(struct avr_irq_t *irq, uint32_t value, void *param)
 {
     char port = (char)(uintptr_t)param;
@@ -113,7 +113,7 @@ static void on_port_write(struct avr_irq_t *irq, uint32_t value, void *param)
 static void watch_chip_pins(void)
 {
     uint32_t watched = 0u; /* by port: bit (letter - 'A') */
-    uint16_t k;
+    uint16_t k, offset;
     uint8_t j;
     for (k = 0; k < sim_chip_table_count; k++) {
         for (j = 0; j < sim_chip_table[k].pin_count; j++) {
@@ -123,11 +123,10 @@ static void watch_chip_pins(void)
             if (n >= 32u || (watched & (1ul << n)) != 0u)
                 continue;
             watched |= 1ul << n;
-            /* DDRx is just below PORTx */
-            avr_irq_register_notify(avr_iomem_getirq(mcu, addr, NULL, AVR_IOMEM_IRQ_ALL), on_port_write,
-                                    (void *)(uintptr_t)port);
-            avr_irq_register_notify(avr_iomem_getirq(mcu, (uint16_t)(addr - 1u), NULL, AVR_IOMEM_IRQ_ALL),
-                                    on_port_write, (void *)(uintptr_t)port);
+            /* PORTx, DDRx below it, PINx below that (a 1 written there toggles PORTx's bit) */
+            for (offset = 0u; offset < 3u; offset++)
+                avr_irq_register_notify(avr_iomem_getirq(mcu, (uint16_t)(addr - offset), NULL, AVR_IOMEM_IRQ_ALL),
+                                        on_port_write, (void *)(uintptr_t)port);
         }
     }
 }

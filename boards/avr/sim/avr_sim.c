@@ -18,7 +18,8 @@
  * params and vars are written into the MCU's RAM, device `out` data are put
  * on the hardware the build maps them to (an ADC channel's voltage, an input
  * pin's level, line camera frames on a UART, quadrature edges on encoder
- * pins, a value of a chip on a bus: avr_chips.c, sim/sim_chips.c), and the
+ * pins, a value of a chip on a bus, a UART or pins: avr_chips.c,
+ * sim/sim_chips.c), and the
  * firmware's own drivers read them. While UART frames or
  * encoder edges are still on their way it keeps GPIOR1 nonzero, and the
  * firmware waits. At the instant marker it copies every item and chart

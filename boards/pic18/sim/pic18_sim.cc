@@ -320,7 +320,7 @@ public:
         scheduled = false;
         pump();
     }
-    /* Let the bytes queued in a character time from now (none before). */
+    /* The bytes queued start into the FIFO one character time from now. */
     void after_a_character()
     {
         if (scheduled)

@@ -6,7 +6,7 @@
  * load, clock, data. */
 #include "el_chip.h"
 
-enum { LOAD, CLOCK, DATA };
+enum { LOAD, CLOCK, DATA }; /* chip->pins, in the order of the claims */
 
 typedef struct {
     uint8_t inputs;
