@@ -2,7 +2,7 @@
  * buses (sim_chips.h), and what the chip-model API offers a chip
  * (el_chip.h). Shared by every simulator harness. */
 #include "sim_chips.h"
-#include "host_internal.h"
+#include "sim_harness.h"
 
 #include <errno.h>
 #include <stdarg.h>
@@ -318,4 +318,7 @@ void el_chip_error(const el_chip_t *chip, const char *format, ...)
     va_end(ap);
     chip_failed = true;
     el_host_error("%s (chip model): %s", chip->device, text);
+    /* the run ends at the harness's next chance, failed */
+    sim_stop = true;
+    sim_exit_status = SIM_EXIT_RUN;
 }

@@ -30,7 +30,8 @@
  *   sim_board_pin_drive for its device's pins only: the firmware reads the
  *   level at once.
  * A chip sending on a UART or driving a pin its device does not claim is
- * an error naming it (el_chip_error): the run fails.
+ * an error naming it (el_chip_error), which ends the run (sim_stop) with
+ * exit status SIM_EXIT_RUN.
  */
 #ifndef SIM_CHIPS_H
 #define SIM_CHIPS_H

@@ -80,6 +80,8 @@ DISPATCH_C = r"""
 #include <stdio.h>
 
 const char *el_host_prog = "dispatch";
+bool sim_stop;       /* what sim_harness.c has: a chip's error ends the run */
+int sim_exit_status;
 
 void el_host_error(const char *fmt, ...)
 {
@@ -125,7 +127,7 @@ int main(void)
         default: el_chip_pin_drive(chips[a], (uint16_t)b, c != 0u); break;
         }
     }
-    printf("finish %d\n", (int)sim_chips_finish());
+    printf("finish %d %d %d\n", (int)sim_chips_finish(), (int)sim_stop, sim_exit_status);
     return 0;
 }
 """
@@ -173,7 +175,7 @@ def expected(chips: list[tuple[str, int, list[int]]], commands: list[tuple[str, 
             else:
                 failed = True
                 out.append(f"error c{a} (chip model): drove pin {b}, which its device does not claim")
-    return out + [f"finish {int(not failed)}"]
+    return out + [f"finish {int(not failed)} {int(failed)} {1 if failed else 0}"]
 
 
 @st.composite
@@ -233,7 +235,7 @@ def test_the_dispatch_on_a_hand_written_board(tmp_path):
         "rx 1 255", "rx 2 16", "drive 5 1", "drive 7 0",
         "error c2 (chip model): sent 0x20 on a UART, but its device claims none",
         "error c2 (chip model): drove pin 7, which its device does not claim",
-        "finish 0"]
+        "finish 0 1 1"]
 
 
 def test_the_pin_example_of_docs_boards_md_is_this_model():
@@ -243,3 +245,23 @@ def test_the_pin_example_of_docs_boards_md_is_this_model():
     start = chip.index("static void output(")
     excerpt = chip[start:chip.index("const el_chip_ops_t", start)].rstrip() + "\n```"
     assert excerpt in docs
+
+
+def test_a_chip_driving_a_pin_its_device_does_not_claim_fails_the_run(tmp_path):
+    """On the AVR in simavr: the chip's word, naming its device, once (the
+    run ends there), and exit status 1."""
+    folder = tmp_path / "m"
+    shutil.copytree(SOURCE, folder)
+    (folder / "drivers" / "switches_chip.c").write_text(
+        '#include "el_chip.h"\n'
+        "static void edge(el_chip_t *chip, uint16_t pin, bool level)\n"
+        "{\n"
+        "    (void)pin;\n"
+        "    el_chip_pin_drive(chip, (uint16_t)(chip->pins[2] + 1u), level); /* PD7 + 1: no pin of its own */\n"
+        "}\n"
+        'const el_chip_ops_t EL_CHIP = { .name = "stray", .pin_edge = edge };\n')
+    built = build(folder / "own_pins.elab", "avr", tmp_path / "b", "--sim")
+    proc = subprocess.run([str(built.simulator), "--fast", "--duration", DURATION, "--trace", str(tmp_path / "t.csv")],
+                          capture_output=True, text=True, timeout=120)
+    assert proc.returncode == 1, proc.stderr
+    assert proc.stderr.count("panel (chip model): drove pin 32, which its device does not claim") == 1, proc.stderr
