@@ -61,6 +61,8 @@ typedef struct el_chip {
     uint8_t value_count;      /* the device's `out` data, in declaration order */
     const char *const *value_names; /* their names ("value") */
     void *harness;            /* the harness's own */
+    uint8_t pin_count;        /* the pins the device claims (`claims pin[...]`), */
+    const uint16_t *pins;     /* in the order of its claims (the board's numbering) */
 } el_chip_t;
 
 typedef struct {
@@ -89,10 +91,12 @@ typedef struct {
     void (*spi_select)(el_chip_t *chip, bool selected);
     uint8_t (*spi_byte)(el_chip_t *chip, uint8_t mosi);
 
-    /* UART (a device claiming a UART): a byte the MCU sent. */
+    /* UART (a device claiming a UART): a byte the MCU sent, when the
+     * firmware hands it to the transmitter. */
     void (*uart_byte)(el_chip_t *chip, uint8_t byte);
 
-    /* A pin the device claims changed level (the firmware drove it). */
+    /* A pin the device claims (one of pins[]) changed level: the firmware
+     * drove it, an output, to `level` (the first level it drives too). */
     void (*pin_edge)(el_chip_t *chip, uint16_t pin, bool level);
 
     /* The run ends: write back what must outlive it (el_chip_memory keeps
@@ -105,10 +109,14 @@ typedef struct {
 /* The simulated time, in microseconds since the MCU's reset. */
 uint64_t el_chip_now_us(const el_chip_t *chip);
 
-/* A byte the chip sends to the MCU on its UART. */
+/* A byte the chip sends to the MCU on its device's UART: the MCU has it
+ * one character time later (after the bytes sent before it), at the baud
+ * rate the firmware set; lost while its receiver is off. An error on a
+ * device claiming no UART. */
 void el_chip_uart_send(el_chip_t *chip, uint8_t byte);
 
-/* Drive a pin the device claims (an input of the MCU) to `level`. */
+/* Drive a pin the device claims (an input of the MCU; one of pins[]) to
+ * `level`: the firmware reads it at once. An error on any other pin. */
 void el_chip_pin_drive(el_chip_t *chip, uint16_t pin, bool level);
 
 /* The device's integer (or bool) parameter `name` as the model gives it

@@ -2,7 +2,7 @@
  * buses (sim_chips.h), and what the chip-model API offers a chip
  * (el_chip.h). Shared by every simulator harness. */
 #include "sim_chips.h"
-#include "host_internal.h"
+#include "sim_harness.h"
 
 #include <errno.h>
 #include <stdarg.h>
@@ -17,7 +17,12 @@ typedef struct {
     el_chip_t chip;
     uint8_t *memory;
     size_t memory_size;
+    /* The level the firmware last drove each of the device's pins to
+     * (PIN_UNDRIVEN before the first): pin_edge reports the changes. */
+    uint8_t *pin_level;
 } chip_slot_t;
+
+#define PIN_UNDRIVEN 0xFFu
 
 static chip_slot_t *slots;
 static const char *chip_dir;
@@ -31,6 +36,12 @@ static int32_t spi_selected[SIM_BUSES] = { -1, -1, -1, -1 };
 static const el_chip_ops_t *ops_of(uint16_t k)
 {
     return sim_chip_table[k].ops;
+}
+
+/* The chip's index in sim_chip_table. */
+static uint16_t index_of(const el_chip_t *chip)
+{
+    return (uint16_t)((const chip_slot_t *)chip->harness - slots);
 }
 
 bool sim_chips_start(const char *dir)
@@ -59,7 +70,15 @@ bool sim_chips_start(const char *dir)
         c->cs_name = e->cs_name;
         c->value_count = e->value_count;
         c->value_names = e->value_names;
+        c->pin_count = e->pin_count;
+        c->pins = e->pins;
         c->harness = &slots[k];
+        slots[k].pin_level = malloc(e->pin_count ? e->pin_count : 1u);
+        if (slots[k].pin_level == NULL) {
+            el_host_error("out of memory for the chip model of '%s'", e->device);
+            return false;
+        }
+        memset(slots[k].pin_level, PIN_UNDRIVEN, e->pin_count ? e->pin_count : 1u);
     }
     /* Every chip's state is there before any reset runs (a chip's reset may
      * ask for its memory, which reports problems naming the device). */
@@ -144,7 +163,7 @@ bool sim_chips_finish(void)
         if (f != NULL && fclose(f) != 0)
             ok = false;
     }
-    return ok;
+    return ok && !chip_failed; /* a chip's error during the run fails it */
 }
 
 bool sim_chips_value(uint16_t index, uint8_t k, const el_chip_value_t *value)
@@ -233,17 +252,32 @@ void sim_chips_uart_byte(uint8_t uart, uint8_t byte)
             ops_of(k)->uart_byte(&slots[k].chip, byte);
 }
 
-void sim_chips_pin_edge(uint16_t pin, bool level)
+/* Which of chip k's pins `pin` is, or -1 when its device does not claim it. */
+static int pin_index(uint16_t k, uint16_t pin)
+{
+    uint8_t j;
+    for (j = 0; j < sim_chip_table[k].pin_count; j++)
+        if (sim_chip_table[k].pins[j] == pin)
+            return j;
+    return -1;
+}
+
+void sim_chips_pin_driven(uint16_t pin, bool level)
 {
     uint16_t k;
-    for (k = 0; k < sim_chip_table_count; k++)
+    for (k = 0; k < sim_chip_table_count; k++) {
+        int j = pin_index(k, pin);
+        if (j < 0 || slots[k].pin_level[j] == (uint8_t)level)
+            continue;
+        slots[k].pin_level[j] = (uint8_t)level;
         if (ops_of(k)->pin_edge != NULL)
             ops_of(k)->pin_edge(&slots[k].chip, pin, level);
+    }
 }
 
 int64_t el_chip_param(const el_chip_t *chip, const char *name, int64_t otherwise)
 {
-    const sim_chip_entry_t *e = &sim_chip_table[(const chip_slot_t *)chip->harness - slots];
+    const sim_chip_entry_t *e = &sim_chip_table[index_of(chip)];
     uint8_t k;
     for (k = 0; k < e->param_count; k++)
         if (strcmp(e->param_names[k], name) == 0)
@@ -259,12 +293,19 @@ uint64_t el_chip_now_us(const el_chip_t *chip)
 
 void el_chip_uart_send(el_chip_t *chip, uint8_t byte)
 {
+    if (sim_chip_table[index_of(chip)].kind != SIM_CHIP_UART) {
+        el_chip_error(chip, "sent 0x%02x on a UART, but its device claims none", (unsigned)byte);
+        return;
+    }
     sim_board_uart_receive(chip->bus, byte);
 }
 
 void el_chip_pin_drive(el_chip_t *chip, uint16_t pin, bool level)
 {
-    (void)chip;
+    if (pin_index(index_of(chip), pin) < 0) {
+        el_chip_error(chip, "drove pin %u, which its device does not claim", (unsigned)pin);
+        return;
+    }
     sim_board_pin_drive(pin, level);
 }
 
@@ -277,4 +318,7 @@ void el_chip_error(const el_chip_t *chip, const char *format, ...)
     va_end(ap);
     chip_failed = true;
     el_host_error("%s (chip model): %s", chip->device, text);
+    /* the run ends at the harness's next chance, failed */
+    sim_stop = true;
+    sim_exit_status = SIM_EXIT_RUN;
 }

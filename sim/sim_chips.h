@@ -16,6 +16,22 @@
  *   sim_chips_spi_byte for each byte the master clocks: the selected
  *   chip's answer, or 0xFF (an idle MISO, pulled up) when no chip is
  *   selected or the selected one has no model.
+ * - UART: sim_chips_uart_byte for each byte the MCU sends on a UART (when
+ *   the firmware hands it to the transmitter): the chips on that UART take
+ *   it. A chip's el_chip_uart_send reaches sim_board_uart_receive for its
+ *   own UART only; the harness puts the byte on the MCU's RX line, where
+ *   its reception ends one character time later (after the byte before
+ *   it), and drops it while the receiver is off, as a board would.
+ * - Pins: sim_chips_pin_driven for each pin a chip's device claims
+ *   (sim_chip_entry_t.pins) whenever a write of the firmware may have
+ *   changed the level it drives the pin to (the pin an output); the chip
+ *   claiming it sees the changes only (pin_edge), the first level the
+ *   firmware drives included. A chip's el_chip_pin_drive reaches
+ *   sim_board_pin_drive for its device's pins only: the firmware reads the
+ *   level at once.
+ * A chip sending on a UART or driving a pin its device does not claim is
+ * an error naming it (el_chip_error), which ends the run (sim_stop) with
+ * exit status SIM_EXIT_RUN.
  */
 #ifndef SIM_CHIPS_H
 #define SIM_CHIPS_H
@@ -41,6 +57,8 @@ typedef struct {
     uint8_t param_count;            /* the device's integer parameters (el_chip_param) */
     const char *const *param_names;
     const int64_t *param_values;
+    uint8_t pin_count;              /* the pins the device claims (`claims pin["PD5"]`) */
+    const uint16_t *pins;           /* their numbers (the board's numbering, as cs) */
 } sim_chip_entry_t;
 
 extern const sim_chip_entry_t sim_chip_table[];
@@ -50,7 +68,7 @@ extern const uint16_t sim_chip_table_count;
  * (NULL: memories erased each run). False after a message. */
 bool sim_chips_start(const char *dir);
 /* Call every chip's finish and save the memories (--chips). False after a
- * message. */
+ * message, or when a chip reported an error during the run. */
 bool sim_chips_finish(void);
 
 /* The stimulus set value `k` of chip `index` (the build's table names the
@@ -66,15 +84,19 @@ void sim_chips_spi_select(uint8_t bus, uint16_t cs, bool selected);
 uint8_t sim_chips_spi_byte(uint8_t bus, uint8_t mosi);
 
 void sim_chips_uart_byte(uint8_t uart, uint8_t byte);
-void sim_chips_pin_edge(uint16_t pin, bool level);
+/* The firmware drives `pin` (one of a chip's pins) to `level`: the chip
+ * claiming it sees a pin_edge when the level changed. */
+void sim_chips_pin_driven(uint16_t pin, bool level);
 
 /* ---- what a board's harness provides the chips ---- */
 
 /* The simulated time in microseconds. */
 uint64_t sim_board_now_us(void);
-/* A byte into the MCU's UART `uart` (as if on its RX line). */
+/* A byte into the MCU's UART `uart` (as if on its RX line): its reception
+ * ends one character time (at the baud rate the firmware set) after the
+ * byte before it or, on an idle line, after now. */
 void sim_board_uart_receive(uint8_t uart, uint8_t byte);
-/* Drive an input pin of the MCU. */
+/* Drive an input pin of the MCU: the firmware reads `level` from now on. */
 void sim_board_pin_drive(uint16_t pin, bool level);
 
 #endif /* SIM_CHIPS_H */

@@ -220,11 +220,13 @@ class SimChip:
     address: int = 0
     cs_name: str = ""
     values: list[int] = field(default_factory=list)
+    pins: list[str] = field(default_factory=list)
 
 
 def _place(chip: SimChip) -> SimChip:
     """The chip at the place its device claims: an I2C address, a chip
-    select, else a UART."""
+    select, else a UART, else its pins alone; with the pins it claims (in
+    claim order: what it sees and drives, el_chip.h) whatever its place."""
     for text in chip.device.claims:
         claim, select = parse_claim(text), parse_select(text)
         if claim and claim[0] == "i2c" and select and select[0] == "addr":
@@ -233,6 +235,10 @@ def _place(chip: SimChip) -> SimChip:
             chip.kind, chip.bus, chip.cs_name = "SIM_CHIP_SPI", int(claim[1]), str(select[1])
         elif claim and claim[0] == "uart" and chip.kind == "0":
             chip.kind, chip.bus = "SIM_CHIP_UART", int(claim[1])
+        elif claim and claim[0] == "pin":
+            chip.pins.append(str(claim[1]))
+    if chip.kind == "0" and chip.pins:
+        chip.kind = "SIM_CHIP_PINS"
     return chip
 
 
@@ -285,10 +291,10 @@ def chip_files(program: Program | None, std_for: str | None = None) -> list[tupl
 
 def chip_table(program: Program | None, pin_number, std_for: str | None = None) -> list[str]:
     """sim_chip_table (sim/sim_chips.h): one entry per chip of
-    :func:`sim_chips`, at the I2C address or chip select it claims
-    (``pin_number(name)``: the harness's number of a pin), with the names of
-    the data whose stimulus reaches it and its device's integer parameters
-    (el_chip_param)."""
+    :func:`sim_chips`, at the I2C address, chip select or UART it claims,
+    with the pins it claims (``pin_number(name)``: the harness's number of
+    a pin), the names of the data whose stimulus reaches it and its
+    device's integer parameters (el_chip_param)."""
     lines, rows = [], []
     chips = sim_chips(program, std_for)
     for symbol in dict.fromkeys(c.symbol for c in chips):
@@ -302,13 +308,16 @@ def chip_table(program: Program | None, pin_number, std_for: str | None = None) 
                      f"{{ {', '.join(c_string(n) for n, _v in params) or '0'} }};")
         lines.append(f"static const int64_t sim_chip_param_values_{k}[] = "
                      f"{{ {', '.join(f'{int(v)}LL' for _n, v in params) or '0'} }};")
+        pins = ", ".join(f"{pin_number(p)}u /* {p} */" for p in c.pins) or "0u"
+        lines.append(f"static const uint16_t sim_chip_pins_{k}[] = {{ {pins} }};")
         cs = pin_number(c.cs_name) if c.cs_name else 0
         rows.append(f"    {{ &{c.symbol}, {c.kind}, {c.bus}u, 0x{c.address:02x}u, {cs}u, {c_string(c.cs_name)}, "
                     f"{c_string(c.device.path)}, {len(c.values)}u, sim_chip_values_{k}, {len(params)}u, "
-                    f"sim_chip_param_names_{k}, sim_chip_param_values_{k} }},")
+                    f"sim_chip_param_names_{k}, sim_chip_param_values_{k}, {len(c.pins)}u, sim_chip_pins_{k} }},")
     if not rows:
         return ["#include \"sim_chips.h\"",
-                "const sim_chip_entry_t sim_chip_table[1] = { { 0, 0u, 0u, 0u, 0u, \"\", \"\", 0u, 0, 0u, 0, 0 } };",
+                "const sim_chip_entry_t sim_chip_table[1] = "
+                "{ { 0, 0u, 0u, 0u, 0u, \"\", \"\", 0u, 0, 0u, 0, 0, 0u, 0 } };",
                 "const uint16_t sim_chip_table_count = 0u;"]
     return ["#include \"sim_chips.h\"", *lines,
             f"const sim_chip_entry_t sim_chip_table[{len(rows)}] = {{", *rows, "};",

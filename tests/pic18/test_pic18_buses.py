@@ -149,7 +149,7 @@ SPI_TABLE_C = dedent("""\
     #include "sim_chips.h"
     extern const el_chip_ops_t test_spi_chip;
     const sim_chip_entry_t sim_chip_table[1] = {
-        { &test_spi_chip, SIM_CHIP_SPI, 0u, 0u, 0x1Fu, "RD7", "adc", 0u, 0, 0u, 0, 0 }, /* RD7: port D (3) << 3 | 7 */
+        { &test_spi_chip, SIM_CHIP_SPI, 0u, 0u, 0x1Fu, "RD7", "adc", 0u, 0, 0u, 0, 0, 0u, 0 }, /* RD7: port D (3) << 3 | 7 */
     };
     const uint16_t sim_chip_table_count = 1u;
     """)
@@ -200,9 +200,9 @@ I2C_TABLE_C = dedent("""\
     #include "sim_chips.h"
     extern const el_chip_ops_t test_i2c_chip;
     const sim_chip_entry_t sim_chip_table[3] = {
-        { &test_i2c_chip, SIM_CHIP_I2C, 0u, 0x60u, 0u, "", "long", 0u, 0, 0u, 0, 0 },
-        { &test_i2c_chip, SIM_CHIP_I2C, 0u, 0x61u, 0u, "", "short", 0u, 0, 0u, 0, 0 },
-        { &test_i2c_chip, SIM_CHIP_I2C, 0u, 0x63u, 0u, "", "writes", 0u, 0, 0u, 0, 0 },
+        { &test_i2c_chip, SIM_CHIP_I2C, 0u, 0x60u, 0u, "", "long", 0u, 0, 0u, 0, 0, 0u, 0 },
+        { &test_i2c_chip, SIM_CHIP_I2C, 0u, 0x61u, 0u, "", "short", 0u, 0, 0u, 0, 0, 0u, 0 },
+        { &test_i2c_chip, SIM_CHIP_I2C, 0u, 0x63u, 0u, "", "writes", 0u, 0, 0u, 0, 0, 0u, 0 },
     };
     const uint16_t sim_chip_table_count = 3u;
     """)
@@ -332,8 +332,8 @@ BUSY_TABLE_C = dedent("""\
     #include "sim_chips.h"
     extern const el_chip_ops_t test_busy_chip;
     const sim_chip_entry_t sim_chip_table[2] = {
-        { &test_busy_chip, SIM_CHIP_I2C, 0u, 0x50u, 0u, "", "patient", 0u, 0, 0u, 0, 0 },
-        { &test_busy_chip, SIM_CHIP_I2C, 0u, 0x51u, 0u, "", "hasty", 0u, 0, 0u, 0, 0 },
+        { &test_busy_chip, SIM_CHIP_I2C, 0u, 0x50u, 0u, "", "patient", 0u, 0, 0u, 0, 0, 0u, 0 },
+        { &test_busy_chip, SIM_CHIP_I2C, 0u, 0x51u, 0u, "", "hasty", 0u, 0, 0u, 0, 0, 0u, 0 },
     };
     const uint16_t sim_chip_table_count = 2u;
     """)

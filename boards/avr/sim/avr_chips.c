@@ -11,6 +11,12 @@
  * whatever the clock); the selected chip answers at once with the byte it
  * shifts out meanwhile. A chip select is the pin's level as the port drives
  * it; the harness numbers pins (port letter - 'A') << 3 | bit.
+ *
+ * The pins a chip's device claims: after each write of the firmware to
+ * their port's PORTx, DDRx or PINx, the level of each of them that is an output
+ * goes to sim_chips_pin_driven (which reports the changes to the chip).
+ * A chip's bytes on a UART and the levels it drives are avr_sim.c's
+ * (sim_board_uart_receive, sim_board_pin_drive).
  */
 #include "avr_chips.h"
 #include "sim_chips.h"
@@ -19,6 +25,7 @@
 #include "avr_ioport.h"
 #include "avr_spi.h"
 #include "avr_twi.h"
+#include "sim_io.h"
 #include "sim_irq.h"
 #include "sim_time.h"
 
@@ -74,6 +81,56 @@ static void on_chip_select(struct avr_irq_t *irq, uint32_t value, void *param)
     sim_chips_spi_select(sim_chip_table[k].bus, sim_chip_table[k].cs, level == 0u);
 }
 
+uint16_t avr_port_addr(char port)
+{
+    if (port >= 'H') /* PORTH and up live in the extended I/O space */
+        return (uint16_t)(0x102u + 3u * (uint16_t)(port - 'H' - (port > 'I' ? 1 : 0)));
+    return (uint16_t)(0x22u + 3u * (uint16_t)(port - 'A'));
+}
+
+/* A write to PORTx, DDRx or PINx of a port with chip pins (param: the letter). */
+static void on_port_write(struct avr_irq_t *irq, uint32_t value, void *param)
+{
+    char port = (char)(uintptr_t)param;
+    avr_ioport_state_t state;
+    uint16_t k;
+    uint8_t j;
+    (void)irq;
+    (void)value;
+    if (avr_ioctl(mcu, AVR_IOCTL_IOPORT_GETSTATE(port), &state) != 0)
+        return;
+    for (k = 0; k < sim_chip_table_count; k++) {
+        for (j = 0; j < sim_chip_table[k].pin_count; j++) {
+            uint16_t pin = sim_chip_table[k].pins[j];
+            uint8_t bit = (uint8_t)(1u << (pin & 7u));
+            if ((pin >> 3) == (uint16_t)(port - 'A') && (state.ddr & bit) != 0u)
+                sim_chips_pin_driven(pin, (state.port & bit) != 0u);
+        }
+    }
+}
+
+/* Watch the ports of the chips' pins (each port once). */
+static void watch_chip_pins(void)
+{
+    uint32_t watched = 0u; /* by port: bit (letter - 'A') */
+    uint16_t k, offset;
+    uint8_t j;
+    for (k = 0; k < sim_chip_table_count; k++) {
+        for (j = 0; j < sim_chip_table[k].pin_count; j++) {
+            uint16_t n = sim_chip_table[k].pins[j] >> 3;
+            char port = (char)('A' + n);
+            uint16_t addr = avr_port_addr(port);
+            if (n >= 32u || (watched & (1ul << n)) != 0u)
+                continue;
+            watched |= 1ul << n;
+            /* PORTx, DDRx below it, PINx below that (a 1 written there toggles PORTx's bit) */
+            for (offset = 0u; offset < 3u; offset++)
+                avr_irq_register_notify(avr_iomem_getirq(mcu, (uint16_t)(addr - offset), NULL, AVR_IOMEM_IRQ_ALL),
+                                        on_port_write, (void *)(uintptr_t)port);
+        }
+    }
+}
+
 bool avr_chips_attach(avr_t *avr)
 {
     uint16_t k;
@@ -95,5 +152,6 @@ bool avr_chips_attach(avr_t *avr)
         avr_irq_register_notify(avr_io_getirq(avr, AVR_IOCTL_IOPORT_GETIRQ('A' + (e->cs >> 3)), e->cs & 7u),
                                 on_chip_select, (void *)(uintptr_t)k);
     }
+    watch_chip_pins();
     return true;
 }

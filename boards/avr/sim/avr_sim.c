@@ -18,7 +18,8 @@
  * params and vars are written into the MCU's RAM, device `out` data are put
  * on the hardware the build maps them to (an ADC channel's voltage, an input
  * pin's level, line camera frames on a UART, quadrature edges on encoder
- * pins, a value of a chip on a bus: avr_chips.c, sim/sim_chips.c), and the
+ * pins, a value of a chip on a bus, a UART or pins: avr_chips.c,
+ * sim/sim_chips.c), and the
  * firmware's own drivers read them. While UART frames or
  * encoder edges are still on their way it keeps GPIOR1 nonzero, and the
  * firmware waits. At the instant marker it copies every item and chart
@@ -253,19 +254,11 @@ const char *sim_pin_name(uint16_t k, bool *pwm)
     return sim_pins[k].name;
 }
 
-/* PORTx's data address; PORTH and up live in the extended I/O space. */
-static uint16_t port_addr(char port)
-{
-    if (port >= 'H')
-        return (uint16_t)(0x102u + 3u * (uint16_t)(port - 'H' - (port > 'I' ? 1 : 0)));
-    return (uint16_t)(0x22u + 3u * (uint16_t)(port - 'A'));
-}
-
 static int pwm_duty(const sim_pin_t *p)
 {
     if ((avr->data[p->tccra] >> p->com_bit) & 1u)
         return avr->data[p->ocr];
-    return (avr->data[port_addr(p->port)] >> p->bit) & 1u ? 255 : 0;
+    return (avr->data[avr_port_addr(p->port)] >> p->bit) & 1u ? 255 : 0;
 }
 
 static void pin_changed(struct avr_irq_t *irq, uint32_t value, void *param)
@@ -296,7 +289,7 @@ static void watch_pins(void)
             avr_irq_register_notify(avr_iomem_getirq(avr, p->ocr, NULL, AVR_IOMEM_IRQ_ALL), pwm_reg_written, NULL);
             avr_irq_register_notify(avr_iomem_getirq(avr, p->tccra, NULL, AVR_IOMEM_IRQ_ALL), pwm_reg_written,
                                     NULL);
-            avr_irq_register_notify(avr_iomem_getirq(avr, port_addr(p->port), NULL, AVR_IOMEM_IRQ_ALL),
+            avr_irq_register_notify(avr_iomem_getirq(avr, avr_port_addr(p->port), NULL, AVR_IOMEM_IRQ_ALL),
                                     pwm_reg_written, NULL);
         }
     }
@@ -443,8 +436,14 @@ uint64_t sim_board_now_us(void)
     return avr->cycle / (sim_clock_hz / 1000000u);
 }
 
+/* simavr's UART takes the byte into its receive FIFO, which hands it to
+ * the firmware one character time (cycles_per_byte) after the byte before
+ * it, and drops it while the receiver is off. */
 void sim_board_uart_receive(uint8_t uart, uint8_t byte)
 {
+    if (uart >= 4u || uarts[uart].uart == NULL)
+        return;
+    uart_log_byte(&sim_links[uart], "rx", byte);
     avr_raise_irq(avr_io_getirq(avr, AVR_IOCTL_UART_GETIRQ((uint32_t)('0' + uart)), UART_IRQ_INPUT), byte);
 }
 

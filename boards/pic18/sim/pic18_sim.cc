@@ -23,13 +23,15 @@
  *   traced with the host board's own trace code.
  *   At each inputs mark the guard at the bottom of sdcc's software stack
  *   is checked: a stack that ran out ends the run with an error.
- * - TXREG: each byte the EUSART is given goes to the link of uart0.
+ * - TXREG: each byte the EUSART is given goes to the link of uart0 and to
+ *   the chip models on uart0 (sim/sim_chips.h).
  * - EECON1 (the PIC18F4620): gpsim's data EEPROM reads ignore EEADRH; the
  *   harness completes them (map_eeadrh, eeprom_read_fix).
  * - LATA..LATE, TRISA..TRISE, CCPR1L, CCP1CON, CCPR2L, CCP2CON, PR2: the
  *   traced pins' levels and PWM duties (--pins), stamped with the cycle
  *   (a duty PWM_SETTLE_CYCLES after a CCP write: it spans two registers);
- *   the chip selects of the SPI's chips.
+ *   the chip selects of the SPI's chips; the levels the firmware drives
+ *   the pins of the chips' devices to (chip_pins_update).
  * - SSPCON1, SSPCON2, SSPSTAT, SSPADD, SSPBUF are not gpsim's at all: the
  *   harness plays the MSSP and the chips on its buses (sim/sim_chips.h;
  *   "the MSSP" below).
@@ -37,7 +39,10 @@
  * (the baud rate the firmware set), when reception is on, and only into an
  * empty FIFO: with two bytes queued gpsim 0.31 hands the firmware a wrong
  * one (seen at 1 Mbaud, 100 cycles a byte); a byte the firmware has not
- * taken yet waits (no overrun is modelled).
+ * taken yet waits (no overrun is modelled). The bytes a chip model sends
+ * take the same way, the first one character time after it sent it; the
+ * levels a chip drives its pins to are forced on them as the stimulus'
+ * are (drive_level).
  *
  * - el_pic18_sim_mark's EL_PIC18_SIM_WAIT and _IDLE: the iterations of the
  *   firmware's wait loops, counted at their bare cost as "asleep" by
@@ -315,6 +320,14 @@ public:
         scheduled = false;
         pump();
     }
+    /* The bytes queued start into the FIFO one character time from now. */
+    void after_a_character()
+    {
+        if (scheduled)
+            return;
+        scheduled = true;
+        get_cycles().set_break(get_cycles().get() + char_cycles(reg(RCSTA)), this);
+    }
     void pump()
     {
         sim_link_t *u = &sim_links[0];
@@ -351,6 +364,19 @@ private:
 };
 
 RxPump rx_pump;
+
+/* The bytes a chip sends (sim_board_uart_receive) join the link's on their
+ * way into the EUSART: the first of them one character time after it was
+ * sent (its reception ends then), the next one more each. */
+void uart_receive_from_chip(uint8_t byte)
+{
+    sim_link_t *u = &sim_links[0];
+    unsigned rcsta = reg(RCSTA);
+    if ((rcsta & 0x90u) != 0x90u || u->in_len >= sizeof u->in) /* SPEN, CREN: the receiver is off */
+        return;
+    u->in[u->in_len++] = byte;
+    rx_pump.after_a_character();
+}
 
 /* ---- the MSSP: the harness plays it, and the chips on its buses ----
  *
@@ -610,6 +636,21 @@ void cs_update()
     }
 }
 
+/* The pins the chips' devices claim: after each write of LATx or TRISx,
+ * the level of each of them that is an output goes to sim_chips_pin_driven
+ * (which reports the changes to the chip). */
+void chip_pins_update()
+{
+    for (uint16_t k = 0; k < sim_chip_table_count; k++) {
+        for (uint8_t j = 0; j < sim_chip_table[k].pin_count; j++) {
+            unsigned pin = sim_chip_table[k].pins[j];
+            unsigned bit = 1u << (pin & 7u);
+            if ((reg(TRISA + (pin >> 3)) & bit) == 0u)
+                sim_chips_pin_driven((uint16_t)pin, (reg(LATA + (pin >> 3)) & bit) != 0u);
+        }
+    }
+}
+
 void mssp_take()
 {
     const unsigned regs[] = {SSPCON1_ADDR, SSPCON2_ADDR, SSPSTAT_ADDR, SSPADD_ADDR, SSPBUF_ADDR};
@@ -710,6 +751,7 @@ void on_write(unsigned address, unsigned value)
         }
     } else if (address == TXREG) {
         sim_link_output(&sim_links[0], (uint8_t)value);
+        sim_chips_uart_byte(0u, (uint8_t)value);
     } else if (address == EECON1_ADDR) {
         eeprom_read_fix(value);
     } else if (address == CCPR1L || address == CCP1CON || address == CCPR2L || address == CCP2CON) {
@@ -717,6 +759,7 @@ void on_write(unsigned address, unsigned value)
     } else {
         record_pins();
         cs_update();
+        chip_pins_update();
     }
 }
 
@@ -787,15 +830,18 @@ extern "C" uint64_t sim_board_now_us(void)
 
 extern "C" void sim_board_uart_receive(uint8_t uart, uint8_t byte)
 {
-    sim_link_t *u = &sim_links[0];
-    if (uart == 0u && u->in_len < sizeof u->in) /* into the EUSART as the link's bytes go */
-        u->in[u->in_len++] = byte;
+    if (uart == 0u) /* the EUSART */
+        uart_receive_from_chip(byte);
 }
 
 extern "C" void sim_board_pin_drive(uint16_t pin, bool level)
 {
-    if (pin < pin_driven.size())
-        drive_level(pin, level);
+    if (pin >= pin_driven.size())
+        return;
+    drive_level(pin, level);
+    if (irq_off()) /* an edge on an interrupt pin while interrupts are off: see IrqRecheck */
+        irq_recheck.arm();
+    record_pins();
 }
 
 /* ---- what sim_harness.c needs of the simulator ---- */
