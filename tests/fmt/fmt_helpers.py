@@ -15,6 +15,7 @@ sys.path[:0] = [str(ROOT / "tests" / "frontend"), str(ROOT / "tests" / "crossche
 
 from mutations import TOKEN  # noqa: E402
 
+from easylab.core.source import ModelError  # noqa: E402
 from easylab.frontend.inline_c import blank_inline_c  # noqa: E402
 from easylab.ir.program import to_json  # noqa: E402
 from easylab.pipeline import lower_file  # noqa: E402
@@ -51,8 +52,11 @@ def shuffle_whitespace(text: str, rng: random.Random) -> str:
     """``text`` with its layout disturbed and its tokens, comments and inline
     C unchanged: every run of blanks outside inline C redrawn (as many line
     breaks, more blank lines where there was one, any indentation, trailing
-    blanks)."""
-    _, blocks = blank_inline_c(text, "<string>")
+    blanks). A text whose inline C does not close is returned as it is."""
+    try:
+        _, blocks = blank_inline_c(text, "<string>")
+    except ModelError:
+        return text
     inside_c = [(start, start + len(body) + 4) for start, body in blocks.items()]
     out, pos = [], 0
     for tok in TOKEN.findall(text):
