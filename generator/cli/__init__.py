@@ -40,6 +40,9 @@ def build_parser() -> argparse.ArgumentParser:
                                                          "(default: DOT on standard output)")
     p.set_defaults(func=model_commands.cmd_graph)
 
+    from .fmt_command import add_parser as add_fmt_parser
+    add_fmt_parser(sub)
+
     p = sub.add_parser("analyze", help="SDF analysis: repetitions, schedules, buffers",
                        description="Analyse the dataflows of a model (.elab) or an SDF3 XML graph (.xml): "
                                    "repetition vector, schedule in looped notation, buffer sizes and bounds.")

@@ -114,7 +114,7 @@ def test_load_replaces_the_model_in_local_execution(tmp_path):
     model = tmp_path / "blink.elab"
     model.write_text((EXAMPLES / "blink.elab").read_text())
     faster = tmp_path / "faster.elab"
-    faster.write_text(model.read_text().replace("= 500  range", "= 20  range"))
+    faster.write_text(model.read_text().replace("= 500 range", "= 20 range"))
     broken = tmp_path / "broken.elab"
     broken.write_text(model.read_text().replace("wave.y -> led.level", "wave.y -> nowhere"))
     fw = InterpFirmware(model, tmp_path, halt=False, fast=False)

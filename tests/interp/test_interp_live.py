@@ -32,8 +32,8 @@ LIVE = (DATA / "live.elab").read_text()
 STIMULUS = DATA / "live.stimulus.csv"
 EDITED = LIVE.replace("g   = Gain<int16>(k = 1000)", "g   = Gain<int16>(k = 2000)\n"
                                                        "    lim = Limit<int16>(min = -1000, max = 500)") \
-             .replace("g.y   -> out", "g.y   -> lim.x\n    lim.y -> out")
-BROKEN = LIVE.replace("g.y   -> out", "g.y   -> nowhere")
+             .replace("g.y          -> out", "g.y   -> lim.x\n    lim.y -> out")
+BROKEN = LIVE.replace("g.y          -> out", "g.y   -> nowhere")
 DEBUG = "debug on uart0\n"  # the debug interface, for the tests that send models over it
 
 
