@@ -232,13 +232,14 @@ def _one_khz_run(built, program_path: Path, work: Path, duration: str, realtime:
 
 
 # (setting, the suite beside, --realtime over TCP)
-ONE_KHZ_SETTINGS = (("idle", False, False), ("suite_beside", True, False), ("suite_beside_realtime_tcp", True, True))
+ONE_KHZ_SETTINGS = (("idle", False, False), ("idle_realtime_tcp", False, True), ("suite_beside", True, False),
+                    ("suite_beside_realtime_tcp", True, True))
 
 
 def _one_khz(work: Path, tiny: bool) -> dict:
     """Overruns per 10,000 instants of blink at 1 kHz through the AVR proxy
-    at 1 Mbaud in real time: idle over a pty; with part of the suite beside
-    it over a pty, and with `--realtime` over a TCP link."""
+    at 1 Mbaud in real time: idle and with part of the suite beside it, each
+    over a pty and with `--realtime` over a TCP link."""
     name, mcu, baud, duration, runs = ONE_KHZ
     model = ROOT / "examples" / f"{name}.elab"
     program, _ = lower_file(model)
