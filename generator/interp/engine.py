@@ -11,6 +11,7 @@ state of whatever did not change.
 
 from __future__ import annotations
 
+import os
 import queue
 import shutil
 import threading
@@ -133,17 +134,20 @@ class Engine:
         return self.state.io
 
     def _open_interfaces(self, state: ProgramState) -> None:
-        """Open (or adopt) the links, take what persistent storage holds,
-        and write the maps."""
+        """Write the maps, then open (or adopt) the links and take what
+        persistent storage holds: a client that sees a link finds its map
+        complete (each written whole, then renamed into place)."""
         o = self.interfaces
-        if not state.io.open(o.debug, o.modbus_tcp, o.modbus_rtu, o.nvram):
-            raise InterfaceError("the debug or service interface cannot be opened")
-        state.io.pull(state.published)
         if o.maps is not None:
             o.maps.mkdir(parents=True, exist_ok=True)
             for name, path in state.io.library.files.items():
                 if name.endswith((".json", ".csv", ".md")):
-                    shutil.copyfile(path, o.maps / name)
+                    partial = o.maps / f".{name}.partial"
+                    shutil.copyfile(path, partial)
+                    os.replace(partial, o.maps / name)
+        if not state.io.open(o.debug, o.modbus_tcp, o.modbus_rtu, o.nvram):
+            raise InterfaceError("the debug or service interface cannot be opened")
+        state.io.pull(state.published)
 
     def serve_interfaces(self, call: Callable, *args) -> None:
         """A call into the interfaces library (see ProgramState.serve), then
