@@ -14,26 +14,13 @@ from hypothesis import strategies as st
 
 from fmt_helpers import ROOT, comments, ir_or_errors, shuffle_whitespace
 from modelgen import generate
-from mutations import mutate
+from mutations import HypothesisChooser, mutate
 
 from easylab.core.source import ModelError
 from easylab.frontend.format import format_text
 from easylab.frontend.parser import parse_text
 
 SEEDS = [*sorted((ROOT / "examples").glob("*.elab")), ROOT / "tests" / "frontend" / "models" / "all_features.elab"]
-
-
-class HypothesisChooser:
-    """A mutation's choices drawn by hypothesis (shrinkable)."""
-
-    def __init__(self, draw):
-        self.draw = draw
-
-    def integer(self, lo: int, hi: int) -> int:
-        return self.draw(st.integers(lo, hi))
-
-    def pick(self, items):
-        return self.draw(st.sampled_from(items))
 
 
 def assert_formats_faithfully(path, text: str) -> bool:

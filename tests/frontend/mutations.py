@@ -57,6 +57,22 @@ class SeededChooser:
         return self.rng.choice(list(items))
 
 
+class HypothesisChooser:
+    """A mutation's choices drawn by hypothesis (shrinkable): ``draw`` of
+    a ``@st.composite`` strategy or ``st.data()``."""
+
+    def __init__(self, draw):
+        from hypothesis import strategies as st  # the campaign's seeded runs need no hypothesis
+        self.draw = draw
+        self.st = st
+
+    def integer(self, lo: int, hi: int) -> int:
+        return self.draw(self.st.integers(lo, hi))
+
+    def pick(self, items: Sequence[T]) -> T:
+        return self.draw(self.st.sampled_from(items))
+
+
 def mutate(text: str, choose: Chooser) -> str:
     """One to four deletions, duplications, swaps, insertions or
     replacements of tokens or lines of ``text``."""

@@ -17,25 +17,12 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from easylab.pipeline import check_file
-from mutations import mutate
+from mutations import HypothesisChooser, mutate
 
 ROOT = Path(__file__).resolve().parents[2]
 # The examples, and a model with every construct of the language once.
 SEEDS = [*sorted((ROOT / "examples").glob("*.elab")), Path(__file__).parent / "models" / "all_features.elab"]
 TOTAL_CASES = 3000
-
-
-class HypothesisChooser:
-    """A mutation's choices drawn by hypothesis (shrinkable)."""
-
-    def __init__(self, draw):
-        self.draw = draw
-
-    def integer(self, lo: int, hi: int) -> int:
-        return self.draw(st.integers(lo, hi))
-
-    def pick(self, items):
-        return self.draw(st.sampled_from(items))
 
 
 @st.composite
