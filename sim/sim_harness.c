@@ -323,9 +323,12 @@ size_t sim_link_ready(sim_link_t *u, uint64_t cycle, bool idle, uint64_t char_cy
 {
     uint16_t crc;
     size_t i, len;
-    if (!keeps_frames_apart() || u->in_len == 0u)
+    if (!keeps_frames_apart())
         return u->in_len;
     if (u->frame_ended) {
+        /* The silence runs from the moment the receiver has the frame,
+         * whether the next frame came yet or not: a master that kept the
+         * pause itself (EASYLAB_BUS_GAP_US) must not wait it twice. */
         if (!idle)
             return 0u;
         if (!u->idle_seen) {
@@ -338,6 +341,8 @@ size_t sim_link_ready(sim_link_t *u, uint64_t cycle, bool idle, uint64_t char_cy
         u->frame_crc = EL_CRC16_INIT;
         u->frame_len = 0u;
     }
+    if (u->in_len == 0u)
+        return 0u;
     /* The frame ends where its CRC checks and a whole frame follows (frames
      * that came together); a frame still coming goes on as it comes. */
     crc = u->frame_crc;

@@ -137,7 +137,8 @@ void sim_link_service(sim_link_t *u);
  * last one may still be coming in: `char_cycles`, a character's time).
  * All of them, except with --rtu-frames in real time: the bytes of one
  * Modbus RTU frame; the next once the frame is in and SIM_RTU_PAUSE_NS
- * have passed. */
+ * have passed. Call it at every service, with or without bytes waiting:
+ * the pause counts from when the receiver went idle. */
 size_t sim_link_ready(sim_link_t *u, uint64_t cycle, bool idle, uint64_t char_cycles);
 /* Drop the first n bytes of in[] (the MCU took them). */
 void sim_link_consume(sim_link_t *u, size_t n);

@@ -118,6 +118,18 @@ class RawPty:
                 continue
             out += os.read(self.fd, 4096)
 
+    def recv_exactly(self, count: int, timeout: float = 1.0) -> bytes:
+        """`count` bytes, as soon as they are all in (fewer at `timeout`)."""
+        import select
+        out = b""
+        deadline = time.monotonic() + timeout
+        while len(out) < count:
+            left = deadline - time.monotonic()
+            if left <= 0 or not select.select([self.fd], [], [], left)[0]:
+                break
+            out += os.read(self.fd, count - len(out))
+        return out
+
     def ask(self, unit: int, pdu: bytes, timeout: float = 1.0) -> bytes | None:
         """Send a request; the reply's PDU (CRC and unit checked), or None."""
         self.send(rtu_frame(unit, pdu))
@@ -135,30 +147,57 @@ class RawPty:
 READ_REG0, READ_REG2 = bytes([3, 0, 0, 0, 1]), bytes([3, 0, 2, 0, 1])  # one holding register: 0, 2
 
 
-def _replies_to_two_frames_written_together(exe: Path, uart: str, tmp_path: Path, *options: str) -> bytes:
-    """pt100_sensor's Modbus RTU slave (unit 17 on `uart`) in real time: two
-    requests written to its pty in one write, once the firmware answers."""
-    tmp_path.mkdir()
-    link = tmp_path / uart
-    proc = subprocess.Popen([str(exe), f"--{uart}", f"pty:{link}", "--wait", *options], stderr=subprocess.PIPE,
-                            text=True)
-    try:
+class _Pt100OnPty:
+    """pt100_sensor's Modbus RTU slave (unit 17 on `uart`) in real time on a
+    raw pty, once the firmware answers."""
+
+    def __init__(self, exe: Path, uart: str, tmp_path: Path, *options: str):
+        tmp_path.mkdir()
+        link = tmp_path / uart
+        self.proc = subprocess.Popen([str(exe), f"--{uart}", f"pty:{link}", "--wait", *options],
+                                     stderr=subprocess.PIPE, text=True)
         deadline = time.monotonic() + 20
         while not link.exists() and time.monotonic() < deadline:
             time.sleep(0.05)
-        pty = RawPty(link)
-        try:
-            reply = None
-            while reply is None and time.monotonic() < deadline:  # the first request may meet a booting firmware
-                reply = pty.ask(17, READ_REG0, timeout=0.5)
-            assert reply == bytes([3, 2, 0x03, 0xE8]), reply  # cal_gain 1000
-            pty.send(rtu_frame(17, READ_REG0) + rtu_frame(17, READ_REG2))
-            return pty.recv(timeout=1.5, quiet=1.5)
-        finally:
-            pty.close()
-    finally:
-        proc.terminate()
-        proc.wait(timeout=10)
+        self.pty = RawPty(link)
+        reply = None
+        while reply is None and time.monotonic() < deadline:  # the first request may meet a booting firmware
+            reply = self.pty.ask(17, READ_REG0, timeout=0.5)
+        assert reply == bytes([3, 2, 0x03, 0xE8]), reply  # cal_gain 1000
+
+    def __enter__(self) -> RawPty:
+        return self.pty
+
+    def __exit__(self, *exc) -> None:
+        self.pty.close()
+        self.proc.terminate()
+        self.proc.wait(timeout=10)
+
+
+def _replies_to_two_frames_written_together(exe: Path, uart: str, tmp_path: Path, *options: str) -> bytes:
+    """Two requests written to pt100_sensor's pty in one write."""
+    with _Pt100OnPty(exe, uart, tmp_path, *options) as pty:
+        pty.send(rtu_frame(17, READ_REG0) + rtu_frame(17, READ_REG2))
+        return pty.recv(timeout=1.5, quiet=1.5)
+
+
+# The link of the checks above (pt100_sensor's Modbus RTU UART).
+BAUD = 19200
+
+
+def _fastest_answer_s(exe: Path, uart: str, tmp_path: Path, asks: int = 12) -> float:
+    """The shortest of `asks` round trips of one request, each sent 30 ms
+    after the last answer (the shortest: a busy machine only delays)."""
+    with _Pt100OnPty(exe, uart, tmp_path, "--rtu-frames") as pty:
+        best = float("inf")
+        for _ in range(asks):
+            time.sleep(0.03)
+            start = time.monotonic()
+            pty.send(rtu_frame(17, READ_REG0))
+            reply = pty.recv_exactly(7, timeout=1.0)
+            best = min(best, time.monotonic() - start)
+            assert crc16(reply) == 0 and reply[:2] == bytes([17, 3]), reply.hex()
+        return best
 
 
 def check_rtu_frames_kept_apart(exe: Path, uart: str, tmp_path: Path) -> None:
@@ -170,3 +209,12 @@ def check_rtu_frames_kept_apart(exe: Path, uart: str, tmp_path: Path) -> None:
     assert _replies_to_two_frames_written_together(exe, uart, tmp_path / "plain") == b""
     assert _replies_to_two_frames_written_together(exe, uart, tmp_path / "framed", "--rtu-frames") == \
         rtu_frame(17, bytes([3, 2, 0x03, 0xE8])) + rtu_frame(17, bytes([3, 2, 0x03, 0x20]))  # 1000, alarm_high 800
+    # A request that comes after a silence longer than the pause goes to the
+    # MCU at once: the pause runs from the end of the frame before, not from
+    # the request's arrival (which made each of a master's slots wait it
+    # twice, once on the master and once here).
+    char_s = 11 / BAUD
+    wire_s = (8 + 7) * char_s + 3.5 * char_s  # request, the slave's t3.5, the answer
+    fastest = _fastest_answer_s(exe, uart, tmp_path / "after-silence")
+    print(f"fastest answer after a silence: {fastest * 1000:.1f} ms, {wire_s * 1000:.1f} ms on the wire")
+    assert fastest < wire_s + 0.0035, f"{fastest * 1000:.1f} ms for {wire_s * 1000:.1f} ms on the wire"

@@ -381,10 +381,12 @@ static void feed_uarts(void)
         sim_link_t *u = &sim_links[n];
         size_t sent = 0, ready;
         avr_irq_t *in;
-        if (u->in_len == 0u || uarts[n].uart == NULL || !avr_regbit_get(avr, uarts[n].uart->rxen))
+        if (uarts[n].uart == NULL || !avr_regbit_get(avr, uarts[n].uart->rxen))
             continue;
         ready = sim_link_ready(u, avr->cycle, uart_fifo_isempty(&uarts[n].uart->input),
                                uarts[n].uart->cycles_per_byte);
+        if (ready == 0u)
+            continue;
         in = avr_io_getirq(avr, AVR_IOCTL_UART_GETIRQ((uint32_t)u->name), UART_IRQ_INPUT);
         while (sent < ready && !uarts[n].xoff && !uart_fifo_isfull(&uarts[n].uart->input)) {
             uart_log_byte(u, "rx", u->in[sent]);

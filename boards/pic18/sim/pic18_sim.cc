@@ -333,7 +333,7 @@ public:
         sim_link_t *u = &sim_links[0];
         _RCREG *rc = dynamic_cast<_RCREG *>(cpu->registers[RCREG]->getReg());
         unsigned rcsta = reg(RCSTA);
-        if (scheduled || u->in_len == 0u || rc == nullptr || (rcsta & 0x90u) != 0x90u /* SPEN, CREN */
+        if (scheduled || rc == nullptr || (rcsta & 0x90u) != 0x90u /* SPEN, CREN */
             || sim_link_ready(u, get_cycles().get(), rc->fifo_sp == 0u, char_cycles(rcsta)) == 0u)
             return;
         guint64 frame = char_cycles(rcsta);
