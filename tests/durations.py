@@ -3,10 +3,13 @@ start the longest first (pytest-xdist's `--dist loadfile` runs a file on one
 process; a long file started last would leave the other processes idle).
 
     python tests/durations.py LOG   # LOG: the output of pytest --durations=N
+    python tests/durations.py build/test-durations.json
 
-writes tests/durations.json: seconds per test file (its tests' setup, call
+updates tests/durations.json: seconds per test file (its tests' setup, call
 and teardown as the report lists them). Files the report does not list
-count DEFAULT_SECONDS. conftest.py orders the collection by it."""
+count DEFAULT_SECONDS. conftest.py orders the collection by it, and after
+every run of the whole suite writes build/test-durations.json, every
+file's seconds (RECORD), which this script takes as it is."""
 
 from __future__ import annotations
 
@@ -17,6 +20,7 @@ from pathlib import Path
 
 TABLE = Path(__file__).with_name("durations.json")
 DEFAULT_SECONDS = 5.0
+RECORD = Path(__file__).resolve().parents[1] / "build" / "test-durations.json"
 _LINE = re.compile(r"^(\d+(?:\.\d+)?)s (?:call|setup|teardown)\s+(\S+?)::")
 
 
@@ -44,11 +48,18 @@ def main(argv: list[str]) -> int:
     if len(argv) != 1:
         print(__doc__.strip(), file=sys.stderr)
         return 2
-    totals = file_seconds(Path(argv[0]).read_text(encoding="utf-8", errors="replace"))
+    text = Path(argv[0]).read_text(encoding="utf-8", errors="replace")
+    try:
+        recorded = json.loads(text)
+    except ValueError:
+        recorded = None
+    totals = ({str(k): float(v) for k, v in recorded.items()} if isinstance(recorded, dict)
+              else file_seconds(text))
     if not totals:
         print(f"{argv[0]}: no --durations lines", file=sys.stderr)
         return 1
-    TABLE.write_text(json.dumps({k: round(v) for k, v in sorted(totals.items())}, indent=1) + "\n",
+    table = {**load(), **totals}  # files the record does not list keep their figure
+    TABLE.write_text(json.dumps({k: round(v) for k, v in sorted(table.items())}, indent=1) + "\n",
                      encoding="utf-8")
     print(f"{TABLE}: {len(totals)} files")
     return 0
