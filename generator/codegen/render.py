@@ -57,7 +57,9 @@ def environment(template_dir: Path | None = None) -> jinja2.Environment:
 def _environment(template_dir: str) -> jinja2.Environment:
     env = jinja2.Environment(loader=jinja2.FileSystemLoader(template_dir),
                              undefined=jinja2.StrictUndefined, trim_blocks=True, lstrip_blocks=True,
-                             keep_trailing_newline=True)
+                             keep_trailing_newline=True,
+                             # compiled templates kept between runs (checked against their source)
+                             bytecode_cache=jinja2.FileSystemBytecodeCache())
     env.filters["c_ident"] = ident
     # Model strings (titles, names of files) in comments and literals.
     env.filters["c_comment"] = c_comment
