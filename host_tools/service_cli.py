@@ -290,7 +290,7 @@ def plan_restore(doc, smap: ServiceMap, source: str) -> tuple[list[tuple[Service
         if not it.writable:
             skipped.append(f"{name}: read-only now, skipped")
             continue
-        todo.append((it, it.parse(str(int(raw)) if isinstance(raw, bool) else str(raw))))
+        todo.append((it, it.parse_stored(str(int(raw)) if isinstance(raw, bool) else str(raw))))
     return todo, skipped
 
 
