@@ -198,6 +198,8 @@
     return it.type === "float32" || lo < 0;
   }
 
+  panel.units = { format, storedOf, checkValue, typed };   // for the tests' property checks
+
   // ------------------------------------------------------------------ items
 
   function valueInput(it) {
@@ -209,7 +211,7 @@
     // Neither has a minus on every phone: items that may be negative get a ± key.
     const decimals = it.type === "float32" || (isScaled(it) && scaleOf(it).decimals > 0);
     return el("input", { name: "value", type: "text", inputmode: decimals ? "decimal" : "numeric",
-      enterkeyhint: "send", autocomplete: "off", autocorrect: "off", autocapitalize: "off", spellcheck: "false",
+      enterkeyhint: "send", autocomplete: "off", autocorrect: "off", autocapitalize: "none", spellcheck: "false",
       "aria-label": `new value of ${it.name}`,
       placeholder: it.range ? `${format(it, it.range[0])}..${format(it, it.range[1])}` : it.type });
   }
@@ -304,7 +306,7 @@
     const shown = withUnit(entry.it, format(entry.it, r.data.value));
     showMsg(entry.msg, true, `set: ${entry.it.name} = ${shown}`);
     panel.marks.push({ t: r.data.t, name, text: shown });
-    drawPlots(false);
+    for (const chart of panel.charts) if (chart.plot) chart.plot.redraw(false, false);
     return true;
   }
   panel.send = send;
@@ -360,7 +362,7 @@
     });
     csv.addEventListener("click", () => downloadCsv(chart));
     close.addEventListener("click", () => { removeChart(chart); savePlots(); });
-    chart.holder.addEventListener("dblclick", () => { chart.zoomed = false; drawPlots(true); });
+    chart.holder.addEventListener("dblclick", () => unzoom(chart));
     panel.charts.push(chart);
     fillAddChoices(chart);
     return chart;
@@ -469,12 +471,50 @@
       },
     };
     chart.plot = new uPlot(opts, chartData(chart), chart.holder);
+    touchZoom(chart);
     fillAddChoices(chart);
     showLast(chart);
   }
 
+  // Copies: a paused or zoomed plot keeps what it shows while the samples go on.
+  // Zoom by touch (uPlot's own drag zoom takes a mouse): drag a finger across
+  // a plot to zoom in on that span, tap twice to follow the samples again.
+  function touchZoom(chart) {
+    const u = chart.plot;
+    const over = u.over;
+    let startX = null;
+    let lastTap = 0;
+    const xOf = (ev) => ev.changedTouches[0].clientX - over.getBoundingClientRect().left;
+    over.addEventListener("touchstart", (ev) => { startX = ev.touches.length === 1 ? xOf(ev) : null; }, { passive: true });
+    over.addEventListener("touchmove", (ev) => {
+      if (startX === null) return;
+      const x = xOf(ev);
+      u.setSelect({ left: Math.min(startX, x), width: Math.abs(x - startX), top: 0, height: over.clientHeight }, false);
+    }, { passive: true });
+    over.addEventListener("touchend", (ev) => {
+      if (startX === null) return;
+      const x = xOf(ev);
+      const [left, right] = [Math.min(startX, x), Math.max(startX, x)];
+      startX = null;
+      u.setSelect({ left: 0, width: 0, top: 0, height: 0 }, false);
+      if (right - left >= 8) {
+        chart.zoomed = true;
+        u.setScale("x", { min: u.posToVal(left, "x"), max: u.posToVal(right, "x") });
+      } else if (ev.timeStamp - lastTap < 350) {
+        unzoom(chart);
+      }
+      lastTap = ev.timeStamp;
+    });
+  }
+
+  // Back to the whole of what the plot holds (paused: the same samples).
+  function unzoom(chart) {
+    chart.zoomed = false;
+    if (chart.plot) chart.plot.setData(chart.plot.data, true);
+  }
+
   function chartData(chart) {
-    return [panel.times, ...chart.names.map((n) => panel.series[panel.rows.get(n).index])];
+    return [panel.times.slice(), ...chart.names.map((n) => panel.series[panel.rows.get(n).index].slice())];
   }
 
   function showLast(chart) {
