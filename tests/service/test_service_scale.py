@@ -191,6 +191,10 @@ def service(tool_env, smap, port, *args, expect=0):
 
 def test_the_service_tool_reads_and_writes_engineering_units(scaled_fw, tool_env):
     smap = scaled_fw.out / "service_map.json"
+    listed = {line.split()[0]: line.split() for line in
+              service(tool_env, smap, scaled_fw.port, "list").stdout.splitlines()[1:]}
+    assert listed["offset"][4:7] == ["degC", "0.1", "-50.0..50.0"]
+    assert listed["gain"][4:6] == ["bar", "2.5"] and listed["plain"][4:6] == ["0.1", "degC"]
     out = service(tool_env, smap, scaled_fw.port, "read", "temp", "offset", "gain", "plain").stdout
     assert out.splitlines() == ["temp = 162.8 degC", "offset = -2.5 degC", "gain = 10.0 bar", "plain = 7 0.1 degC"]
     assert service(tool_env, smap, scaled_fw.port, "write", "--", "offset", "-12.3").stdout == "offset = -12.3 degC\n"
