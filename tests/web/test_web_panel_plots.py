@@ -268,3 +268,59 @@ def test_an_outage_is_a_gap_and_its_messages_go_when_it_is_back(bench):
     # The server marks the first sample after a connect: a page opened later draws the gap too.
     doc = bench.panel.api("GET", "/api/samples?after=-1").json()
     assert [s.get("gap", False) for s in doc["samples"]].count(True) >= 1
+
+
+# ---------------------------------------------------------------- generated models
+
+
+UNITS = st.text(st.sampled_from("abcdegmsAKVW°µ/%²·-"), min_size=1, max_size=8).map(str.strip).filter(bool)
+
+
+def test_generated_scales_and_units_round_trip_through_map_page_and_device(tmp_path, panel, browser):
+    """Generated models (an integer type, a unit, a scale, initial values)
+    built for the host board: the map carries the scale and unit, the page
+    shows the initial values as the tools do, and a generated value typed
+    in engineering units reaches the device as the stored integer."""
+    from easylab.host_tools.modbus_link import ModbusLink
+    from easylab.host_tools.service_cli import read_values
+    from easylab.host_tools.service_map import load_map
+    from svc_testlib import Firmware, build_model
+    runs = iter(range(100))
+
+    @settings(max_examples=4, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+    @given(scale=SCALES.filter(lambda f: f != 1), type_name=st.sampled_from(sorted(LIMITS)), unit=UNITS,
+           data=st.data())
+    def check(scale, type_name, unit, data):
+        lo, hi = LIMITS[type_name]
+        initial, written = data.draw(st.integers(lo, hi)), data.draw(st.integers(lo, hi))
+        work = tmp_path / f"run{next(runs)}"
+        model = work / "gen.elab"
+        model.parent.mkdir(parents=True)
+        model.write_text(f'model gen "Generated scale"\n'
+                         f'param p: {type_name} = {initial} unit "{unit}" scale {decimal(scale)} service rw\n'
+                         f'var   v: {type_name} = {initial} unit "{unit}" scale {decimal(scale)} service ro\n'
+                         f'modbus tcp port 1502\n')
+        built = build_model(model, work / "host")
+        it = load_map(built.map).item("p")
+        assert (it.scale.fraction, it.unit) == (scale, unit)
+        fw = Firmware(built.exe, work, rtu=False).start()
+        try:
+            p = panel(built.map, "--tcp", f"127.0.0.1:{fw.port}")
+            browser.get(p.url)
+            wait_for(lambda: browser.text('[data-item="v"] .value') == it.format(initial), timeout=15,
+                     what="the initial value on the page")
+            assert browser.text('[data-item="v"] .unit') == unit
+            field = browser.find('[data-item="p"] input')
+            field.clear()
+            field.send_keys(it.format(written))
+            browser.find('[data-item="p"] button.set').click()
+            wait_for(lambda: browser.text('[data-item="p"] .msg') == f"set: p = {it.format(written)} {unit}",
+                     what="the write")
+            link = ModbusLink.tcp("127.0.0.1", fw.port, 1, 2.0)
+            try:
+                assert read_values(link, [it]) == {"p": written}
+            finally:
+                link.close()
+        finally:
+            fw.stop()
+    check()
