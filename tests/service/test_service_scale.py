@@ -66,8 +66,11 @@ def service_map_file(tmp_path, text: str):
     ("var t: int16 scale 0.0", "2:14", "the scale of 't' is 0, outside 0.000000001..1000000"),
     ("var t: int16 scale 2e6", "2:14", "the scale of 't' is 2e+06, outside 0.000000001..1000000"),
     ("var t: int16 scale 1.0000000001", "2:14", "the scale of 't' has more than 9 decimals"),
-    ("var t: int16 scale -1", "2:20", "unexpected '-'"),
-    ("var t: int16 scale \"0.1\"", "2:20", "unexpected '\"0.1\"'"),
+    ("var t: int16 scale -1", "2:20", "unexpected '-': a scale is a positive decimal number, as in 'scale 0.1'"),
+    ("var t: int16 scale \"0.1\"", "2:20", "unexpected '\"0.1\"': a scale is a positive decimal number"),
+    ("var t: int16 scale ten service ro", "2:20", "unexpected 'ten': a scale is a positive decimal number"),
+    ("var t: int16 scale", "2:19", "unexpected end of the file: a scale is a positive decimal number"),
+    ("param t: int16 scale 0.1 = 4", "2:26", "unexpected '=': the initial value '= ...' comes right after the type"),
     ("var t: int16 scale 0.1 scale 0.2", "2:24", "attribute 'scale' given twice"),
 ])
 def test_bad_scales_are_errors_at_their_place(shim, tmp_path, decl, where, message):
