@@ -194,8 +194,8 @@
 
   // Whether an item's values may be negative: such fields get a sign key.
   function mayBeNegative(it) {
-    const lo = it.range ? it.range[0] : (TYPE_LIMITS[it.type] || [-1])[0];
-    return it.type === "float32" || lo < 0;
+    if (it.range) return it.range[0] < 0;
+    return it.type === "float32" || (TYPE_LIMITS[it.type] || [0])[0] < 0;
   }
 
   panel.units = { format, storedOf, checkValue, typed };   // for the tests' property checks
