@@ -256,8 +256,9 @@ def test_an_outage_is_a_gap_and_its_messages_go_when_it_is_back(bench):
     # One null row between the last sample before the outage and the first after it.
     k = index_of(bench, "temperature")
     times, column = b.js("return [easylabPanel.times, easylabPanel.series[arguments[0]]]", k)
-    gaps = [i for i, v in enumerate(column) if v is None]
-    assert len(gaps) == 1, gaps
+    lost_at = max(t for t, v in zip(times[:before], column[:before]) if v is not None)
+    gaps = [i for i, v in enumerate(column) if v is None and times[i - 1] == lost_at]
+    assert len(gaps) == 1, (gaps, lost_at)
     g = gaps[0]
     assert column[g - 1] is not None and column[g + 1] is not None
     assert times[g - 1] < times[g] < times[g + 1] and times[g + 1] - times[g - 1] > 0.5
