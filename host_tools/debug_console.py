@@ -265,7 +265,8 @@ class Session:
         width = max((len(i.name) for i in items), default=4)
         for i in items:
             count = f"[{i.count}]" if i.count > 1 else ""
-            rng = f" {i.range[0]}..{i.range[1]}" if i.range else ""
+            shown = str if i.scale.is_one else i.scale.show  # a scaled item's range in engineering units
+            rng = f" {shown(i.range[0])}..{shown(i.range[1])}" if i.range else ""
             unit = f" unit \"{i.unit}\"" if i.unit else ""
             unit += f" scale {i.scale.text()}" if not i.scale.is_one else ""
             text = (f"{i.name:<{width}}  {i.type + count:<10} {i.kind:<8} {'rw' if i.writable else 'ro'}"

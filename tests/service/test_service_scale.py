@@ -234,3 +234,4 @@ def test_the_debug_console_shows_and_writes_engineering_units(scaled_fw, tool_en
         console("write offset 4.25", expect=1)
     assert "offset: 99 is outside its range -50.0 degC..50.0 degC" in console("write offset 99", expect=1)
     assert re.search(r'temp\s+int16\s+var\s+rw unit "degC" scale 0.1', console("vars temp"))
+    assert re.search(r'offset\s+int16\s+param\s+rw -50.0..50.0 unit "degC" scale 0.1', console("vars offset"))
