@@ -29,6 +29,7 @@ from .debug_map import DebugMap, Item, MapError
 from .debug_protocol import (K, STEP_UNITS, TYPES, DebugClient, DebugError, ProtocolError, decode_value,
                              type_size)
 from .transport import TransportError
+from .units import ScaleError
 
 PROG = "easylab-debug"
 EXIT_OK, EXIT_FAIL, EXIT_USAGE = 0, 1, 2
@@ -72,8 +73,14 @@ def parse_duration(text: str) -> float:
 
 
 def parse_value(item: Item, text: str):
-    """A value of the item's type from the user's text, checked."""
+    """A value of the item's type from the user's text, checked (a scaled
+    item's text is in engineering units, converted back exactly)."""
     t = item.type
+    if not item.scale.is_one:
+        try:
+            text = str(item.scale.stored(text))
+        except ScaleError as err:
+            raise CommandError(f"{item.name}: {err}") from None
     low = text.strip().lower()
     if t == "bool":
         if low in ("1", "true", "on", "yes"):
@@ -102,7 +109,8 @@ def parse_value(item: Item, text: str):
     bits = struct.calcsize(fmt) * 8
     lo, hi = (-(1 << (bits - 1)), (1 << (bits - 1)) - 1) if fmt[1].islower() else (0, (1 << bits) - 1)
     if not lo <= v <= hi:
-        raise CommandError(f"{item.name} is an {t}: {v} is outside {lo}..{hi}")
+        raise CommandError(f"{item.name} is an {t}: {format_value(item, v)} is outside "
+                           f"{format_value(item, lo)}..{format_value(item, hi)}")
     return v
 
 
@@ -126,6 +134,8 @@ def format_value(item: Item, value) -> str:
         return "true" if value else "false"
     if item.type == "float32":
         return f"{value:.9g}"
+    if not item.scale.is_one:  # engineering units: 1628 at scale 0.1 "degC" is "162.8 degC"
+        return item.scale.show(value) + (f" {item.unit}" if item.unit else "")
     return str(value)
 
 
@@ -255,8 +265,10 @@ class Session:
         width = max((len(i.name) for i in items), default=4)
         for i in items:
             count = f"[{i.count}]" if i.count > 1 else ""
-            rng = f" {i.range[0]}..{i.range[1]}" if i.range else ""
+            shown = str if i.scale.is_one else i.scale.show  # a scaled item's range in engineering units
+            rng = f" {shown(i.range[0])}..{shown(i.range[1])}" if i.range else ""
             unit = f" unit \"{i.unit}\"" if i.unit else ""
+            unit += f" scale {i.scale.text()}" if not i.scale.is_one else ""
             text = (f"{i.name:<{width}}  {i.type + count:<10} {i.kind:<8} {'rw' if i.writable else 'ro'}"
                     f"{rng}{unit}  #{i.id}  {i.location}")
             self.emit(text, {"id": i.id, "name": i.name, "type": i.type, "count": i.count, "kind": i.kind,
@@ -292,7 +304,8 @@ class Session:
             raise CommandError(f"{it.name} has {it.count} elements: write {it.name}[i] VALUE")
         value = parse_value(it, args[1])
         if it.range and not it.range[0] <= value <= it.range[1]:
-            raise CommandError(f"{it.name}: {args[1]} is outside its range {it.range[0]}..{it.range[1]}")
+            raise CommandError(f"{it.name}: {args[1]} is outside its range "
+                               f"{format_value(it, it.range[0])}..{format_value(it, it.range[1])}")
         with self.lock:
             try:
                 how = self.c.write(it.id, it.type, value, elem or 0, what=it.name)

@@ -15,6 +15,7 @@ from pathlib import Path
 
 from .debug_protocol import K, PROBE_NAMES
 from .map_schema import DEBUG_MAP_SCHEMA, MapFileError, read_map
+from .units import Scale
 
 MAP_FORMAT = "easylab-debug-map"
 
@@ -37,6 +38,7 @@ class Item:
     chart: int | None = None  # a chart's state (kinds chart, step_time): its chart
     step: int | None = None  # a step's time: its step
     labels: dict | None = None  # a chart's active steps: step id -> name (NONE8: none)
+    scale: Scale = Scale()  # stored integer x scale = the engineering value (host_tools/units.py)
 
     @property
     def writable(self) -> bool:
@@ -67,7 +69,8 @@ class DebugMap:
         self.tasks = data.get("tasks", [])
         self.items = [Item(i["id"], i["name"], i["kind"], i["type"], i["count"], i["flags"], i.get("unit"),
                            i.get("range"), i.get("location", "?"), i.get("chart"), i.get("step"),
-                           self._step_labels(i["chart"]) if i["kind"] == "chart" else None)
+                           self._step_labels(i["chart"]) if i["kind"] == "chart" else None,
+                           Scale.of(i.get("scale")))
                       for i in data["items"]]
         self.by_name = {i.name: i for i in self.items}
         self.by_id = {i.id: i for i in self.items}

@@ -23,6 +23,8 @@ _ID = {"type": "integer", "minimum": 0, "maximum": 65535}
 _NAME = {"type": "string", "minLength": 1, "maxLength": 1000}
 _TEXT = {"type": "string", "maxLength": 10000}
 _RANGE = {"oneOf": [{"type": "null"}, {"type": "array", "items": _NUMBER, "minItems": 2, "maxItems": 2}]}
+# An item's scale (docs/language.md): engineering value = stored value x scale.
+_SCALE = {"type": "number", "exclusiveMinimum": 0, "maximum": 1e6}
 _TYPES = ["bool", "int8", "uint8", "int16", "uint16", "int32", "uint32", "float32", "time"]
 
 DEBUG_MAP_SCHEMA = {
@@ -50,6 +52,7 @@ DEBUG_MAP_SCHEMA = {
                 "range": _RANGE,
                 "location": _TEXT,
                 "chart": _ID, "step": _ID,
+                "scale": _SCALE,
             },
             # a chart's state names its chart (and a step's time its step)
             "allOf": [{"if": {"properties": {"kind": {"const": "chart"}}, "required": ["kind"]},
@@ -113,6 +116,7 @@ SERVICE_MAP_SCHEMA = {
                 "range": _RANGE,
                 "access": {"enum": ["ro", "rw"]},
                 "persist": {"type": "boolean"},
+                "scale": _SCALE,
             },
             # A 32-bit value's second register is an address too.
             "if": {"properties": {"registers": {"const": 2}}, "required": ["registers"]},

@@ -157,11 +157,12 @@ def _items(smap: ServiceMap, names: list[str]) -> list[ServiceItem]:
 
 
 def cmd_list(args, smap: ServiceMap) -> int:
-    rows = [("name", "table", "address", "type", "unit", "range", "access", "persist")]
+    rows = [("name", "table", "address", "type", "unit", "scale", "range", "access", "persist")]
     for it in smap.items:
         addr = f"{it.address}" if it.registers == 1 else f"{it.address}..{it.end - 1}"
-        rng = f"{it.format(it.range[0])}..{it.format(it.range[1])}" if it.range else ""
-        rows.append((it.name, it.table, addr, it.type, it.unit or "", rng, it.access, "yes" if it.persist else ""))
+        rng = f"{it.format(it.range[0])}..{it.format(it.range[1])}" if it.range else ""  # engineering units
+        rows.append((it.name, it.table, addr, it.type, it.unit or "", it.scale.text() if it.scaled else "", rng,
+                     it.access, "yes" if it.persist else ""))
     widths = [max(len(r[k]) for r in rows) for k in range(len(rows[0]))]
     print(f"model {smap.model} (program {smap.program_id}): {len(smap.items)} service items")
     for r in rows:
@@ -290,7 +291,7 @@ def plan_restore(doc, smap: ServiceMap, source: str) -> tuple[list[tuple[Service
         if not it.writable:
             skipped.append(f"{name}: read-only now, skipped")
             continue
-        todo.append((it, it.parse(str(int(raw)) if isinstance(raw, bool) else str(raw))))
+        todo.append((it, it.parse_stored(str(int(raw)) if isinstance(raw, bool) else str(raw))))
     return todo, skipped
 
 

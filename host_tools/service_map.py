@@ -16,6 +16,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from .map_schema import SERVICE_MAP_SCHEMA, MapFileError, read_map
+from .units import Scale, ScaleError
 
 MAP_FORMAT = 1
 READ_TABLES = ("coil", "discrete", "holding", "input")
@@ -23,6 +24,7 @@ _INT_LIMITS = {"int8": (-128, 127), "uint8": (0, 255), "int16": (-32768, 32767),
                "int32": (-2 ** 31, 2 ** 31 - 1), "uint32": (0, 2 ** 32 - 1), "time": (0, 2 ** 32 - 1)}
 _FLOAT32_MAX = 3.4028234663852886e38
 _TIME_UNITS = {"ms": 1, "s": 1000, "min": 60000, "m": 60000, "h": 3600000}
+_ALARM_WORDS = re.compile(r"(^|_)(alarm|fault|error|trip)(_|$)", re.IGNORECASE)
 
 
 class MapError(Exception):
@@ -46,6 +48,7 @@ class ServiceItem:
     range: tuple | None
     access: str
     persist: bool
+    scale: Scale = Scale()  # stored integer x scale = the engineering value
 
     @property
     def writable(self) -> bool:
@@ -61,8 +64,36 @@ class ServiceItem:
 
     # ------------------------------------------------------------ text
 
+    @property
+    def alarm(self) -> bool:
+        """An alarm, drawn as one when it is on (non-zero): a fault counter
+        (status item), or a bool measurement named for one (alarm,
+        motor_fault, over_temp_trip: a word alarm, fault, error or trip)."""
+        if self.kind == "status":
+            return True
+        return self.type == "bool" and self.access == "ro" and bool(_ALARM_WORDS.search(self.name))
+
+    @property
+    def scaled(self) -> bool:
+        return not self.scale.is_one
+
     def parse(self, text: str):
-        """A value of this item from text, in the model's units (``time``: whole
+        """A value of this item from text, in engineering units (a scaled
+        item's text is converted back to its stored integer, exactly)."""
+        if not self.scaled:
+            return self.parse_stored(text)
+        try:
+            value = self.scale.stored(text)
+        except ScaleError as err:
+            raise ValueError_(f"'{self.name}': {err}") from None
+        lo, hi = _INT_LIMITS[self.type]
+        if not lo <= value <= hi:
+            raise ValueError_(f"{text.strip()} does not fit '{self.name}' ({self.type} x {self.scale.text()}: "
+                              f"{self.format(lo)}..{self.format(hi)}{' ' + self.unit if self.unit else ''})")
+        return value
+
+    def parse_stored(self, text: str):
+        """A value of this item from text, in stored units (``time``: whole
         milliseconds, or with a unit: 2s, 500ms, 1.5min)."""
         t = text.strip()
         if self.type == "bool":
@@ -99,11 +130,12 @@ class ServiceItem:
         return value
 
     def format(self, value) -> str:
+        """A stored value as text in engineering units."""
         if self.type == "bool":
             return "1" if value else "0"
         if self.type == "float32":
             return f"{value:.9g}"
-        return str(int(value))
+        return self.scale.show(int(value))
 
     def describe_range(self) -> str:
         if self.range is None:
@@ -167,7 +199,7 @@ def load_map(path: str | Path) -> ServiceMap:
         raise MapError(str(err)) from None
     items = [ServiceItem(i["id"], i["name"], i.get("kind", "param"), i["table"], i["address"], i["registers"],
                          i["type"], i.get("unit"), tuple(i["range"]) if i.get("range") is not None else None,
-                         i["access"], i.get("persist", False))
+                         i["access"], i.get("persist", False), Scale.of(i.get("scale")))
              for i in data["items"]]
     return ServiceMap(str(path), data.get("model", "?"), data.get("title"), data.get("program_id", "?"),
                       data.get("interfaces", {}), items)

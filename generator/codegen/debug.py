@@ -82,6 +82,7 @@ class DebugItem:
     range_index: int | None = None
     chart: int | None = None  # a chart's state: the chart's id
     step: int | None = None  # a step's time: the step's id in its chart
+    scale: str | None = None  # a model item's scale (decimal text), None: 1
 
     @property
     def writable(self) -> bool:
@@ -134,7 +135,7 @@ def debug_items(program: Program, view) -> list[DebugItem]:
             continue
         decl = f"extern {iv.c_type} {iv.c_name}{f'[{it.count}]' if it.count > 1 else ''};"
         items.append(DebugItem(it.id, it.name, it.kind, it.type, it.count, f"(void *){iv.addr}", decl,
-                               it.range, it.unit, it.location))
+                               it.range, it.unit, it.location, scale=it.scale))
     next_id = len(program.items)
     for inst in program.instances:
         spec = program.specs[inst.spec]
@@ -211,6 +212,7 @@ def debug_map(program: Program, items: list[DebugItem]) -> dict:
             **({"actor": d.actor} if d.actor is not None else {}),
             **({"chart": d.chart} if d.chart is not None else {}),
             **({"step": d.step} if d.step is not None else {}),
+            **({"scale": T.scale_number(d.scale)} if d.scale is not None else {}),
         } for d in items],
         "charts": [{
             "id": c.id, "name": c.name, "task": c.task, "location": c.location, "slots": c.slots,

@@ -86,7 +86,7 @@ class Entry:
         it = self.item
         return {
             "id": self.id, "name": it.name, "kind": it.kind, "table": self.table, "address": self.address,
-            "registers": self.registers, "type": it.type.name, "scale": 1, "unit": self.unit(),
+            "registers": self.registers, "type": it.type.name, "scale": T.scale_number(it.scale), "unit": self.unit(),
             "range": list(it.range) if it.range is not None else None, "access": it.service,
             "persist": it.persist, "initial": it.initial, "location": it.location,
         }
@@ -205,13 +205,18 @@ def map_csv(smap: ServiceMap) -> str:
                 "persist", "initial"])
     for e in smap.entries:
         lo, hi = e.item.range if e.item.range is not None else ("", "")
-        w.writerow([e.id, e.name, e.table, e.address, e.registers, e.item.type.name, 1, e.unit() or "", lo, hi,
+        w.writerow([e.id, e.name, e.table, e.address, e.registers, e.item.type.name, e.item.scale or 1,
+                    e.unit() or "", lo, hi,
                     e.access, "yes" if e.item.persist else "no", e.item.initial])
     return out.getvalue()
 
 
 def _md(text) -> str:
     return str(text).replace("|", "\\|")
+
+
+def _scale_note(e: Entry) -> str:
+    return f" (x {e.item.scale})" if e.item.scale else ""
 
 
 def map_md(smap: ServiceMap) -> str:
@@ -229,7 +234,9 @@ def map_md(smap: ServiceMap) -> str:
               "number (mbpoll: `-r` takes address + 1).",
               "- 32-bit values (int32, uint32, time, float32) take two registers, the high word first.",
               "- `rw` items are written with 05/15 (coils) or 06/16 (holding registers; a 32-bit item only "
-              "with 16 over both of its registers); a value outside the range gives exception 03.", ""]
+              "with 16 over both of its registers); a value outside the range gives exception 03.",
+              "- Registers hold values in stored units: an item shown `(x 0.1)` holds its engineering value "
+              "divided by 0.1 (register 1628 is 162.8); its range is in stored units too.", ""]
     if not smap.entries:
         lines += ["The model has no `service` items.", ""]
         return "\n".join(lines)
@@ -241,7 +248,7 @@ def map_md(smap: ServiceMap) -> str:
             ref += f"..{REF_PREFIX[e.table]}{e.address + 2:05d}"
         rng = f"{e.item.range[0]}..{e.item.range[1]}" if e.item.range is not None else ""
         lines.append(f"| {e.id} | `{_md(e.name)}` | {e.table} | {e.address} | {ref} | {e.item.type.name} | "
-                     f"{_md(e.unit() or '')} | {rng} | {e.access} | {'yes' if e.item.persist else ''} |")
+                     f"{_md(e.unit() or '')}{_scale_note(e)} | {rng} | {e.access} | {'yes' if e.item.persist else ''} |")
     lines.append("")
     return "\n".join(lines)
 

@@ -8,6 +8,7 @@ asks this module instead of deciding again.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from fractions import Fraction
 
 
 @dataclass(frozen=True)
@@ -75,6 +76,32 @@ def show_real(value) -> str:
         return f"{double:g}"
     digits = str(abs(int(value)))
     return f"{'-' if value < 0 else ''}{digits[0]}e+{len(digits) - 1}"
+
+
+# A `scale` (docs/language.md, "Consts, params, vars") has at most this many decimals.
+SCALE_DECIMALS = 9
+SCALE_MIN, SCALE_MAX = Fraction(1, 10 ** SCALE_DECIMALS), Fraction(10 ** 6)
+
+
+def decimal_text(value) -> str | None:
+    """A Fraction whose denominator divides 10**SCALE_DECIMALS as plain
+    decimal text without trailing zeros ("0.1", "2.5", "10"); None for
+    any other value."""
+    scaled = value * 10 ** SCALE_DECIMALS
+    if scaled.denominator != 1:
+        return None
+    sign, digits = ("-" if scaled < 0 else ""), str(abs(scaled.numerator)).rjust(SCALE_DECIMALS + 1, "0")
+    whole, frac = digits[:-SCALE_DECIMALS], digits[-SCALE_DECIMALS:].rstrip("0")
+    return f"{sign}{whole}{'.' + frac if frac else ''}"
+
+
+def scale_number(text: str | None) -> int | float:
+    """An item's scale (decimal text, None for 1) as the JSON number the
+    map files carry: exact, having at most 15 significant digits."""
+    value = Fraction(text) if text is not None else Fraction(1)
+    return int(value) if value.denominator == 1 else float(value)
+
+
 # The largest `time` (a uint32 count of milliseconds), in microseconds.
 TIME_MAX_US = (2 ** 32 - 1) * 1000
 

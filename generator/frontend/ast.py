@@ -135,6 +135,7 @@ class Data(Named):
     service: ServiceAttr | None
     persist: bool
     attr_spans: tuple[tuple[str, Span], ...] = ()
+    scale: Fraction | None = None  # engineering value = stored value x scale (``scale 0.1``)
 
 
 @dataclass(frozen=True)

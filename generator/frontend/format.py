@@ -46,7 +46,7 @@ STATEMENTS = frozenset({
 # Statements aligned in columns when they stand on consecutive lines: the
 # class they align with, and where their columns start (a token index, or
 # the text of the token that starts a column).
-_DATA_COLUMNS = (1, 3, "=", "range", "unit", "service", "persist")
+_DATA_COLUMNS = (1, 3, "=", "range", "unit", "scale", "service", "persist")
 _ALIGN = {
     "param_decl": ("data", _DATA_COLUMNS), "var_decl": ("data", _DATA_COLUMNS),
     "const_decl": ("const", (3,)), "channel_decl": ("channel", (3,)),

@@ -24,6 +24,7 @@ _TERMINAL_WORDS = {
 _EQUALS_IN_EXPRESSION = "'=' in an expression"
 _INITIAL_VALUE_LATE = "the initial value '= ...' comes right after the type, before the attributes"
 _RANGE_FORM = "a range is written low..high, as in 'range 0..100'"
+_SCALE_FORM = "a scale is a positive decimal number, as in 'scale 0.1'"
 _EXAMPLES = {
     "an edge needs '->' between its source and its destination": [
         "dataflow D { a.y b.x }", "dataflow D { a b }", "dataflow D { a.y = b.x }"],
@@ -36,9 +37,12 @@ _EXAMPLES = {
         "chart C { transition A -> B when x = 1 }", "chart C { transition A -> B when 1 = 1 }",
         "chart C { transition A -> B when x.y = 1 }"],
     _INITIAL_VALUE_LATE: [
-        "param p: int16 unit \"u\" = 3", "param p: int16 persist = 3", "param p: int16 service rw = 3"],
+        "param p: int16 unit \"u\" = 3", "param p: int16 persist = 3", "param p: int16 service rw = 3",
+        "param p: int16 scale 0.1 = 3"],
     _RANGE_FORM: [
         "param p: int16 range 1 }", "param p: int16 range x y"],
+    _SCALE_FORM: [
+        "param p: int16 scale -1", "param p: int16 scale \"0.1\"", "param p: int16 scale x", "param p: int16 scale"],
 }
 
 # Where a top-level declaration may start: the keywords that begin one.

@@ -190,7 +190,7 @@ class ToAst(Transformer):
         return ast.Data(**self._named(meta, name), kind=kind, type=type_ref, default=default,
                         range=attrs.get("range"), unit=attrs.get("unit"),
                         service=attrs.get("service"), persist=bool(attrs.get("persist")),
-                        attr_spans=tuple(spans))
+                        attr_spans=tuple(spans), scale=attrs.get("scale"))
 
     def param_decl(self, meta, ch):
         return self._data(meta, ch, "param")
@@ -203,6 +203,9 @@ class ToAst(Transformer):
 
     def unit_attr(self, meta, ch):
         return ("unit", self._string(ch[1]), self._span(meta))
+
+    def scale_attr(self, meta, ch):
+        return ("scale", Fraction(self._number(ch[1])), self._span(meta))
 
     def service_attr(self, meta, ch):
         address = ch[1] if len(ch) > 1 else None

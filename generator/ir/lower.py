@@ -59,7 +59,8 @@ class _Lowering:
                     location(d.decl.name_span),
                     range=tuple(_runtime_value(d.type, v) for v in d.range) if d.range else None,
                     unit=d.decl.unit, service=d.decl.service.access if d.decl.service else None,
-                    address=d.decl.service.address if d.decl.service else None, persist=d.decl.persist))
+                    address=d.decl.service.address if d.decl.service else None, persist=d.decl.persist,
+                    scale=T.decimal_text(d.decl.scale) if d.decl.scale is not None else None))
         seen: set[int] = set()
         for dev in self.m.devices:
             formal_types = {f.name: T.ALL_TYPES[f.type.name] for f in dev.type.params}

@@ -57,6 +57,7 @@ class Item:
     device: int | None = None
     port: str | None = None
     writer_task: int | None = None  # the one task that writes it, if any
+    scale: str | None = None  # decimal text: engineering value = value x scale (None: 1)
 
 
 @dataclass
@@ -363,8 +364,9 @@ def to_json(program: Program) -> dict:
             return _expr_json(value)
         if isinstance(value, Fraction):
             return str(value)
-        if hasattr(value, "__dataclass_fields__"):
-            return {k: conv(getattr(value, k)) for k in value.__dataclass_fields__}
+        if hasattr(value, "__dataclass_fields__"):  # an item without a scale: as before scales
+            return {k: conv(getattr(value, k)) for k in value.__dataclass_fields__
+                    if not (k == "scale" and getattr(value, k) is None)}
         if isinstance(value, dict):
             return {str(k): conv(v) for k, v in value.items()}
         if isinstance(value, (list, tuple)):

@@ -31,7 +31,7 @@ from aiohttp import web
 from ..modbus_link import EXCEPTIONS, DeviceException, LinkError
 from ..service_cli import (PROG, UsageError, backup_document, device_address, parse_period, plan_restore,
                            read_values, restore_params, write_value)
-from ..service_map import MapError, ServiceMap, ValueError_
+from ..service_map import MapError, ServiceItem, ServiceMap, ValueError_
 from .session import Busy, DeviceSession, NotConnected, json_value
 
 STATIC = Path(__file__).resolve().parent / "static"
@@ -193,7 +193,7 @@ class Panel:
         return web.json_response({"model": s.model, "title": s.title, "program_id": s.program_id,
                                   "where": self.session.address.where, "period": self.session.period,
                                   "csrf": self.guard.csrf, "csrf_header": CSRF_HEADER,
-                                  "items": [asdict(it) for it in s.items]})
+                                  "items": [item_json(it) for it in s.items]})
 
     async def api_samples(self, request: web.Request) -> web.Response:
         try:
@@ -253,7 +253,7 @@ class Panel:
         except _Refusal as refusal:
             return refusal.response
         return web.json_response({"name": it.name, "value": json_value(now), "text": it.format(now),
-                                  "seq": before})
+                                  "seq": before, "t": round(time.time(), 3)})
 
     async def api_backup(self, request: web.Request) -> web.Response:
         try:
@@ -276,6 +276,12 @@ class Panel:
             return refusal.response
         return web.json_response({"total": len(todo), "restored": len(todo) - len(refused), "skipped": skipped,
                                   "refused": [{"name": it.name, "error": why} for it, why in refused]})
+
+
+def item_json(it: ServiceItem) -> dict:
+    """A map item for the page: its scale as decimal text ("0.1"), and
+    whether it is an alarm (ServiceItem.alarm)."""
+    return {**asdict(it), "scale": it.scale.text(), "alarm": it.alarm}
 
 
 class _Refusal(Exception):

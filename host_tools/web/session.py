@@ -40,9 +40,11 @@ class Sample:
     seq: int
     time: float  # seconds since the epoch
     values: list  # one per map item, in map order
+    gap: bool = False  # the first sample of a connection: the device was away before it
 
     def as_json(self) -> dict:
-        return {"seq": self.seq, "t": round(self.time, 3), "v": [json_value(v) for v in self.values]}
+        doc = {"seq": self.seq, "t": round(self.time, 3), "v": [json_value(v) for v in self.values]}
+        return {**doc, "gap": True} if self.gap else doc
 
 
 def json_value(value):
@@ -75,6 +77,7 @@ class DeviceSession:
         self._state, self._message, self._since = CONNECTING, f"connecting to {address.where}", time.time()
         self._link: ModbusLink | None = None
         self._connected_message = ""
+        self._gap = False  # the next sample follows an outage
         self._stopping = threading.Event()
         self._thread = threading.Thread(target=self._run, name="easylab-device", daemon=True)
 
@@ -158,6 +161,7 @@ class DeviceSession:
             self._set_state(LOST if self.connects else CONNECTING, f"{err}; trying again")
             return False
         self.connects += 1
+        self._gap = True
         again = " again" if self.connects > 1 else ""
         self._connected_message = f"connected{again} to {self.address.where} (model {self.smap.model})"
         self._set_state(CONNECTED, self._connected_message)
@@ -191,7 +195,9 @@ class DeviceSession:
         self._set_state(CONNECTED, self._connected_message)  # after a refused read, if one came
         with self._lock:
             self._seq += 1
-            self._history.append(Sample(self._seq, time.time(), [values[it.name] for it in self.smap.items]))
+            self._history.append(Sample(self._seq, time.time(), [values[it.name] for it in self.smap.items],
+                                        self._gap))
+            self._gap = False
 
     def _execute(self, future: concurrent.futures.Future, job) -> None:
         if not future.set_running_or_notify_cancel():

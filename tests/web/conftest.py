@@ -10,13 +10,14 @@ from __future__ import annotations
 import shutil
 import sys
 from pathlib import Path
+from types import SimpleNamespace
 
 import pytest
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "service"))
 
 from svc_testlib import EXAMPLES, build_model  # noqa: E402
-from weblib import Browser, Panel, ramp_stimulus  # noqa: E402
+from weblib import Browser, Panel, Pt100Devices, ramp_stimulus, wait_for  # noqa: E402
 
 
 def pt100_with_tcp(directory: Path) -> Path:
@@ -62,3 +63,20 @@ def panel(tmp_path):
     yield start
     for p in started:
         p.stop()
+
+
+@pytest.fixture(scope="module")
+def bench(tmp_path_factory, pt100_tcp, stimulus, browser):
+    """One pt100_sensor device (host board, Modbus TCP, ramp stimulus), its
+    panel and the page open in the browser, for a module's tests."""
+    work = tmp_path_factory.mktemp("panel")
+    devices = Pt100Devices(pt100_tcp.exe, stimulus, work)
+    fw = devices.start()
+    panel = Panel(pt100_tcp.map, ["--tcp", f"127.0.0.1:{fw.port}"]).start()
+    browser.get(panel.url)
+    browser.console()  # what earlier pages of the session logged
+    wait_for(lambda: browser.text("#link-state") == "connected", what="the page to say connected")
+    b = SimpleNamespace(panel=panel, browser=browser, devices=devices, fw=fw, map=pt100_tcp.map, work=work)
+    yield b
+    panel.stop()
+    devices.stop_all()

@@ -7,6 +7,7 @@ reconnects to a restarted device; the page shows the values."""
 from __future__ import annotations
 
 import os
+import re
 
 import pytest
 
@@ -31,10 +32,11 @@ def exercise(p, browser) -> None:
     first = wait_for(lambda: p.api("GET", "/api/samples?after=-1").json()["samples"], what="samples")[-1]["seq"]
     wait_for(lambda: p.api("GET", f"/api/samples?after={first}").json()["samples"], what="new samples")
     assert isinstance(p.latest()["temperature"], int) and p.latest()["cal_gain"] == 1000
-    r = p.api("POST", "/api/write", {"name": "cal_offset", "value": "-12"})
+    r = p.api("POST", "/api/write", {"name": "cal_offset", "value": "-1.2"})   # degC: stored in tenths
     body = r.json()
     seq = body.pop("seq")
-    assert r.status == 200 and body == {"name": "cal_offset", "value": -12, "text": "-12"}
+    assert body.pop("t") > 0
+    assert r.status == 200 and body == {"name": "cal_offset", "value": -12, "text": "-1.2"}
     # The write came after the samples it names: every later one shows it.
     assert seq >= first + 1
     later = wait_for(lambda: p.api("GET", f"/api/samples?after={seq}").json()["samples"], what="samples after the write")
@@ -48,8 +50,8 @@ def exercise(p, browser) -> None:
     assert r.status == 200 and r.json()["params"] == {"cal_gain": 1000, "cal_offset": -12, "alarm_high": 800}
     browser.get(p.url)
     wait_for(lambda: browser.text("#link-state") == "connected", what="the page")
-    wait_for(lambda: browser.text('[data-item="cal_offset"] .value') == "-12", what="the value on the page")
-    assert browser.text('[data-item="temperature"] .value').lstrip("-").isdigit()
+    wait_for(lambda: browser.text('[data-item="cal_offset"] .value') == "-1.2", what="the value on the page")
+    assert re.fullmatch(r"-?\d+\.\d", browser.text('[data-item="temperature"] .value'))
 
 
 def test_avr_in_simavr_over_rtu(avr_pt100, tmp_path, panel, browser):

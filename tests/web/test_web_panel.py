@@ -16,56 +16,13 @@ import shutil
 import subprocess
 import sys
 from pathlib import Path
-from types import SimpleNamespace
 
 import pytest
 
-from weblib import Panel, Pt100Devices, wait_for
+from weblib import device_values, item_text, set_in_page, wait_for
 
 PARAMS = ["cal_gain", "cal_offset", "alarm_high"]
 MEASUREMENTS = ["temperature", "t_min", "t_max", "t_mean", "alarm"]
-
-
-def device_values(bench, *names: str) -> dict:
-    """Read items straight from the device with the project's Modbus link
-    (pymodbus), not through the panel."""
-    from easylab.host_tools.modbus_link import ModbusLink
-    from easylab.host_tools.service_cli import read_values
-    from easylab.host_tools.service_map import load_map
-
-    smap = load_map(bench.map)
-    link = ModbusLink.tcp("127.0.0.1", bench.fw.port, 1, 2.0)
-    try:
-        return read_values(link, [smap.item(n) for n in names])
-    finally:
-        link.close()
-
-
-@pytest.fixture(scope="module")
-def bench(tmp_path_factory, pt100_tcp, stimulus, browser):
-    work = tmp_path_factory.mktemp("panel")
-    devices = Pt100Devices(pt100_tcp.exe, stimulus, work)
-    fw = devices.start()
-    panel = Panel(pt100_tcp.map, ["--tcp", f"127.0.0.1:{fw.port}"]).start()
-    browser.get(panel.url)
-    browser.console()  # what earlier pages of the session logged
-    wait_for(lambda: browser.text("#link-state") == "connected", what="the page to say connected")
-    b = SimpleNamespace(panel=panel, browser=browser, devices=devices, fw=fw, map=pt100_tcp.map, work=work)
-    yield b
-    panel.stop()
-    devices.stop_all()
-
-
-def item_text(bench, name: str, part: str = ".value") -> str:
-    return bench.browser.text(f'[data-item="{name}"] {part}')
-
-
-def set_in_page(bench, name: str, text: str) -> None:
-    """Type a value into an item's field and press Set, as a person does."""
-    field = bench.browser.find(f'[data-item="{name}"] input')
-    field.clear()
-    field.send_keys(text)
-    bench.browser.find(f'[data-item="{name}"] button.set').click()
 
 
 def test_every_item_is_listed_by_kind_with_unit_range_and_persist(bench):
@@ -73,8 +30,8 @@ def test_every_item_is_listed_by_kind_with_unit_range_and_persist(bench):
     groups = b.js("return [...document.querySelectorAll('.group')].map(g => "
                   "[g.querySelector('h2').textContent, [...g.querySelectorAll('.item')].map(i => i.dataset.item)])")
     assert groups == [["Measurements", MEASUREMENTS], ["Parameters", PARAMS]]
-    assert item_text(bench, "cal_offset", ".unit") == "0.1 degC"
-    assert item_text(bench, "cal_offset", ".meta") == "int16 · range -500..500"
+    assert item_text(bench, "cal_offset", ".unit") == "degC"  # unit "degC" scale 0.1: engineering units
+    assert item_text(bench, "cal_offset", ".meta") == "int16 · range -50.0..50.0"
     assert item_text(bench, "cal_gain", ".meta") == "int16 · range 500..2000"
     assert item_text(bench, "temperature", ".meta") == "int16"
     for name in PARAMS:
@@ -94,22 +51,24 @@ def test_temperature_updates_live_and_is_plotted(bench, tmp_path):
     seen: set[str] = set()
     wait_for(lambda: seen.add(item_text(bench, "temperature")) or len(seen) >= 4, timeout=15,
              what="four different temperatures on the page")
-    shown = [int(v) for v in seen if v != "–"]
-    assert all(190 <= v <= 310 for v in shown), shown       # the ramp: about 20..30 degC
-    assert 190 <= device_values(bench, "temperature")["temperature"] <= 310
+    shown = [float(v) for v in seen if v != "–"]
+    assert all(19.0 <= v <= 31.0 and v == round(v, 1) for v in shown), shown  # the ramp: about 20..30 degC
+    assert 190 <= device_values(bench, "temperature")["temperature"] <= 310  # stored: 0.1 degC
     # The first measurement is plotted without asking; another one on request.
-    wait_for(lambda: b.js("return easylabPanel.plots.get('temperature').plot.data[0].length") >= 30, timeout=15,
+    wait_for(lambda: b.js("return easylabPanel.charts[0].plot.data[0].length") >= 30, timeout=15,
              what="30 points in the temperature plot")
+    # Another item joins the same plot (several series on one plot).
     b.find('[data-item="t_mean"] button.plot-toggle').click()
-    assert b.js("return [...easylabPanel.plots.keys()]") == ["temperature", "t_mean"]
+    assert b.js("return easylabPanel.charts.map(c => c.names)") == [["temperature", "t_mean"]]
     assert b.find('[data-item="t_mean"] button.plot-toggle').get_attribute("aria-pressed") == "true"
-    plotted = b.js("const p = easylabPanel.plots.get('temperature').plot; return [p.data[0].length, p.data[1].at(-1)]")
-    assert plotted[0] >= 30 and 190 <= plotted[1] <= 310
-    assert b.js("return document.querySelectorAll('[data-plot] canvas').length") == 2
+    plotted = b.js("const p = easylabPanel.charts[0].plot; return [p.data[0].length, p.data[1].at(-1), p.series.length]")
+    assert plotted[0] >= 30 and 19.0 <= plotted[1] <= 31.0 and plotted[2] == 3
+    assert b.js("return document.querySelectorAll('.plot canvas').length") == 1
     # The choice of plots outlives a reload of the page.
     b.get(bench.panel.url)
-    wait_for(lambda: b.js("return easylabPanel.plots && easylabPanel.plots.size") == 2, what="plots after reload")
-    wait_for(lambda: b.js("return easylabPanel.plots.get('temperature').plot.data[0].length") >= 40, timeout=15,
+    wait_for(lambda: b.js("return easylabPanel.charts && easylabPanel.charts.map(c => c.names)")
+             == [["temperature", "t_mean"]], what="plots after reload")
+    wait_for(lambda: b.js("return easylabPanel.charts[0].plot.data[0].length") >= 40, timeout=15,
              what="the plot to fill from the server's history")
     # No console error, no content-security-policy violation (uPlot included).
     problems = [e for e in b.console() if "Content Security Policy" in e["message"]
@@ -125,9 +84,9 @@ def test_temperature_updates_live_and_is_plotted(bench, tmp_path):
 
 def test_cal_offset_write_shows_in_the_device_trace(bench):
     b = bench.browser
-    set_in_page(bench, "cal_offset", "25")
-    wait_for(lambda: item_text(bench, "cal_offset", ".msg") == "set: cal_offset = 25 0.1 degC", what="the write")
-    assert item_text(bench, "cal_offset") == "25"
+    set_in_page(bench, "cal_offset", "2.5")
+    wait_for(lambda: item_text(bench, "cal_offset", ".msg") == "set: cal_offset = 2.5 degC", what="the write")
+    assert item_text(bench, "cal_offset") == "2.5"
     assert device_values(bench, "cal_offset") == {"cal_offset": 25}
     # A clean stop writes the whole trace: the write is in it, at one instant.
     bench.fw.stop()
@@ -139,7 +98,7 @@ def test_cal_offset_write_shows_in_the_device_trace(bench):
     # Started again on its port: the page reconnects, the persist param kept its value.
     bench.fw = bench.devices.start(port=bench.fw.port, trace="trace2.csv")
     wait_for(lambda: b.text("#link-state") == "connected", timeout=15, what="the page to reconnect")
-    wait_for(lambda: item_text(bench, "cal_offset") == "25", what="cal_offset after the restart")
+    wait_for(lambda: item_text(bench, "cal_offset") == "2.5", what="cal_offset after the restart")
 
 
 def test_out_of_range_value_is_refused_in_words(bench):
@@ -148,18 +107,18 @@ def test_out_of_range_value_is_refused_in_words(bench):
     # The page checks the map's range before sending: nothing leaves the page.
     b.js("window.postsSent = 0; const f = window.fetch; window.fetch = (url, init) => "
          "{ if (init && init.method === 'POST') window.postsSent += 1; return f(url, init); };")
-    set_in_page(bench, "cal_offset", "-600")
+    set_in_page(bench, "cal_offset", "-60")
     wait_for(lambda: "outside the range" in (item_text(bench, "cal_offset", ".msg") or ""), what="the range message")
-    assert item_text(bench, "cal_offset", ".msg") == "-600 is outside the range of cal_offset (-500..500 0.1 degC): not sent"
+    assert item_text(bench, "cal_offset", ".msg") == "-60 is outside the range of cal_offset (-50.0..50.0 degC): not sent"
     assert "invalid" in b.find('[data-item="cal_offset"] input').get_attribute("class")
     assert b.js("return window.postsSent") == 0
     # Sent without that check (as any client of the panel may), the device
     # itself refuses: its Modbus exception in words.
     exceptions = bench.panel.link()["stats"]["exceptions"]
-    assert b.js("return easylabPanel.send('cal_offset', '-600')") is False
+    assert b.js("return easylabPanel.send('cal_offset', '-60')") is False
     msg = item_text(bench, "cal_offset", ".msg")
     assert msg.startswith("Refused by the device: illegal data value (exception 03)")
-    assert "-600 is outside the range of 'cal_offset' (-500..500 0.1 degC): the device refused it" in msg
+    assert "-60.0 is outside the range of 'cal_offset' (-50.0..50.0 degC): the device refused it" in msg
     assert "error" in b.find('[data-item="cal_offset"] .msg').get_attribute("class")
     assert bench.panel.link()["stats"]["exceptions"] == exceptions + 1
     assert device_values(bench, "cal_offset")["cal_offset"] == before
@@ -179,8 +138,8 @@ def test_backup_and_restore_round_trip(bench, tmp_path):
     # Change two params, then restore the file through the page.
     set_in_page(bench, "cal_gain", "1500")
     wait_for(lambda: item_text(bench, "cal_gain", ".msg") == "set: cal_gain = 1500 1/1000", what="cal_gain write")
-    set_in_page(bench, "alarm_high", "950")
-    wait_for(lambda: item_text(bench, "alarm_high", ".msg") == "set: alarm_high = 950 0.1 degC", what="alarm_high")
+    set_in_page(bench, "alarm_high", "95")
+    wait_for(lambda: item_text(bench, "alarm_high", ".msg") == "set: alarm_high = 95.0 degC", what="alarm_high")
     assert device_values(bench, "cal_gain", "alarm_high") == {"cal_gain": 1500, "alarm_high": 950}
     b.find("#restore-file").send_keys(str(saved))
     wait_for(lambda: b.js("return !document.getElementById('restore-confirm').hidden"), what="the restore question")

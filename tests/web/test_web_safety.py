@@ -5,11 +5,12 @@ the device under a burst of requests."""
 
 from __future__ import annotations
 
-from http.server import BaseHTTPRequestHandler, ThreadingHTTPServer
 import signal
 import threading
 import time
 from concurrent.futures import ThreadPoolExecutor
+from decimal import Decimal
+from http.server import BaseHTTPRequestHandler, ThreadingHTTPServer
 
 import pytest
 
@@ -28,6 +29,11 @@ def rig(tmp_path_factory, pt100_tcp, stimulus):
 @pytest.fixture
 def device_args(rig):
     return ["--tcp", f"127.0.0.1:{rig.port}"]
+
+
+def degc(stored: int) -> str:
+    """cal_offset's engineering text (unit "degC" scale 0.1) of a stored value."""
+    return str(Decimal(stored).scaleb(-1))
 
 
 def cal_offset(rig) -> int:
@@ -73,10 +79,10 @@ def test_off_loopback_nothing_is_read_or_written_without_the_token(pt100_tcp, ri
     assert "HttpOnly" in cookie and "SameSite=Strict" in cookie
     r = http("GET", p.base + "/api/map", headers={"Cookie": f"easylab_panel_{p.port}={p.token}"})
     assert r.status == 200 and r.json()["model"] == "pt100_sensor"
-    r = p.api("POST", "/api/write", {"name": "cal_offset", "value": "33"})
-    assert r.status == 200 and r.json()["value"] == 33
+    r = p.api("POST", "/api/write", {"name": "cal_offset", "value": "3.3"})  # degC: stored in tenths
+    assert r.status == 200 and r.json()["value"] == 33 and r.json()["text"] == "3.3"
     assert cal_offset(rig) == 33
-    p.api("POST", "/api/write", {"name": "cal_offset", "value": str(before)})
+    p.api("POST", "/api/write", {"name": "cal_offset", "value": degc(before)})
 
 
 def test_the_token_address_opens_the_page_in_a_browser(pt100_tcp, device_args, panel, browser):
@@ -114,7 +120,7 @@ def test_writes_must_be_same_origin_json_with_the_csrf_header(pt100_tcp, rig, de
     p = panel(pt100_tcp.map, *device_args)
     wait_for(lambda: connected(p), what="the panel to connect")
     before = cal_offset(rig)
-    body = {"name": "cal_offset", "value": "44"}
+    body = {"name": "cal_offset", "value": "4.4"}
     refused = {
         "another origin": {"Origin": "http://evil.example", p.csrf_header: p.csrf},
         "another port": {"Origin": f"http://127.0.0.1:{p.port + 1}", p.csrf_header: p.csrf},
@@ -132,7 +138,7 @@ def test_writes_must_be_same_origin_json_with_the_csrf_header(pt100_tcp, rig, de
     assert cal_offset(rig) == before
     r = p.api("POST", "/api/write", body)                       # the page's own request
     assert r.status == 200 and cal_offset(rig) == 44
-    p.api("POST", "/api/write", {"name": "cal_offset", "value": str(before)})
+    p.api("POST", "/api/write", {"name": "cal_offset", "value": degc(before)})
 
 
 ATTACK = """<!doctype html><title>elsewhere</title>

@@ -264,3 +264,33 @@ class Browser:
 
     def quit(self) -> None:
         self.driver.quit()
+
+
+# ---------------------------------------------------------------- the bench of the page tests
+
+
+def device_values(bench, *names: str) -> dict:
+    """Read items straight from the device with the project's Modbus link
+    (pymodbus), not through the panel."""
+    from easylab.host_tools.modbus_link import ModbusLink
+    from easylab.host_tools.service_cli import read_values
+    from easylab.host_tools.service_map import load_map
+
+    smap = load_map(bench.map)
+    link = ModbusLink.tcp("127.0.0.1", bench.fw.port, 1, 2.0)
+    try:
+        return read_values(link, [smap.item(n) for n in names])
+    finally:
+        link.close()
+
+
+def item_text(bench, name: str, part: str = ".value") -> str:
+    return bench.browser.text(f'[data-item="{name}"] {part}')
+
+
+def set_in_page(bench, name: str, text: str) -> None:
+    """Type a value into an item's field and press Set, as a person does."""
+    field = bench.browser.find(f'[data-item="{name}"] input')
+    field.clear()
+    field.send_keys(text)
+    bench.browser.find(f'[data-item="{name}"] button.set').click()

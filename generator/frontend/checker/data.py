@@ -43,6 +43,8 @@ class DataRules:
                         self.error(span, f"the initial value {show_value(initial, t)} of '{decl.name}' is outside "
                                          f"its range {show_value(lo.const, t)}..{show_value(hi.const, t)}",
                                    None if decl.default is not None else "give an initial value inside the range")
+        if decl.scale is not None:
+            self.check_scale(decl, t)
         if t is T.TIME and not whole_ms(initial):
             self.error(decl.default.span, "a run-time 'time' value counts whole milliseconds")
         if decl.persist and decl.kind != "param":
@@ -68,6 +70,21 @@ class DataRules:
             else:
                 self._addresses[(table, first, last)] = decl
         self.data[decl.name] = DataInfo(decl, t, initial, rng)
+
+    def check_scale(self, decl: ast.Data, t: T.ValueType) -> None:
+        """``scale``: a decimal within SCALE_MIN..SCALE_MAX of at most
+        SCALE_DECIMALS decimals (so at most 15 significant digits: exact as a
+        JSON number), on an integer item (engineering value = value x scale)."""
+        span = dict(decl.attr_spans).get("scale", decl.span)
+        if t not in T.INTEGERS:
+            self.error(span, f"a scale needs an integer type, and '{decl.name}' is a {t.name}",
+                       "drop 'scale', or store the value as an integer (int16 ... scale 0.1)")
+        elif not T.SCALE_MIN <= decl.scale <= T.SCALE_MAX:
+            self.error(span, f"the scale of '{decl.name}' is {T.show_real(decl.scale)}, outside "
+                             f"{T.decimal_text(T.SCALE_MIN)}..{T.decimal_text(T.SCALE_MAX)}")
+        elif T.decimal_text(decl.scale) is None:
+            self.error(span, f"the scale of '{decl.name}' has more than {T.SCALE_DECIMALS} decimals",
+                       "give a scale such as 0.1, 0.001 or 2.5")
 
     def check_channel(self, decl: ast.Channel) -> None:
         t = self.resolve_type(decl.type)
