@@ -219,18 +219,22 @@ class Session:
         return (f"breakpoint {bp} at " if bp is not None else "") + text
 
     def condition_text(self, item_id: int, elem: int, bp: int | None) -> str:
-        """A conditional breakpoint: ``breakpoint N when NAME OP VALUE
-        (file:line)``, its comparison from the breakpoint list."""
-        it = self._item_named(item_id)
-        name = f"{it.name}[{elem}]" if it.count > 1 else it.name
+        """Where a conditional breakpoint halted: ``breakpoint N when NAME
+        OP VALUE (file:line)``, its comparison from the breakpoint list."""
         with self.lock:
             found = next((b for b in self.c.bp_list() if b.slot == bp), None) if bp is not None else None
-        text = f"condition on {name}"
-        if found is not None and found.op is not None:
-            value = decode_value(it.type, found.value[:type_size(it.type)])
-            text = f"{name} {OP_NAMES.get(found.op, '?')} {format_value(it, value)}"
-        source = self.map.location(K.P_CONDITION, item_id, elem) if self.map is not None else None
-        return (f"breakpoint {bp} when " if bp is not None else "when ") + text + (f" ({source})" if source else "")
+        if found is None:
+            it = self._item_named(item_id)
+            return f"condition on {it.name}" + (f"[{elem}]" if it.count > 1 else "")
+        return f"breakpoint {bp} when {self.describe_condition(found)}"
+
+    def describe_condition(self, b) -> str:
+        """A conditional breakpoint's ``NAME OP VALUE (file:line)``."""
+        it = self._item_named(b.a)
+        name = f"{it.name}[{b.b}]" if it.count > 1 else it.name
+        value = decode_value(it.type, b.value[:type_size(it.type)])
+        source = self.map.location(K.P_CONDITION, b.a, b.b) if self.map is not None else None
+        return f"{name} {OP_NAMES.get(b.op, '?')} {format_value(it, value)}" + (f" ({source})" if source else "")
 
     def _item_named(self, item_id: int) -> Item:
         if self.map is not None and item_id in self.map.by_id:
@@ -271,7 +275,16 @@ class Session:
                  f"contents    {h.item_count} items, {h.actor_count} actors, {h.chart_count} charts, "
                  f"{h.task_count} tasks",
                  f"state       {state}" + ("" if f.halted else f", {self.when(f.tick)}")]
+        if f.status & K.S_FORCED:
+            with self.lock:
+                names = [self._forced_name(x) for x in self.c.forced()]
+            obj["forced"] = names
+            lines.append(f"forced: {', '.join(names)}")
         self.emit("\n".join(lines), obj)
+
+    def _forced_name(self, forced) -> str:
+        it = self._item_named(forced.item)
+        return f"{it.name}[{forced.elem}]" if it.count > 1 else it.name
 
     def cmd_vars(self, args):
         if len(args) > 1:
@@ -527,7 +540,7 @@ class Session:
             self.emit("nothing forced", None)
         for f in found:
             it = self._item_named(f.item)
-            name = f"{it.name}[{f.elem}]" if it.count > 1 else it.name
+            name = self._forced_name(f)
             value = decode_value(it.type, f.value)
             self.emit(f"{name} = {format_value(it, value)} (forced)", {"name": name, "forced": value})
 
@@ -621,7 +634,7 @@ class Session:
             self.emit("no breakpoints", None)
         for b in bps:
             if b.kind == K.P_CONDITION:
-                at = self.condition_text(b.a, b.b, None)
+                at = self.describe_condition(b)
             else:
                 at = self.map.describe(b.kind, b.a, b.b) if self.map else f"{b.kind} {b.a}.{b.b}"
             self.emit(f"{b.slot}: {at} (hit {b.hits} time{'s' if b.hits != 1 else ''})",
