@@ -64,6 +64,11 @@ COMMANDS = {
 }
 
 
+# A firmware built without slots for forcing or conditional breakpoints (HELLO reports 0).
+_NO_SLOTS = ("this firmware has no {what}: declare slots in the model (`debug on ... {setting} N`, "
+             "docs/protocol.md) and rebuild it")
+
+
 class CommandError(Exception):
     """A command that cannot be done: one line for the user."""
 
@@ -467,6 +472,7 @@ class Session:
             args = list(m.groups()) if m else args
         if len(args) != 3 or args[1] not in OPS:
             raise CommandError("usage: break when ITEM OP VALUE (OP: == != < <= > >=)")
+        self._needs_slots("cond_slots", "conditional breakpoints", "conditions")
         it, elem = self.item(args[0])
         if it.count > 1 and elem is None:
             raise CommandError(f"{it.name} has {it.count} elements: break when {it.name}[i] {args[1]} VALUE")
@@ -475,9 +481,6 @@ class Session:
             try:
                 slot = self.c.bp_when(it.id, it.type, args[1], value, elem or 0)
             except DebugError as err:
-                if err.status == K.E_BP_FULL and self.c.hello_info and not self.c.hello_info.cond_slots:
-                    raise CommandError("this firmware has no conditional breakpoints: declare them in the model "
-                                       "(`debug on ... conditions N`) and rebuild") from None
                 raise CommandError(str(err)) from None
         name = f"{it.name}[{elem}]" if elem is not None else it.name
         self.emit(f"breakpoint {slot} when {name} {args[1]} {format_value(it, value)}",
@@ -493,9 +496,17 @@ class Session:
             return int(text)
         raise CommandError(f"{it.name}: no step '{text}' (its steps: {', '.join(sorted(by_name))})")
 
+    def _needs_slots(self, field: str, what: str, setting: str) -> None:
+        """Refuse a command the firmware was built without (HELLO: 0 slots)."""
+        with self.lock:
+            hello = self.c.hello_info or self.c.hello()
+        if getattr(hello, field) == 0:
+            raise CommandError(_NO_SLOTS.format(what=what, setting=setting))
+
     def cmd_force(self, args):
         if len(args) != 2:
             raise CommandError("usage: force NAME VALUE")
+        self._needs_slots("force_slots", "forcing", "force")
         it, elem = self.item(args[0])
         if not it.writable:
             raise CommandError(f"{it.name} cannot be forced: it is read-only ({_why_read_only(it)})")
@@ -517,6 +528,7 @@ class Session:
     def cmd_release(self, args):
         if len(args) != 1:
             raise CommandError("usage: release NAME|all")
+        self._needs_slots("force_slots", "forcing", "force")
         if args[0] == "all":
             with self.lock:
                 self.c.release()
@@ -534,6 +546,7 @@ class Session:
     def cmd_forced(self, args):
         if args:
             raise CommandError("usage: forced")
+        self._needs_slots("force_slots", "forcing", "force")
         with self.lock:
             found = self.c.forced()
         if not found:

@@ -332,7 +332,8 @@ class DebugClient:
                                 f"this tool version {PROTOCOL_VERSION}"
                                 + (": the firmware is older (no force, no conditional breakpoints); rebuild it "
                                    "with this easylab" if older else ""))
-        fields = struct.unpack_from("<BHBIHHBBBBBBBB", body)
+        # the slots of forcing and conditional breakpoints: absent from a server without either
+        fields = struct.unpack_from("<BHBIHHBBBBBB", body) + (tuple(body[19:21]) if len(body) >= 21 else (0, 0))
         self.hello_info = Hello(*fields)
         return self.hello_info
 

@@ -171,6 +171,7 @@ typedef struct {
 } force_t;
 static force_t forces[EL_DBG_FORCE_SLOTS];
 static uint8_t force_count;
+static bool forcing; /* the WRITE path serves a FORCE: hold, not submit */
 #endif
 
 #if HAS_CONDS
@@ -664,39 +665,43 @@ static uint8_t submit(entry_t *e)
     return EL_DBG_OK;
 }
 
-/* The element a WRITE or FORCE names (p[n]: id u16, element u16, value)
- * into *e as a write entry, checked: the item writable, the element
- * there, the value acceptable. */
-static uint8_t prepare_write(const uint8_t *p, uint8_t n, entry_t *e)
+#if EL_DBG_FORCE_SLOTS > 0
+/* The index of the force of (id, elem), or force_count: none. */
+static uint8_t find_force(uint16_t id, uint16_t elem)
 {
-    el_dbg_item_t it;
-    uint16_t elem;
-    uint8_t size;
-    if (n < 5u) {
-        return EL_DBG_E_LENGTH;
+    uint8_t i;
+    for (i = 0u; i < force_count && (forces[i].id != id || forces[i].elem != elem); i++) {
     }
-    if (!load_item(get_u16(p), &it)) {
-        return EL_DBG_E_ID;
-    }
-    size = type_size(it.type);
-    elem = get_u16(p + 2);
-    if (n != 4u + size) {
-        return EL_DBG_E_LENGTH;
-    }
-    if ((it.flags & EL_DBG_F_WRITE) == 0u) {
-        return EL_DBG_E_READ_ONLY;
-    }
-    if (elem >= ELEMENTS(it)) {
-        return EL_DBG_E_VALUE;
-    }
-    e->addr = (uint8_t *)it.addr + (elem << (size >> 1)); /* sizes 1, 2, 4: no multiplication */
-    copy_bytes(e->value, p + 4, size); /* the wire's order: apply moves it to memory */
-    e->size = (uint8_t)(size | ENTRY_WRITE);
-    return check_value(&it, p + 4);
+    return i;
 }
 
+/* FORCE's end of the WRITE path (do_access, `forcing`): the checked write
+ * *e of (id, elem) held from the next instant on (at once when halted at
+ * an instant), until RELEASE; forcing an element again changes its value. */
+static uint8_t hold(const entry_t *e, uint16_t id, uint16_t elem)
+{
+    uint8_t i = find_force(id, elem);
+    if (i == force_count) {
+        if (force_count >= EL_DBG_FORCE_SLOTS) {
+            return EL_DBG_E_FORCE_FULL;
+        }
+        force_count++;
+    }
+    copy_bytes((uint8_t *)&forces[i].e, (const uint8_t *)e, (uint8_t)sizeof *e);
+    forces[i].id = id;
+    forces[i].elem = elem;
+    if (at_instant()) {
+        apply(&forces[i].e);
+        put8(EL_DBG_APPLIED);
+    } else {
+        put8(EL_DBG_QUEUED);
+    }
+    return EL_DBG_OK;
+}
+#endif
+
 /* READ (p[n]: item ids, every element of each) and WRITE (p[n]: id, element,
- * value). In an open transaction the response is QUEUED and the index of
+ * value); FORCE is a WRITE held (`forcing`). In an open transaction the response is QUEUED and the index of
  * the first entry; a request queues all of its elements or none (an error
  * takes back what it queued; a response with an error carries nothing). */
 static uint8_t do_access(bool write, const uint8_t *p, uint8_t n)
@@ -705,26 +710,45 @@ static uint8_t do_access(bool write, const uint8_t *p, uint8_t n)
     uint16_t elem;
     el_dbg_item_t it;
     entry_t e;
-    if (!write && (n == 0u || (n & 1u) != 0u)) {
+    if (write ? n < 5u : (n == 0u || (n & 1u) != 0u)) {
         return EL_DBG_E_LENGTH;
     }
     if (tx_state == TX_OPEN) {
         put8(EL_DBG_QUEUED);
         put8(first);
     }
-    if (write) {
-        st = prepare_write(p, n, &e);
-        if (st == EL_DBG_OK) {
-            st = submit(&e); /* one element of one item */
-        }
-    }
-    for (k = 0u; !write && k < n && st == EL_DBG_OK; k += 2u) {
+    for (k = 0u; k < n && st == EL_DBG_OK; k += 2u) {
         if (!load_item(get_u16(p + k), &it)) {
             st = EL_DBG_E_ID;
             break;
         }
         e.size = type_size(it.type);
         e.addr = (uint8_t *)it.addr;
+        if (write) {
+            elem = get_u16(p + 2);
+            if (n != 4u + e.size) {
+                st = EL_DBG_E_LENGTH;
+            } else if ((it.flags & EL_DBG_F_WRITE) == 0u) {
+                st = EL_DBG_E_READ_ONLY;
+            } else if (elem >= ELEMENTS(it)) {
+                st = EL_DBG_E_VALUE;
+            } else {
+                st = check_value(&it, p + 4);
+            }
+            if (st == EL_DBG_OK) {
+                e.addr += elem << (e.size >> 1); /* sizes 1, 2, 4: no multiplication */
+                for (k = 0u; k < e.size; k++) {
+                    e.value[k] = p[4u + k]; /* the wire's order: apply moves it to memory */
+                }
+                e.size |= ENTRY_WRITE;
+#if EL_DBG_FORCE_SLOTS > 0
+                st = forcing ? hold(&e, get_u16(p), elem) : submit(&e);
+#else
+                st = submit(&e);
+#endif
+            }
+            break; /* one element of one item */
+        }
         for (elem = 0u; elem < ELEMENTS(it) && st == EL_DBG_OK && !resp_full; elem++) {
             st = submit(&e);
             e.addr += e.size;
@@ -737,45 +761,6 @@ static uint8_t do_access(bool write, const uint8_t *p, uint8_t n)
 }
 
 #if EL_DBG_FORCE_SLOTS > 0
-/* The index of the force of (id, elem), or force_count: none. */
-static uint8_t find_force(uint16_t id, uint16_t elem)
-{
-    uint8_t i;
-    for (i = 0u; i < force_count && (forces[i].id != id || forces[i].elem != elem); i++) {
-    }
-    return i;
-}
-
-/* FORCE (p[n]: id, element, value, as WRITE): held from the next instant
- * on (at once when halted at an instant), until RELEASE; forcing an
- * element again changes its value. */
-static uint8_t do_force(const uint8_t *p, uint8_t n)
-{
-    entry_t e;
-    uint8_t i, st = prepare_write(p, n, &e);
-    uint16_t id = get_u16(p), elem = get_u16(p + 2);
-    if (st != EL_DBG_OK) {
-        return st;
-    }
-    i = find_force(id, elem);
-    if (i == force_count) {
-        if (force_count >= EL_DBG_FORCE_SLOTS) {
-            return EL_DBG_E_FORCE_FULL;
-        }
-        force_count++;
-    }
-    copy_bytes((uint8_t *)&forces[i].e, (const uint8_t *)&e, (uint8_t)sizeof e);
-    forces[i].id = id;
-    forces[i].elem = elem;
-    if (at_instant()) {
-        apply(&forces[i].e);
-        put8(EL_DBG_APPLIED);
-    } else {
-        put8(EL_DBG_QUEUED);
-    }
-    return EL_DBG_OK;
-}
-
 /* RELEASE (id, element; id NONE16: every force): the element keeps its
  * value until the program or the stimulus changes it. */
 static uint8_t do_release(const uint8_t *p)
@@ -1040,8 +1025,10 @@ static void put_hello(void)
     put8(EL_DBG_WRITE_ENTRIES);
     put8(EL_DBG_BP_SLOTS);
     put8(EL_DBG_VALUE_MAX);
+#if EL_DBG_HAS_FORCE_POINT /* absent: no slots (2 bytes fewer in a server short of flash) */
     put8(EL_DBG_FORCE_SLOTS);
     put8(EL_DBG_COND_SLOTS);
+#endif
 }
 
 static void put_flags(void)
@@ -1113,10 +1100,14 @@ static const uint8_t requests[][2] EL_ROM = {
     {EL_DBG_CMD_BP_SET, 5u},
     {EL_DBG_CMD_BP_CLEAR, 1u},
     {EL_DBG_CMD_BP_LIST, 0u},
+#if EL_DBG_FORCE_SLOTS > 0 /* without slots these are unknown requests: HELLO says 0 */
     {EL_DBG_CMD_FORCE, ANY_LENGTH},
     {EL_DBG_CMD_RELEASE, 4u},
     {EL_DBG_CMD_FORCE_LIST, 0u},
+#endif
+#if HAS_CONDS
     {EL_DBG_CMD_BP_WHEN, ANY_LENGTH},
+#endif
 };
 enum request {
     REQ_HELLO,
@@ -1138,10 +1129,14 @@ enum request {
     REQ_BP_SET,
     REQ_BP_CLEAR,
     REQ_BP_LIST,
+#if EL_DBG_FORCE_SLOTS > 0
     REQ_FORCE,
     REQ_RELEASE,
     REQ_FORCE_LIST,
+#endif
+#if HAS_CONDS
     REQ_BP_WHEN,
+#endif
     REQ_COUNT
 };
 typedef char requests_match_their_enum[sizeof requests / sizeof requests[0] == REQ_COUNT ? 1 : -1];
@@ -1258,27 +1253,22 @@ static uint8_t dispatch(uint8_t cmd, const uint8_t *p, uint8_t n)
         break;
 #if EL_DBG_FORCE_SLOTS > 0
     case REQ_FORCE:
-        return do_force(p, n);
+        if (tx_state == TX_OPEN) {
+            return EL_DBG_E_TX_BUSY; /* a force is not part of a transaction */
+        }
+        forcing = true;
+        i = do_access(true, p, n);
+        forcing = false;
+        return i;
     case REQ_RELEASE:
         return do_release(p);
     case REQ_FORCE_LIST:
         put_forces();
         break;
-#else
-    case REQ_FORCE:
-        return EL_DBG_E_FORCE_FULL; /* a build without force slots: every slot is in use */
-    case REQ_RELEASE:
-        return EL_DBG_E_ID;
-    case REQ_FORCE_LIST:
-        put8(0u);
-        break;
 #endif
 #if HAS_CONDS
     case REQ_BP_WHEN:
         return do_bp_when(p, n);
-#else
-    case REQ_BP_WHEN:
-        return EL_DBG_E_BP_FULL; /* a build without condition slots */
 #endif
     default:
 #if defined(EL_DEBUG_BOARD_COMMANDS) && EL_DEBUG_BOARD_COMMANDS

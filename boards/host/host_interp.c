@@ -56,6 +56,7 @@ EL_INTERP_EXPORT uint8_t el_interp_take_resync(void);
 EL_INTERP_EXPORT bool el_interp_has_debug(void);
 EL_INTERP_EXPORT uint8_t el_interp_armed(void);
 EL_INTERP_EXPORT void el_interp_instant(void);
+EL_INTERP_EXPORT void el_interp_force(void);
 EL_INTERP_EXPORT void el_interp_task_begin(uint8_t task);
 EL_INTERP_EXPORT void el_interp_task_end(void);
 EL_INTERP_EXPORT void el_interp_probe(uint8_t kind, uint16_t a, uint16_t b);
@@ -129,6 +130,11 @@ void el_interp_instant(void)
     el_debug_instant();
 }
 
+void el_interp_force(void)
+{
+    EL_DEBUG_FORCE(); /* forced values, conditional breakpoints: after the device reads */
+}
+
 void el_interp_task_begin(uint8_t task)
 {
     el_debug_task_begin(task);
@@ -162,6 +168,10 @@ uint8_t el_interp_armed(void)
 }
 
 void el_interp_instant(void)
+{
+}
+
+void el_interp_force(void)
 {
 }
 

@@ -329,7 +329,7 @@ def buffer_sizes(program: Program, items: list[DebugItem], actors: int, forces: 
     points = 1 + len(program.tasks) + actors + sum(1 + len(c.steps) + len(c.transitions) for c in program.charts)
     breakpoints = min(k.BP_MAX, points)
     payloads = [  # status included
-        21,                                                   # HELLO
+        19 + (2 if forces or conditions else 0),              # HELLO (the slots, when there are)
         16,                                                   # GET_FLAGS
         2 + 2 * k.C_COUNT,                                    # GET_COUNTERS
         14,                                                   # ITEM_INFO
