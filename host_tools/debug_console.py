@@ -844,17 +844,22 @@ class Console(cmd.Cmd):
             return []
         cmdname = words[0]
         m = self.s.map
-        if cmdname in ("read", "write", "watch", "vars") and m is not None:
-            if cmdname == "write" and len(words) > 1:
+        if cmdname in ("read", "write", "watch", "vars", "force", "release") and m is not None:
+            if cmdname in ("write", "force", "release") and len(words) > 1:
                 return []
-            return [i.name + " " for i in m.items if i.name.startswith(text)]
+            names = [i.name for i in m.items if cmdname not in ("force", "release") or i.writable]
+            return [n + " " for n in names + (["all"] if cmdname == "release" else []) if n.startswith(text)]
         if cmdname == "step":
             return [u + " " for u in STEP_UNITS if u.startswith(text)]
         if cmdname == "tx":
             return [u + " " for u in ("begin", "commit", "abort") if u.startswith(text)]
         if cmdname == "break":
             if len(words) == 1:
-                return ["at "] if "at".startswith(text) else []
+                return [w + " " for w in ("at", "when") if w.startswith(text)]
+            if words[1] == "when":  # break when ITEM OP VALUE
+                if len(words) == 2 and m is not None:
+                    return [i.name + " " for i in m.items if i.name.startswith(text)]
+                return [op + " " for op in OPS if op.startswith(text)] if len(words) == 3 else []
             if m is not None:
                 return [p.label + " " for p in m.points() if p.label.startswith(text)]
         if cmdname == "reset":

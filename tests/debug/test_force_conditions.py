@@ -249,3 +249,58 @@ def test_a_model_that_asks_gets_its_slots_and_the_328p_none_without(tmp_path):
     assert debug_slots(plain, small=True) == (0, 0)
     assert debug_slots(plain, small=False) == (K.FORCE_MAX, K.COND_MAX)
     assert debug_slots(asked, small=True) == debug_slots(asked, small=False) == (3, 1)
+
+
+def test_the_console_completes_the_new_commands(builds):
+    from types import SimpleNamespace
+
+    from easylab.host_tools.debug_console import Console
+    from easylab.host_tools.debug_map import DebugMap
+
+    dmap = DebugMap.load(builds["pneumatic_cylinder"].parent / "debug_map.json")
+    session = SimpleNamespace(url="test", map=dmap, c=SimpleNamespace(hello_info=SimpleNamespace(program_id=0)))
+    con = Console(session)
+    assert con.completedefault("end_o", "force end_o", 6, 11) == ["end_out.level "]
+    assert con.completedefault("valve", "force valve", 6, 11) == []  # a device `in` datum cannot be forced
+    assert "all " in con.completedefault("", "release ", 8, 8)
+    assert con.completedefault("w", "break w", 6, 7) == ["when "]
+    assert con.completedefault("cyc", "break when cyc", 11, 14) == ["cycles "]
+    assert con.completedefault(">", "break when cycles >", 18, 19) == ["> ", ">= "]
+
+
+def test_an_older_firmware_is_refused_with_what_it_lacks():
+    import struct
+
+    from easylab.host_tools.debug_protocol import DebugClient, ProtocolError
+
+    client = DebugClient.__new__(DebugClient)
+    client.t = SimpleNamespaceTransport()
+    client.request = lambda cmd, payload=b"", what="", check=True: struct.pack(
+        "<BHBIHHBBBBBB", K.PROTOCOL_VERSION - 1, 160, 1, 0, 1, 0, 0, 1, 24, 8, 8, 4)
+    with pytest.raises(ProtocolError, match="the firmware is older \\(no force, no conditional breakpoints\\); "
+                                            "rebuild it with this easylab"):
+        client.hello()
+
+
+class SimpleNamespaceTransport:
+    url = "/dev/ttyTEST"
+
+    def discard_input(self):
+        pass
+
+
+def test_a_firmware_without_slots_is_told_apart_by_the_console(builds):
+    """HELLO without the slots (a server built with neither): the console
+    says how to get them instead of sending requests the server lacks."""
+    from types import SimpleNamespace
+
+    from easylab.host_tools.debug_console import CommandError, Session
+    from easylab.host_tools.debug_map import DebugMap
+
+    dmap = DebugMap.load(builds["pneumatic_cylinder"].parent / "debug_map.json")
+    hello = SimpleNamespace(force_slots=0, cond_slots=0, program_id=0)
+    session = Session(SimpleNamespace(hello_info=hello), dmap, "test")
+    with pytest.raises(CommandError, match=r"no forcing: declare slots in the model \(`debug on ... force N`"):
+        session.execute("force end_out.level 1")
+    with pytest.raises(CommandError, match="no conditional breakpoints: .*`debug on ... conditions N`"):
+        session.execute("break when cycles >= 1")
