@@ -252,6 +252,11 @@ class LoadStatus:
     message: str
 
 
+# HELLO's fields up to VALUE_MAX; the slots of forcing and conditional breakpoints follow (2 x u8) when the
+# server has either.
+HELLO_FORMAT = "<BHBIHHBBBBBB"
+
+
 class DebugClient:
     """Requests and responses over a FrameTransport, one at a time.
 
@@ -333,7 +338,9 @@ class DebugClient:
                                 + (": the firmware is older (no force, no conditional breakpoints); rebuild it "
                                    "with this easylab" if older else ""))
         # the slots of forcing and conditional breakpoints: absent from a server without either
-        fields = struct.unpack_from("<BHBIHHBBBBBB", body) + (tuple(body[19:21]) if len(body) >= 21 else (0, 0))
+        fixed = struct.calcsize(HELLO_FORMAT)
+        fields = struct.unpack_from(HELLO_FORMAT, body) + (tuple(body[fixed:fixed + 2]) if len(body) >= fixed + 2
+                                                           else (0, 0))
         self.hello_info = Hello(*fields)
         return self.hello_info
 

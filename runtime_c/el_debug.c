@@ -194,6 +194,9 @@ static uint8_t cond_count;
 #endif
 
 uint8_t el_dbg_armed;
+#if EL_DBG_HAS_FORCE_POINT
+uint8_t el_dbg_forcing;
+#endif
 volatile uint8_t el_debug_abort_halt;
 static bool halt_request;
 static uint8_t halt_why; /* EL_DBG_WHY_... of the current or next halt */
@@ -212,6 +215,20 @@ static void count(uint8_t which)
         counters[which]++;
     }
 }
+
+#if EL_DBG_HAS_FORCE_POINT
+/* el_dbg_forcing: is anything forced or a condition set? */
+static void update_forcing(void)
+{
+    el_dbg_forcing = 0u;
+#if EL_DBG_FORCE_SLOTS > 0
+    el_dbg_forcing |= force_count;
+#endif
+#if HAS_CONDS
+    el_dbg_forcing |= cond_count;
+#endif
+}
+#endif
 
 static void update_armed(void)
 {
@@ -464,6 +481,7 @@ static void clear_bps(void)
         conds[i].addr = NULL;
     }
     cond_count = 0u;
+    update_forcing();
 #endif
 }
 
@@ -686,6 +704,7 @@ static uint8_t hold(const entry_t *e, uint16_t id, uint16_t elem)
             return EL_DBG_E_FORCE_FULL;
         }
         force_count++;
+        update_forcing();
     }
     copy_bytes((uint8_t *)&forces[i].e, (const uint8_t *)e, (uint8_t)sizeof *e);
     forces[i].id = id;
@@ -769,6 +788,7 @@ static uint8_t do_release(const uint8_t *p)
     uint8_t i;
     if (id == EL_DBG_NONE16) {
         force_count = 0u;
+        update_forcing();
         return EL_DBG_OK;
     }
     i = find_force(id, get_u16(p + 2));
@@ -777,6 +797,7 @@ static uint8_t do_release(const uint8_t *p)
     }
     force_count--;
     copy_bytes((uint8_t *)&forces[i], (const uint8_t *)&forces[force_count], (uint8_t)sizeof forces[0]);
+    update_forcing();
     return EL_DBG_OK;
 }
 
@@ -867,6 +888,7 @@ static uint8_t do_bp_when(const uint8_t *p, uint8_t n)
     c->elem = elem;
     c->hits = 0u;
     cond_count++;
+    update_forcing();
     put8((uint8_t)(EL_DBG_BP_SLOTS + free_slot));
     return EL_DBG_OK;
 }
@@ -946,6 +968,7 @@ static uint8_t do_bp_clear(uint8_t slot)
                conds[slot - EL_DBG_BP_SLOTS].addr != NULL) {
         conds[slot - EL_DBG_BP_SLOTS].addr = NULL;
         cond_count--;
+        update_forcing();
 #endif
     } else if (slot >= EL_DBG_BP_SLOTS || bps[slot].kind == EL_DBG_P_NONE) {
         return EL_DBG_E_ID;

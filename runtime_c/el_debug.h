@@ -146,8 +146,11 @@ void el_debug_probe(uint8_t kind, uint16_t a, uint16_t b);
 #if EL_DBG_HAS_FORCE_POINT
 /* After an instant's device reads, before its tasks are released: the
  * forced elements get their values again, then the conditional
- * breakpoints are evaluated (a halt there is at EL_DBG_P_CONDITION). */
+ * breakpoints are evaluated (a halt there is at EL_DBG_P_CONDITION).
+ * Called only while el_dbg_forcing is nonzero (something forced or a
+ * condition set). */
 void el_debug_force(void);
+extern uint8_t el_dbg_forcing;
 #endif
 
 /* ---- provided by the board's debug transport --------------------------- */
@@ -167,7 +170,8 @@ bool el_debug_put(const uint8_t *data, uint16_t n);
 #define EL_DEBUG_INSTANT() el_debug_instant()
 #define EL_DEBUG_TASK_BEGIN(task) el_debug_task_begin(task)
 #if EL_DBG_HAS_FORCE_POINT
-#define EL_DEBUG_FORCE() el_debug_force()
+#define EL_DEBUG_FORCE() \
+    do { if (el_dbg_forcing != 0u) { el_debug_force(); } } while (0)
 #else
 #define EL_DEBUG_FORCE() ((void)0)
 #endif

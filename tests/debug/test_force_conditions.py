@@ -271,12 +271,12 @@ def test_the_console_completes_the_new_commands(builds):
 def test_an_older_firmware_is_refused_with_what_it_lacks():
     import struct
 
-    from easylab.host_tools.debug_protocol import DebugClient, ProtocolError
+    from easylab.host_tools.debug_protocol import HELLO_FORMAT, DebugClient, ProtocolError
 
     client = DebugClient.__new__(DebugClient)
     client.t = SimpleNamespaceTransport()
     client.request = lambda cmd, payload=b"", what="", check=True: struct.pack(
-        "<BHBIHHBBBBBB", K.PROTOCOL_VERSION - 1, 160, 1, 0, 1, 0, 0, 1, 24, 8, 8, 4)
+        HELLO_FORMAT, K.PROTOCOL_VERSION - 1, 160, 1, 0, 1, 0, 0, 1, 24, 8, 8, 4)
     with pytest.raises(ProtocolError, match="the firmware is older \\(no force, no conditional breakpoints\\); "
                                             "rebuild it with this easylab"):
         client.hello()
