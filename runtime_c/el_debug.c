@@ -720,9 +720,10 @@ static uint8_t hold(const entry_t *e, uint16_t id, uint16_t elem)
 #endif
 
 /* READ (p[n]: item ids, every element of each) and WRITE (p[n]: id, element,
- * value); FORCE is a WRITE held (`forcing`). In an open transaction the response is QUEUED and the index of
- * the first entry; a request queues all of its elements or none (an error
- * takes back what it queued; a response with an error carries nothing). */
+ * value); FORCE is a WRITE held (`forcing`). In an open transaction the
+ * response is QUEUED and the index of the first entry; a request queues
+ * all of its elements or none (an error takes back what it queued; a
+ * response with an error carries nothing). */
 static uint8_t do_access(bool write, const uint8_t *p, uint8_t n)
 {
     uint8_t k, first = tx_len, st = EL_DBG_OK;
