@@ -12,8 +12,8 @@
  * target appends a valid CRC, COBS-encodes it and feeds it, so the fuzzer
  * gets past the CRC check. Bit 7 set: the bytes go to the decoder raw
  * (garbage, cut frames, stray delimiters). After each record the target
- * plays the dispatcher: an instant (queued writes apply, halts), a task,
- * probes of every kind. A halted program is fed the following records
+ * plays the dispatcher: an instant (queued writes apply, halts), the
+ * forced values and conditional breakpoints, a task, probes of every kind. A halted program is fed the following records
  * through el_port_idle, as a board would; when the input ends, the halt is
  * released (el_debug_abort_halt).
  *
@@ -123,6 +123,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
         feed_record();
         /* The dispatcher's and the model's hooks, as between instants. */
         el_debug_instant();
+        EL_DEBUG_FORCE(); /* forced values; conditional breakpoints may halt here */
         el_debug_task_begin((uint8_t)(k % 3u));
         EL_DEBUG_PROBE(EL_DBG_P_CHART, 0u, 0u);
         EL_DEBUG_PROBE(EL_DBG_P_STEP, (uint16_t)(k % 2u), 1u);

@@ -26,7 +26,7 @@ import time
 from pathlib import Path
 
 from .debug_map import DebugMap, Item, MapError
-from .debug_protocol import (K, STEP_UNITS, TYPES, DebugClient, DebugError, ProtocolError, decode_value,
+from .debug_protocol import (K, OP_NAMES, OPS, STEP_UNITS, TYPES, DebugClient, DebugError, ProtocolError, decode_value,
                              type_size)
 from .transport import TransportError
 from .units import ScaleError
@@ -44,12 +44,18 @@ COMMANDS = {
     "tx": "tx begin|commit|abort     a transaction: reads and writes queued, applied at one instant",
     "stack": "stack                     running task, active steps of every chart, where it halted",
     "run": "run                       let a halted program go on",
-    "break": "break | break at ITEM      halt at the next instant | set a breakpoint (step, transition, actor, task)",
+    "break": "break | break at ITEM | break when ITEM OP VALUE   halt at the next instant | set a breakpoint "
+             "(step, transition, actor, task) | halt at the instant where ITEM OP VALUE turns true "
+             "(OP: == != < <= > >=)",
     "step": "step [task|chart|actor|instant]   one task activation (default), actor firing or instant; "
             "chart: to the end of the next chart evolution, showing the steps it entered",
     "reset": "reset [--halt]            restart the firmware from boot (--halt: halted at its first instant)",
     "load": "load FILE                 replace the running model with FILE (local execution: `easylab run`)",
     "delete": "delete N|all              remove breakpoint N",
+    "force": "force NAME VALUE          hold a param, var or device datum (a sensor) at VALUE every instant",
+    "release": "release NAME|all          stop forcing NAME (or every forced item): the program and the "
+               "stimulus change it again",
+    "forced": "forced                    the forced items and their values",
     "breakpoints": "breakpoints [--all]       the breakpoints (--all: every place one can go)",
     "wait": "wait [TIMEOUT]            wait until the program halts (default 10s); every halt shows the "
             "element, its file:line and the logical time in ms",
@@ -57,6 +63,11 @@ COMMANDS = {
     "sleep": "sleep DURATION            pause a script (100ms, 2s)",
     "quit": "quit                      leave (also: exit, Ctrl-D)",
 }
+
+
+# A firmware built without slots for forcing or conditional breakpoints (HELLO reports 0).
+_NO_SLOTS = ("this firmware has no {what}: declare slots in the model (`debug on ... {setting} N`, "
+             "docs/protocol.md) and rebuild it")
 
 
 class CommandError(Exception):
@@ -207,6 +218,8 @@ class Session:
         ``tick``)."""
         if loc.kind == K.P_NONE:
             return "?"
+        if loc.kind == K.P_CONDITION:
+            return self.condition_text(loc.a, loc.b, bp)
         if self.map is None:
             return (f"breakpoint {bp} at " if bp is not None else "") + f"{loc.kind_name} {loc.a}.{loc.b}"
         text = self.map.describe(loc.kind, loc.a, loc.b)
@@ -219,6 +232,29 @@ class Session:
                 text += " (releases " + ", ".join(f"task {t['name']} at {t.get('location', '?')}"
                                                    for t in tasks) + ")"
         return (f"breakpoint {bp} at " if bp is not None else "") + text
+
+    def condition_text(self, item_id: int, elem: int, bp: int | None) -> str:
+        """Where a conditional breakpoint halted: ``breakpoint N when NAME
+        OP VALUE (file:line)``, its comparison from the breakpoint list."""
+        with self.lock:
+            found = next((b for b in self.c.bp_list() if b.slot == bp), None) if bp is not None else None
+        if found is None:
+            it = self._item_named(item_id)
+            return f"condition on {it.name}" + (f"[{elem}]" if it.count > 1 else "")
+        return f"breakpoint {bp} when {self.describe_condition(found)}"
+
+    def describe_condition(self, b) -> str:
+        """A conditional breakpoint's ``NAME OP VALUE (file:line)``."""
+        it = self._item_named(b.a)
+        name = f"{it.name}[{b.b}]" if it.count > 1 else it.name
+        value = decode_value(it.type, b.value[:type_size(it.type)])
+        source = self.map.location(K.P_CONDITION, b.a, b.b) if self.map is not None else None
+        return f"{name} {OP_NAMES.get(b.op, '?')} {format_value(it, value)}" + (f" ({source})" if source else "")
+
+    def _item_named(self, item_id: int) -> Item:
+        if self.map is not None and item_id in self.map.by_id:
+            return self.map.by_id[item_id]
+        return self._item_by_id(item_id)
 
     def when(self, tick: int) -> str:
         """The logical time of a tick: milliseconds with a map (tick_us),
@@ -254,7 +290,16 @@ class Session:
                  f"contents    {h.item_count} items, {h.actor_count} actors, {h.chart_count} charts, "
                  f"{h.task_count} tasks",
                  f"state       {state}" + ("" if f.halted else f", {self.when(f.tick)}")]
+        if f.status & K.S_FORCED:
+            with self.lock:
+                names = [self._forced_name(x) for x in self.c.forced()]
+            obj["forced"] = names
+            lines.append(f"forced: {', '.join(names)}")
         self.emit("\n".join(lines), obj)
+
+    def _forced_name(self, forced) -> str:
+        it = self._item_named(forced.item)
+        return f"{it.name}[{forced.elem}]" if it.count > 1 else it.name
 
     def cmd_vars(self, args):
         if len(args) > 1:
@@ -409,6 +454,9 @@ class Session:
         self.emit("running", {"running": True})
 
     def cmd_break(self, args):
+        if args and args[0] == "when":
+            self._break_when(args[1:])
+            return
         if args and args[0] == "at":
             if len(args) < 2:
                 raise CommandError("usage: break at ITEM (a step Chart.Step, a transition Chart:A->B, "
@@ -429,6 +477,98 @@ class Session:
         with self.lock:
             self.c.halt()
         self._report_halt(self._wait_halted(max(2.0, self.c.timeout)), "break")
+
+    def _break_when(self, args):
+        """``break when ITEM OP VALUE``: a conditional breakpoint."""
+        if len(args) == 1:  # written without spaces: x>=3
+            m = re.fullmatch(r"(.+?)(==|!=|<=|>=|<|>)(.+)", args[0])
+            args = list(m.groups()) if m else args
+        if len(args) != 3 or args[1] not in OPS:
+            raise CommandError("usage: break when ITEM OP VALUE (OP: == != < <= > >=)")
+        self._needs_slots("cond_slots", "conditional breakpoints", "conditions")
+        it, elem = self.item(args[0])
+        if it.count > 1 and elem is None:
+            raise CommandError(f"{it.name} has {it.count} elements: break when {it.name}[i] {args[1]} VALUE")
+        value = self._step_value(it, args[2]) if it.labels is not None else parse_value(it, args[2])
+        with self.lock:
+            try:
+                slot = self.c.bp_when(it.id, it.type, args[1], value, elem or 0)
+            except DebugError as err:
+                raise CommandError(str(err)) from None
+        name = f"{it.name}[{elem}]" if elem is not None else it.name
+        self.emit(f"breakpoint {slot} when {name} {args[1]} {format_value(it, value)}",
+                  {"breakpoint": slot, "when": f"{name} {args[1]} {format_value(it, value)}"})
+
+    @staticmethod
+    def _step_value(it: Item, text: str) -> int:
+        """A chart's step by name (or its id) as the value of Chart.active."""
+        by_name = {name: ident for ident, name in it.labels.items() if name is not None}
+        if text in by_name:
+            return by_name[text]
+        if text.isdigit():
+            return int(text)
+        raise CommandError(f"{it.name}: no step '{text}' (its steps: {', '.join(sorted(by_name))})")
+
+    def _needs_slots(self, field: str, what: str, setting: str) -> None:
+        """Refuse a command the firmware was built without (HELLO: 0 slots)."""
+        with self.lock:
+            hello = self.c.hello_info or self.c.hello()
+        if getattr(hello, field) == 0:
+            raise CommandError(_NO_SLOTS.format(what=what, setting=setting))
+
+    def cmd_force(self, args):
+        if len(args) != 2:
+            raise CommandError("usage: force NAME VALUE")
+        self._needs_slots("force_slots", "forcing", "force")
+        it, elem = self.item(args[0])
+        if not it.writable:
+            raise CommandError(f"{it.name} cannot be forced: it is read-only ({_why_read_only(it)})")
+        if it.count > 1 and elem is None:
+            raise CommandError(f"{it.name} has {it.count} elements: force {it.name}[i] VALUE")
+        value = parse_value(it, args[1])
+        if it.range and not it.range[0] <= value <= it.range[1]:
+            raise CommandError(f"{it.name}: {args[1]} is outside its range {it.range[0]}..{it.range[1]}")
+        with self.lock:
+            try:
+                how = self.c.force(it.id, it.type, value, elem or 0, what=it.name)
+            except DebugError as err:
+                raise CommandError(str(err)) from None
+        name = f"{it.name}[{elem}]" if elem is not None else it.name
+        self.emit(f"{name} forced to {format_value(it, value)} "
+                  f"({'from now' if how == K.APPLIED else 'from the next instant'}, every instant until released)",
+                  {"name": name, "forced": value, "applied": how == K.APPLIED})
+
+    def cmd_release(self, args):
+        if len(args) != 1:
+            raise CommandError("usage: release NAME|all")
+        self._needs_slots("force_slots", "forcing", "force")
+        if args[0] == "all":
+            with self.lock:
+                self.c.release()
+            self.emit("released every forced item", {"released": "all"})
+            return
+        it, elem = self.item(args[0])
+        name = f"{it.name}[{elem}]" if elem is not None else it.name
+        with self.lock:
+            try:
+                self.c.release(it.id, elem or 0)
+            except DebugError as err:
+                raise CommandError(f"{name} is not forced" if err.status == K.E_ID else str(err)) from None
+        self.emit(f"released {name}", {"released": name})
+
+    def cmd_forced(self, args):
+        if args:
+            raise CommandError("usage: forced")
+        self._needs_slots("force_slots", "forcing", "force")
+        with self.lock:
+            found = self.c.forced()
+        if not found:
+            self.emit("nothing forced", None)
+        for f in found:
+            it = self._item_named(f.item)
+            name = self._forced_name(f)
+            value = decode_value(it.type, f.value)
+            self.emit(f"{name} = {format_value(it, value)} (forced)", {"name": name, "forced": value})
 
     def cmd_step(self, args):
         unit = args[0] if args else "task"
@@ -519,7 +659,10 @@ class Session:
         if not bps:
             self.emit("no breakpoints", None)
         for b in bps:
-            at = self.map.describe(b.kind, b.a, b.b) if self.map else f"{b.kind} {b.a}.{b.b}"
+            if b.kind == K.P_CONDITION:
+                at = self.describe_condition(b)
+            else:
+                at = self.map.describe(b.kind, b.a, b.b) if self.map else f"{b.kind} {b.a}.{b.b}"
             self.emit(f"{b.slot}: {at} (hit {b.hits} time{'s' if b.hits != 1 else ''})",
                       {"breakpoint": b.slot, "at": at, "hits": b.hits})
 
@@ -714,17 +857,22 @@ class Console(cmd.Cmd):
             return []
         cmdname = words[0]
         m = self.s.map
-        if cmdname in ("read", "write", "watch", "vars") and m is not None:
-            if cmdname == "write" and len(words) > 1:
+        if cmdname in ("read", "write", "watch", "vars", "force", "release") and m is not None:
+            if cmdname in ("write", "force", "release") and len(words) > 1:
                 return []
-            return [i.name + " " for i in m.items if i.name.startswith(text)]
+            names = [i.name for i in m.items if cmdname not in ("force", "release") or i.writable]
+            return [n + " " for n in names + (["all"] if cmdname == "release" else []) if n.startswith(text)]
         if cmdname == "step":
             return [u + " " for u in STEP_UNITS if u.startswith(text)]
         if cmdname == "tx":
             return [u + " " for u in ("begin", "commit", "abort") if u.startswith(text)]
         if cmdname == "break":
             if len(words) == 1:
-                return ["at "] if "at".startswith(text) else []
+                return [w + " " for w in ("at", "when") if w.startswith(text)]
+            if words[1] == "when":  # break when ITEM OP VALUE
+                if len(words) == 2 and m is not None:
+                    return [i.name + " " for i in m.items if i.name.startswith(text)]
+                return [op + " " for op in OPS if op.startswith(text)] if len(words) == 3 else []
             if m is not None:
                 return [p.label + " " for p in m.points() if p.label.startswith(text)]
         if cmdname == "reset":

@@ -146,6 +146,10 @@ class DebugMap:
         if kind == K.P_CHART_END:  # where `step chart` halts: no breakpoint goes there
             c = self._chart(a)
             return f"the end of chart:{c['name']}'s evolution" if c else f"the end of chart {a}'s evolution"
+        if kind == K.P_CONDITION:  # a conditional breakpoint's item (its comparison: the breakpoint list)
+            it = self.by_id.get(a)
+            name = it.name if it is not None else f"#{a}"
+            return f"condition on {name}" + (f"[{b}]" if it is not None and it.count > 1 else "")
         for p in self.points():
             if (p.kind, p.a, p.b) == (kind, a, b):
                 return p.label if p.kind != K.P_STEP else f"step {p.label}"
@@ -167,6 +171,9 @@ class DebugMap:
             if found is not None and kind != K.P_CHART and kind != K.P_CHART_END:
                 key = "steps" if kind == K.P_STEP else "transitions"
                 found = next((x for x in found[key] if x["id"] == b), None)
+        elif kind == K.P_CONDITION:  # the item's declaration
+            it = self.by_id.get(a)
+            return it.location if it is not None and it.location != "?" else None
         else:
             found = None
         return found.get("location") if found is not None else None

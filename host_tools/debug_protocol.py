@@ -41,7 +41,11 @@ KIND_NAMES = {K.K_PARAM: "param", K.K_VAR: "var", K.K_DEV_OUT: "dev_out", K.K_DE
               K.K_STATE: "state", K.K_STATUS: "status", K.K_DEV_STATE: "dev_state", K.K_CHART: "chart",
               K.K_STEP_TIME: "step_time"}
 PROBE_NAMES = {K.P_NONE: "none", K.P_INSTANT: "instant", K.P_TASK: "task", K.P_CHART: "chart", K.P_STEP: "step",
-               K.P_TRANSITION: "transition", K.P_ACTOR: "actor", K.P_CHART_END: "chart end"}
+               K.P_TRANSITION: "transition", K.P_ACTOR: "actor", K.P_CHART_END: "chart end",
+               K.P_CONDITION: "condition"}
+# A conditional breakpoint's comparison (BP_WHEN): the console's operator -> EL_DBG_OP_.
+OPS = {"==": K.OP_EQ, "!=": K.OP_NE, "<": K.OP_LT, "<=": K.OP_LE, ">": K.OP_GT, ">=": K.OP_GE}
+OP_NAMES = {code: name for name, code in OPS.items()}
 WHY_NAMES = {K.WHY_NONE: "", K.WHY_BREAK: "break", K.WHY_BREAKPOINT: "breakpoint", K.WHY_STEP: "step",
              K.WHY_START: "start"}
 STEP_UNITS = {"task": K.STEP_TASK, "chart": K.STEP_CHART, "actor": K.STEP_ACTOR, "instant": K.STEP_INSTANT}
@@ -61,6 +65,7 @@ ERRORS = {
     K.E_NOT_HALTED: "the program is running (break first)",
     K.E_BP_FULL: "every breakpoint slot is in use",
     K.E_UNSUPPORTED: "the board cannot do that",
+    K.E_FORCE_FULL: "every force slot is in use (a model gets more with `debug on ... force N`)",
 }
 
 
@@ -170,6 +175,8 @@ class Hello:
     write_queue: int
     bp_max: int
     value_max: int
+    force_slots: int  # forced elements the server holds (0: built without forcing)
+    cond_slots: int  # conditional breakpoints (0: built without them)
 
 
 @dataclass
@@ -218,6 +225,17 @@ class Breakpoint:
     a: int
     b: int
     hits: int
+    op: int | None = None  # a conditional breakpoint (kind P_CONDITION: a = item, b = element): EL_DBG_OP_
+    value: bytes = b""  # its constant, 4 bytes little-endian (the item's size used)
+
+
+@dataclass
+class Forced:
+    """A forced element (FORCE_LIST): its item, element and value's bytes."""
+
+    item: int
+    elem: int
+    value: bytes
 
 
 LOAD_STATES = {K.LOAD_IDLE: "idle", K.LOAD_RECEIVING: "receiving", K.LOAD_CHECKING: "checking",
@@ -232,6 +250,11 @@ class LoadStatus:
     state: str
     program_id: int
     message: str
+
+
+# HELLO's fields up to VALUE_MAX; the slots of forcing and conditional breakpoints follow (2 x u8) when the
+# server has either.
+HELLO_FORMAT = "<BHBIHHBBBBBB"
 
 
 class DebugClient:
@@ -309,9 +332,15 @@ class DebugClient:
         self.t.discard_input()
         body = self.request(K.CMD_HELLO, what="hello")
         if len(body) < 1 or body[0] != PROTOCOL_VERSION:
+            older = bool(body) and body[0] < PROTOCOL_VERSION
             raise ProtocolError(f"{self.t.url} speaks debug protocol version {body[0] if body else '?'}, "
-                                f"this tool version {PROTOCOL_VERSION}")
-        fields = struct.unpack_from("<BHBIHHBBBBBB", body)
+                                f"this tool version {PROTOCOL_VERSION}"
+                                + (": the firmware is older (no force, no conditional breakpoints); rebuild it "
+                                   "with this easylab" if older else ""))
+        # the slots of forcing and conditional breakpoints: absent from a server without either
+        fixed = struct.calcsize(HELLO_FORMAT)
+        fields = struct.unpack_from(HELLO_FORMAT, body) + (tuple(body[fixed:fixed + 2]) if len(body) >= fixed + 2
+                                                           else (0, 0))
         self.hello_info = Hello(*fields)
         return self.hello_info
 
@@ -477,6 +506,44 @@ class DebugClient:
     def bp_clear(self, slot: int | None = None) -> None:
         self.request(K.CMD_BP_CLEAR, bytes([0xFF if slot is None else slot]), what="delete")
 
+    def bp_when(self, item: int, type_name: str, op: str, value, elem: int = 0) -> int:
+        """A conditional breakpoint: halt at the instant where ``item[elem]
+        OP value`` turns true; returns its slot."""
+        return self.request(K.CMD_BP_WHEN, struct.pack("<HHB", item, elem, OPS[op]) + encode_value(type_name, value),
+                            what="break when")[0]
+
     def bp_list(self) -> list[Breakpoint]:
+        """Every breakpoint; conditional ones (kind P_CONDITION) carry their
+        comparison."""
         body = self.request(K.CMD_BP_LIST, what="breakpoints")
-        return [Breakpoint(*struct.unpack_from("<BBHHH", body, 1 + 8 * i)) for i in range(body[0])]
+        out, at = [], 1
+        for _ in range(body[0]):
+            bp = Breakpoint(*struct.unpack_from("<BBHHH", body, at))
+            at += 8
+            if bp.kind == K.P_CONDITION:
+                bp.op, bp.value = body[at], bytes(body[at + 1:at + 1 + K.VALUE_MAX])
+                at += 1 + K.VALUE_MAX
+            out.append(bp)
+        return out
+
+    def force(self, item: int, type_name: str, value, elem: int = 0, what: str = "") -> int:
+        """Hold one element at ``value`` every instant until released;
+        returns K.APPLIED (halted at an instant) or K.QUEUED (from the next
+        instant)."""
+        body = self.request(K.CMD_FORCE, struct.pack("<HH", item, elem) + encode_value(type_name, value),
+                            what=what or f"force {item}")
+        return body[0]
+
+    def release(self, item: int | None = None, elem: int = 0) -> None:
+        """Release one forced element, or every one (``item`` None)."""
+        self.request(K.CMD_RELEASE, struct.pack("<HH", K.NONE16 if item is None else item, elem), what="release")
+
+    def forced(self) -> list[Forced]:
+        """The forced elements (FORCE_LIST)."""
+        body = self.request(K.CMD_FORCE_LIST, what="forced")
+        out, at = [], 1
+        for _ in range(body[0]):
+            item, elem, size = struct.unpack_from("<HHB", body, at)
+            out.append(Forced(item, elem, bytes(body[at + 5:at + 5 + size])))
+            at += 5 + size
+        return out

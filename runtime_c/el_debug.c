@@ -88,6 +88,11 @@
 #define EL_DBG_RANGES_FLOAT 1 /* ... on a float32 item */
 #endif
 #define HAS_RANGES (EL_DBG_RANGES_UNSIGNED || EL_DBG_RANGES_SIGNED || EL_DBG_RANGES_FLOAT)
+/* Conditional breakpoints compare order keys (order_key) of every type. */
+#define HAS_CONDS (EL_DBG_COND_SLOTS > 0)
+#define KEYS_SIGNED (EL_DBG_RANGES_SIGNED || HAS_CONDS)
+#define KEYS_FLOAT (EL_DBG_RANGES_FLOAT || HAS_CONDS)
+
 #ifndef EL_DBG_HAS_ARRAYS
 #define EL_DBG_HAS_ARRAYS 1 /* an item of more than one element */
 #endif
@@ -156,7 +161,42 @@ static uint8_t tx_state;
 static breakpoint_t bps[EL_DBG_BP_SLOTS];
 static uint8_t bp_count;
 
+#if EL_DBG_FORCE_SLOTS > 0
+/* A forced element: a write (entry) applied again at every instant, and
+ * the ids FORCE_LIST reports. In use: forces[0 .. force_count). */
+typedef struct {
+    entry_t e;
+    uint16_t id;
+    uint16_t elem;
+} force_t;
+static force_t forces[EL_DBG_FORCE_SLOTS];
+static uint8_t force_count;
+static bool forcing; /* the WRITE path serves a FORCE: hold, not submit */
+#endif
+
+#if HAS_CONDS
+/* A conditional breakpoint: element `addr` of `type` compared (op) with
+ * `value` (the wire's order, zero-padded to 4 bytes); it halts when the
+ * comparison turns true. addr NULL: a free slot. Its slot number on the
+ * wire is EL_DBG_BP_SLOTS + its index. */
+typedef struct {
+    uint8_t *addr;
+    uint8_t type;
+    uint8_t op;
+    bool was_true;
+    uint8_t value[EL_DBG_VALUE_MAX];
+    uint16_t id;
+    uint16_t elem;
+    uint16_t hits;
+} cond_t;
+static cond_t conds[EL_DBG_COND_SLOTS];
+static uint8_t cond_count;
+#endif
+
 uint8_t el_dbg_armed;
+#if EL_DBG_HAS_FORCE_POINT
+uint8_t el_dbg_forcing;
+#endif
 volatile uint8_t el_debug_abort_halt;
 static bool halt_request;
 static uint8_t halt_why; /* EL_DBG_WHY_... of the current or next halt */
@@ -175,6 +215,20 @@ static void count(uint8_t which)
         counters[which]++;
     }
 }
+
+#if EL_DBG_HAS_FORCE_POINT
+/* el_dbg_forcing: is anything forced or a condition set? */
+static void update_forcing(void)
+{
+    el_dbg_forcing = 0u;
+#if EL_DBG_FORCE_SLOTS > 0
+    el_dbg_forcing |= force_count;
+#endif
+#if HAS_CONDS
+    el_dbg_forcing |= cond_count;
+#endif
+}
+#endif
 
 static void update_armed(void)
 {
@@ -258,7 +312,7 @@ static void move_value(uint8_t *dst, const uint8_t *src, uint8_t size)
 }
 #endif
 
-#if HAS_RANGES
+#if HAS_RANGES || HAS_CONDS
 /* A value of `size` bytes from the wire, zero-extended: its bytes in a
  * 4-byte wire value, moved into memory's order (no shifts by 8, which
  * cost much code on 8-bit parts). */
@@ -307,15 +361,15 @@ static bool load_item(uint16_t id, el_dbg_item_t *it)
  * the sign bit set, a negative one negated (-0 keys as +0; a NaN orders
  * beyond the infinities, so it is out of any finite range as a float
  * comparison has it). */
-#if EL_DBG_RANGES_FLOAT || EL_DBG_RANGES_SIGNED
+#if KEYS_FLOAT || KEYS_SIGNED
 static uint32_t order_key(uint8_t type, uint32_t u)
 {
-#if EL_DBG_RANGES_FLOAT
+#if KEYS_FLOAT
     if (type == EL_DBG_T_F32) {
         return (u & 0x80000000uL) != 0u ? (uint32_t)0u - u : (u | 0x80000000uL); /* -0: 0 - 0x80000000, +0's key */
     }
 #endif
-#if EL_DBG_RANGES_SIGNED
+#if KEYS_SIGNED
     if (type == EL_DBG_T_I8) {
         u = (uint32_t)(int32_t)(int8_t)(uint8_t)u; /* sign-extended */
     } else if (type == EL_DBG_T_I16) {
@@ -385,6 +439,11 @@ static void apply(entry_t *e)
 
 static bool at_instant(void)
 {
+#if HAS_CONDS
+    if (loc_kind == EL_DBG_P_CONDITION) {
+        return true; /* an instant too: after its device reads, before its releases */
+    }
+#endif
     return loc_kind == EL_DBG_P_INSTANT;
 }
 
@@ -417,6 +476,13 @@ static void clear_bps(void)
         bp->kind = EL_DBG_P_NONE;
     }
     bp_count = 0u;
+#if HAS_CONDS
+    for (i = 0u; i < EL_DBG_COND_SLOTS; i++) {
+        conds[i].addr = NULL;
+    }
+    cond_count = 0u;
+    update_forcing();
+#endif
 }
 
 /* Cancel a pending break or step, then step to the next probe of `unit`
@@ -617,10 +683,47 @@ static uint8_t submit(entry_t *e)
     return EL_DBG_OK;
 }
 
+#if EL_DBG_FORCE_SLOTS > 0
+/* The index of the force of (id, elem), or force_count: none. */
+static uint8_t find_force(uint16_t id, uint16_t elem)
+{
+    uint8_t i;
+    for (i = 0u; i < force_count && (forces[i].id != id || forces[i].elem != elem); i++) {
+    }
+    return i;
+}
+
+/* FORCE's end of the WRITE path (do_access, `forcing`): the checked write
+ * *e of (id, elem) held from the next instant on (at once when halted at
+ * an instant), until RELEASE; forcing an element again changes its value. */
+static uint8_t hold(const entry_t *e, uint16_t id, uint16_t elem)
+{
+    uint8_t i = find_force(id, elem);
+    if (i == force_count) {
+        if (force_count >= EL_DBG_FORCE_SLOTS) {
+            return EL_DBG_E_FORCE_FULL;
+        }
+        force_count++;
+        update_forcing();
+    }
+    copy_bytes((uint8_t *)&forces[i].e, (const uint8_t *)e, (uint8_t)sizeof *e);
+    forces[i].id = id;
+    forces[i].elem = elem;
+    if (at_instant()) {
+        apply(&forces[i].e);
+        put8(EL_DBG_APPLIED);
+    } else {
+        put8(EL_DBG_QUEUED);
+    }
+    return EL_DBG_OK;
+}
+#endif
+
 /* READ (p[n]: item ids, every element of each) and WRITE (p[n]: id, element,
- * value). In an open transaction the response is QUEUED and the index of
- * the first entry; a request queues all of its elements or none (an error
- * takes back what it queued; a response with an error carries nothing). */
+ * value); FORCE is a WRITE held (`forcing`). In an open transaction the
+ * response is QUEUED and the index of the first entry; a request queues
+ * all of its elements or none (an error takes back what it queued; a
+ * response with an error carries nothing). */
 static uint8_t do_access(bool write, const uint8_t *p, uint8_t n)
 {
     uint8_t k, first = tx_len, st = EL_DBG_OK;
@@ -658,7 +761,11 @@ static uint8_t do_access(bool write, const uint8_t *p, uint8_t n)
                     e.value[k] = p[4u + k]; /* the wire's order: apply moves it to memory */
                 }
                 e.size |= ENTRY_WRITE;
+#if EL_DBG_FORCE_SLOTS > 0
+                st = forcing ? hold(&e, get_u16(p), elem) : submit(&e);
+#else
                 st = submit(&e);
+#endif
             }
             break; /* one element of one item */
         }
@@ -672,6 +779,159 @@ static uint8_t do_access(bool write, const uint8_t *p, uint8_t n)
     }
     return st;
 }
+
+#if EL_DBG_FORCE_SLOTS > 0
+/* RELEASE (id, element; id NONE16: every force): the element keeps its
+ * value until the program or the stimulus changes it. */
+static uint8_t do_release(const uint8_t *p)
+{
+    uint16_t id = get_u16(p);
+    uint8_t i;
+    if (id == EL_DBG_NONE16) {
+        force_count = 0u;
+        update_forcing();
+        return EL_DBG_OK;
+    }
+    i = find_force(id, get_u16(p + 2));
+    if (i == force_count) {
+        return EL_DBG_E_ID;
+    }
+    force_count--;
+    copy_bytes((uint8_t *)&forces[i], (const uint8_t *)&forces[force_count], (uint8_t)sizeof forces[0]);
+    update_forcing();
+    return EL_DBG_OK;
+}
+
+static void put_forces(void)
+{
+    uint8_t i, size;
+    put8(force_count);
+    for (i = 0u; i < force_count; i++) {
+        size = (uint8_t)(forces[i].e.size & ENTRY_SIZE);
+        put16(forces[i].id);
+        put16(forces[i].elem);
+        put8(size);
+        put_bytes(forces[i].e.value, size);
+    }
+}
+#endif
+
+#if HAS_CONDS
+/* Is the condition true now? Both sides compare as order keys (order_key:
+ * signed, unsigned and float values as their type orders them); each
+ * operator is the set of outcomes (greater, equal, less: bits 0, 1, 2) for
+ * which it holds, so one 32-bit comparison pair serves all six. */
+static const uint8_t op_outcomes[] EL_ROM = {
+    0x02u, /* EL_DBG_OP_EQ */
+    0x05u, /* EL_DBG_OP_NE */
+    0x04u, /* EL_DBG_OP_LT */
+    0x06u, /* EL_DBG_OP_LE */
+    0x01u, /* EL_DBG_OP_GT */
+    0x03u, /* EL_DBG_OP_GE */
+};
+typedef char op_outcomes_cover_the_ops[sizeof op_outcomes == EL_DBG_OP_GE + 1u ? 1 : -1];
+
+static bool cond_holds(const cond_t *c)
+{
+    uint8_t size = type_size(c->type), now[EL_DBG_VALUE_MAX], outcome = 0u;
+    uint32_t x, k;
+    move_value(now, c->addr, size); /* memory's order to the wire's */
+    x = order_key(c->type, le32(now, size));
+    k = order_key(c->type, le32(c->value, size));
+    if (x == k) {
+        outcome = 1u;
+    } else if (x < k) {
+        outcome = 2u;
+    }
+    return ((EL_ROM_READ_U8(&op_outcomes[c->op]) >> outcome) & 1u) != 0u;
+}
+
+/* BP_WHEN (p[n]: id u16, element u16, op u8, value): a conditional
+ * breakpoint on any readable element, in a slot of its own. It is false
+ * until evaluated: one that holds when set halts at the next instant. */
+static uint8_t do_bp_when(const uint8_t *p, uint8_t n)
+{
+    el_dbg_item_t it;
+    cond_t *c;
+    uint8_t i, size, free_slot = EL_DBG_NONE8;
+    uint16_t id = get_u16(p), elem;
+    if (n < 6u) {
+        return EL_DBG_E_LENGTH;
+    }
+    if (!load_item(id, &it)) {
+        return EL_DBG_E_ID;
+    }
+    size = type_size(it.type);
+    elem = get_u16(p + 2);
+    if (n != 5u + size) {
+        return EL_DBG_E_LENGTH;
+    }
+    if (elem >= ELEMENTS(it) || p[4] > EL_DBG_OP_GE || (it.type == EL_DBG_T_BOOL && p[5] > 1u)) {
+        return EL_DBG_E_VALUE;
+    }
+    for (i = 0u, c = conds; i < EL_DBG_COND_SLOTS && free_slot == EL_DBG_NONE8; i++, c++) {
+        if (c->addr == NULL) {
+            free_slot = i;
+        }
+    }
+    if (free_slot == EL_DBG_NONE8) {
+        return EL_DBG_E_BP_FULL;
+    }
+    c = &conds[free_slot];
+    c->addr = (uint8_t *)it.addr + (elem << (size >> 1));
+    c->type = it.type;
+    c->op = p[4];
+    c->was_true = false;
+    for (i = 0u; i < EL_DBG_VALUE_MAX; i++) {
+        c->value[i] = i < size ? p[5u + i] : 0u;
+    }
+    c->id = id;
+    c->elem = elem;
+    c->hits = 0u;
+    cond_count++;
+    update_forcing();
+    put8((uint8_t)(EL_DBG_BP_SLOTS + free_slot));
+    return EL_DBG_OK;
+}
+#endif
+
+#if EL_DBG_HAS_FORCE_POINT
+void el_debug_force(void)
+{
+    uint8_t i;
+#if EL_DBG_FORCE_SLOTS > 0
+    for (i = 0u; i < force_count; i++) {
+        apply(&forces[i].e);
+    }
+#endif
+#if HAS_CONDS
+    {
+        uint8_t hit = EL_DBG_NONE8;
+        cond_t *c = conds;
+        bool now;
+        for (i = 0u; i < EL_DBG_COND_SLOTS; i++, c++) {
+            if (c->addr == NULL) {
+                continue;
+            }
+            now = cond_holds(c);
+            if (now && !c->was_true) { /* the edge: false -> true */
+                if (c->hits != UINT16_MAX) {
+                    c->hits++;
+                }
+                if (hit == EL_DBG_NONE8) {
+                    hit = i;
+                }
+            }
+            c->was_true = now;
+        }
+        if (hit != EL_DBG_NONE8 && el_debug_abort_halt == 0u && loc_kind == EL_DBG_P_NONE) {
+            halt_here(EL_DBG_WHY_BREAKPOINT, EL_DBG_P_CONDITION, conds[hit].id, conds[hit].elem,
+                      (uint8_t)(EL_DBG_BP_SLOTS + hit));
+        }
+    }
+#endif
+}
+#endif
 
 static uint8_t do_bp_set(const uint8_t *p)
 {
@@ -704,6 +964,13 @@ static uint8_t do_bp_clear(uint8_t slot)
 {
     if (slot == EL_DBG_NONE8) {
         clear_bps();
+#if HAS_CONDS
+    } else if (slot >= EL_DBG_BP_SLOTS && slot < EL_DBG_BP_SLOTS + EL_DBG_COND_SLOTS &&
+               conds[slot - EL_DBG_BP_SLOTS].addr != NULL) {
+        conds[slot - EL_DBG_BP_SLOTS].addr = NULL;
+        cond_count--;
+        update_forcing();
+#endif
     } else if (slot >= EL_DBG_BP_SLOTS || bps[slot].kind == EL_DBG_P_NONE) {
         return EL_DBG_E_ID;
     } else {
@@ -718,7 +985,11 @@ static void put_bps(void)
 {
     const breakpoint_t *bp = bps;
     uint8_t i;
+#if HAS_CONDS
+    put8((uint8_t)(bp_count + cond_count));
+#else
     put8(bp_count);
+#endif
     for (i = 0u; i < EL_DBG_BP_SLOTS; i++, bp++) {
         if (bp->kind != EL_DBG_P_NONE) {
             put8(i);
@@ -728,6 +999,20 @@ static void put_bps(void)
             put16(bp->hits);
         }
     }
+#if HAS_CONDS
+    for (i = 0u; i < EL_DBG_COND_SLOTS; i++) {
+        const cond_t *c = &conds[i];
+        if (c->addr != NULL) { /* then its op and value (4 bytes) */
+            put8((uint8_t)(EL_DBG_BP_SLOTS + i));
+            put8(EL_DBG_P_CONDITION);
+            put16(c->id);
+            put16(c->elem);
+            put16(c->hits);
+            put8(c->op);
+            put_bytes(c->value, EL_DBG_VALUE_MAX);
+        }
+    }
+#endif
 }
 
 static void put_stack(void)
@@ -764,6 +1049,10 @@ static void put_hello(void)
     put8(EL_DBG_WRITE_ENTRIES);
     put8(EL_DBG_BP_SLOTS);
     put8(EL_DBG_VALUE_MAX);
+#if EL_DBG_HAS_FORCE_POINT /* absent: no slots (2 bytes fewer in a server short of flash) */
+    put8(EL_DBG_FORCE_SLOTS);
+    put8(EL_DBG_COND_SLOTS);
+#endif
 }
 
 static void put_flags(void)
@@ -778,6 +1067,11 @@ static void put_flags(void)
     if (halt_request || step_unit != 0u) {
         f |= EL_DBG_S_HALT_PENDING;
     }
+#if EL_DBG_FORCE_SLOTS > 0
+    if (force_count != 0u) {
+        f |= EL_DBG_S_FORCED;
+    }
+#endif
     put8(f);
     put_location();
     put32((uint32_t)el_now_tick());
@@ -830,6 +1124,14 @@ static const uint8_t requests[][2] EL_ROM = {
     {EL_DBG_CMD_BP_SET, 5u},
     {EL_DBG_CMD_BP_CLEAR, 1u},
     {EL_DBG_CMD_BP_LIST, 0u},
+#if EL_DBG_FORCE_SLOTS > 0 /* without slots these are unknown requests: HELLO says 0 */
+    {EL_DBG_CMD_FORCE, ANY_LENGTH},
+    {EL_DBG_CMD_RELEASE, 4u},
+    {EL_DBG_CMD_FORCE_LIST, 0u},
+#endif
+#if HAS_CONDS
+    {EL_DBG_CMD_BP_WHEN, ANY_LENGTH},
+#endif
 };
 enum request {
     REQ_HELLO,
@@ -851,6 +1153,14 @@ enum request {
     REQ_BP_SET,
     REQ_BP_CLEAR,
     REQ_BP_LIST,
+#if EL_DBG_FORCE_SLOTS > 0
+    REQ_FORCE,
+    REQ_RELEASE,
+    REQ_FORCE_LIST,
+#endif
+#if HAS_CONDS
+    REQ_BP_WHEN,
+#endif
     REQ_COUNT
 };
 typedef char requests_match_their_enum[sizeof requests / sizeof requests[0] == REQ_COUNT ? 1 : -1];
@@ -965,6 +1275,25 @@ static uint8_t dispatch(uint8_t cmd, const uint8_t *p, uint8_t n)
     case REQ_BP_LIST:
         put_bps();
         break;
+#if EL_DBG_FORCE_SLOTS > 0
+    case REQ_FORCE:
+        if (tx_state == TX_OPEN) {
+            return EL_DBG_E_TX_BUSY; /* a force is not part of a transaction */
+        }
+        forcing = true;
+        i = do_access(true, p, n);
+        forcing = false;
+        return i;
+    case REQ_RELEASE:
+        return do_release(p);
+    case REQ_FORCE_LIST:
+        put_forces();
+        break;
+#endif
+#if HAS_CONDS
+    case REQ_BP_WHEN:
+        return do_bp_when(p, n);
+#endif
     default:
 #if defined(EL_DEBUG_BOARD_COMMANDS) && EL_DEBUG_BOARD_COMMANDS
         if (cmd >= EL_DBG_CMD_BOARD_FIRST && cmd <= EL_DBG_CMD_BOARD_LAST) {

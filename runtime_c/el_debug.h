@@ -9,6 +9,8 @@
  *
  * What the runtime and generated code call:
  *   EL_DEBUG_INSTANT()          dispatcher, after the inputs of an instant
+ *   EL_DEBUG_FORCE()            dispatcher, after the devices are read,
+ *                               before the tasks are released
  *   EL_DEBUG_TASK_BEGIN(task)   dispatcher, before a task's body
  *   EL_DEBUG_TASK_END(task)     dispatcher, after it
  *   EL_DEBUG_PROBE(kind, a, b)  model.c: chart evolutions, step
@@ -47,6 +49,17 @@
 #if defined(EL_DEBUG_SERVER) && EL_DEBUG_SERVER
 
 #include "el_debug_protocol.h"
+
+/* Forced elements and conditional breakpoints this server has room for:
+ * el_debug_config.h says what the model asked for (0: the code is left
+ * out); without it (the fuzz target), the protocol's most. */
+#ifndef EL_DBG_FORCE_SLOTS
+#define EL_DBG_FORCE_SLOTS EL_DBG_FORCE_MAX
+#endif
+#ifndef EL_DBG_COND_SLOTS
+#define EL_DBG_COND_SLOTS EL_DBG_COND_MAX
+#endif
+#define EL_DBG_HAS_FORCE_POINT (EL_DBG_FORCE_SLOTS + EL_DBG_COND_SLOTS > 0)
 
 /* ---- tables generated in debug_tables.c ---------------------------------- */
 
@@ -130,6 +143,15 @@ void el_debug_instant(void);
 void el_debug_task_begin(uint8_t task);
 void el_debug_task_end(void);
 void el_debug_probe(uint8_t kind, uint16_t a, uint16_t b);
+#if EL_DBG_HAS_FORCE_POINT
+/* After an instant's device reads, before its tasks are released: the
+ * forced elements get their values again, then the conditional
+ * breakpoints are evaluated (a halt there is at EL_DBG_P_CONDITION).
+ * Called only while el_dbg_forcing is nonzero (something forced or a
+ * condition set). */
+void el_debug_force(void);
+extern uint8_t el_dbg_forcing;
+#endif
 
 /* ---- provided by the board's debug transport --------------------------- */
 uint16_t el_debug_port_read(uint8_t *buf, uint16_t max);
@@ -147,6 +169,12 @@ bool el_debug_put(const uint8_t *data, uint16_t n);
 
 #define EL_DEBUG_INSTANT() el_debug_instant()
 #define EL_DEBUG_TASK_BEGIN(task) el_debug_task_begin(task)
+#if EL_DBG_HAS_FORCE_POINT
+#define EL_DEBUG_FORCE() \
+    do { if (el_dbg_forcing != 0u) { el_debug_force(); } } while (0)
+#else
+#define EL_DEBUG_FORCE() ((void)0)
+#endif
 #define EL_DEBUG_TASK_END(task) el_debug_task_end()
 #define EL_DEBUG_PROBE(kind, a, b) \
     do { if (el_dbg_armed != 0u) { el_debug_probe((kind), (a), (b)); } } while (0)
@@ -155,6 +183,7 @@ bool el_debug_put(const uint8_t *data, uint16_t n);
 #else /* no debug server: the hooks compile to nothing */
 
 #define EL_DEBUG_INSTANT() ((void)0)
+#define EL_DEBUG_FORCE() ((void)0)
 #define EL_DEBUG_TASK_BEGIN(task) ((void)0)
 #define EL_DEBUG_TASK_END(task) ((void)0)
 #define EL_DEBUG_PROBE(kind, a, b) ((void)0)

@@ -13,7 +13,7 @@
 #define EL_DEBUG_PROTOCOL_H
 
 /* ---- the protocol ------------------------------------------------------ */
-#define EL_DBG_PROTOCOL_VERSION 2u
+#define EL_DBG_PROTOCOL_VERSION 3u
 
 /* Largest decoded frame (sequence number, command, payload, CRC), bytes.
  * The encoded frame adds at most 1 + ceil(n / 254) COBS bytes and the 0x00
@@ -40,6 +40,9 @@
 #define EL_DBG_CMD_ITEM_INFO 0x05u
 #define EL_DBG_CMD_READ 0x10u
 #define EL_DBG_CMD_WRITE 0x11u
+#define EL_DBG_CMD_FORCE 0x12u       /* u16 id, u16 element, value: held at every instant until released */
+#define EL_DBG_CMD_RELEASE 0x13u     /* u16 id (NONE16: all), u16 element */
+#define EL_DBG_CMD_FORCE_LIST 0x14u  /* -> u8 n, n x (u16 id, u16 element, u8 size, value) */
 #define EL_DBG_CMD_TX_BEGIN 0x20u
 #define EL_DBG_CMD_TX_COMMIT 0x21u
 #define EL_DBG_CMD_TX_ABORT 0x22u
@@ -52,6 +55,7 @@
 #define EL_DBG_CMD_BP_SET 0x40u
 #define EL_DBG_CMD_BP_CLEAR 0x41u
 #define EL_DBG_CMD_BP_LIST 0x42u
+#define EL_DBG_CMD_BP_WHEN 0x43u     /* u16 id, u16 element, u8 op, value -> u8 slot: a conditional breakpoint */
 /* Board commands: answered by boards that have them (local execution),
  * EL_DBG_E_UNKNOWN_CMD by the others (every firmware). */
 #define EL_DBG_CMD_BOARD_FIRST 0x50u
@@ -76,12 +80,15 @@
 #define EL_DBG_E_NOT_HALTED 11u  /* step needs a halted program */
 #define EL_DBG_E_BP_FULL 12u     /* every breakpoint slot is in use */
 #define EL_DBG_E_UNSUPPORTED 13u /* the board cannot do it (reset without a way to reset) */
+#define EL_DBG_E_FORCE_FULL 14u  /* every force slot is in use (or the build has none) */
 
 /* ---- sizes of the server (reported by HELLO) --------------------------- */
 #define EL_DBG_TX_MAX 24u        /* entries of one transaction (reads and writes) */
 #define EL_DBG_WRITE_QUEUE 8u    /* single writes waiting for the next instant */
 #define EL_DBG_BP_MAX 8u         /* breakpoints */
 #define EL_DBG_VALUE_MAX 4u      /* bytes of one element of any type */
+#define EL_DBG_FORCE_MAX 8u      /* forced elements */
+#define EL_DBG_COND_MAX 4u       /* conditional breakpoints (slots BP_SLOTS .. BP_SLOTS + COND_SLOTS - 1) */
 
 /* ---- item kinds (EL_K_... of el_model.h, plus actor state, the links'
  * read-only fault counters, docs/ir.md "Status items", and the read-only
@@ -131,6 +138,18 @@
 /* A chart evolution ended, its steps entered and its runs done (a = chart):
  * where STEP_CHART halts; not a breakpoint's point (BP_SET: E_ID). */
 #define EL_DBG_P_CHART_END 7u
+/* A conditional breakpoint's condition became true (a = item, b = element):
+ * after the instant's device reads and forced values, before its tasks are
+ * released; set with BP_WHEN, not BP_SET. */
+#define EL_DBG_P_CONDITION 8u
+
+/* ---- conditional breakpoints: the comparison (BP_WHEN) ------------------ */
+#define EL_DBG_OP_EQ 0u
+#define EL_DBG_OP_NE 1u
+#define EL_DBG_OP_LT 2u
+#define EL_DBG_OP_LE 3u
+#define EL_DBG_OP_GT 4u
+#define EL_DBG_OP_GE 5u
 
 /* ---- step units (STEP request) ------------------------------------------ */
 #define EL_DBG_STEP_TASK 2u      /* to the start of the next task activation */
@@ -152,6 +171,7 @@
 #define EL_DBG_S_TX_APPLIED 0x08u    /* applied: TX_RESULT has its reads */
 #define EL_DBG_S_WRITES_PENDING 0x10u
 #define EL_DBG_S_HALT_PENDING 0x20u  /* BREAK or STEP under way */
+#define EL_DBG_S_FORCED 0x40u        /* at least one element is forced (FORCE_LIST names them) */
 
 /* ---- RESET flags ---------------------------------------------------------- */
 #define EL_DBG_RESET_HALT 0x01u  /* halt at the first instant after the reset */

@@ -53,10 +53,11 @@ EL_RUN_ATTRIBUTES void el_run(int argc, char **argv)
             release = EL_ROM_READ_MASK(&el_instants[i].release);
             if (release != 0u) {
                 el_gen_read_devices(release);
-                for (task = 0u, mask = release; mask != 0u; task++, mask = (el_task_mask_t)(mask >> 1)) {
-                    if ((mask & 1u) != 0u) {
-                        el_gen_release(task);
-                    }
+            }
+            EL_DEBUG_FORCE(); /* forced values over what was read; conditional breakpoints */
+            for (task = 0u, mask = release; mask != 0u; task++, mask = (el_task_mask_t)(mask >> 1)) {
+                if ((mask & 1u) != 0u) {
+                    el_gen_release(task);
                 }
             }
             el_port_instant(el_now);

@@ -333,6 +333,10 @@ class Engine:
                     continue  # its host handlers from the model's folder
                 if self.stimulus is not None:
                     self.stimulus.read_device(device, t, state.published)
+        if state.io is not None and state.io.forcing:  # EL_DEBUG_FORCE: forced values over what was read;
+            self.serve_interfaces(state.io.force)      # conditional breakpoints
+            state = self.state
+        if released:
             state.release(plan, t, inline)
         self._record(t)
         for task_id in plan.python if inline else released:

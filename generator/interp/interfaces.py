@@ -152,6 +152,7 @@ class Interfaces:
                 ("el_interp_set_tick", None, [ctypes.c_uint64]), ("el_interp_idle", None, [ctypes.c_uint16]),
                 ("el_interp_take_resync", ctypes.c_uint8, []), ("el_interp_has_debug", ctypes.c_bool, []),
                 ("el_interp_armed", ctypes.c_uint8, []), ("el_interp_instant", None, []),
+                ("el_interp_force", None, []), ("el_interp_forcing", ctypes.c_uint8, []),
                 ("el_interp_task_begin", None, [ctypes.c_uint8]), ("el_interp_task_end", None, []),
                 ("el_interp_probe", None, [ctypes.c_uint8, ctypes.c_uint16, ctypes.c_uint16]),
                 ("el_interp_abort_halt", None, []), ("el_interp_handover", ctypes.c_bool, []),
@@ -250,6 +251,17 @@ class Interfaces:
 
     def instant(self) -> None:
         self.library.lib.el_interp_instant()
+
+    @property
+    def forcing(self) -> bool:
+        """Whether anything is forced or a conditional breakpoint set (the
+        force point then calls into the server)."""
+        return bool(self.library.lib.el_interp_forcing())
+
+    def force(self) -> None:
+        """EL_DEBUG_FORCE: the forced elements again, then the conditional
+        breakpoints (after the instant's device reads)."""
+        self.library.lib.el_interp_force()
 
     def task_begin(self, task: int) -> None:
         self.library.lib.el_interp_task_begin(task)

@@ -28,6 +28,7 @@ STACK = 256  # bytes kept for the stack (the build's own check)
 BLINK_RELEASE_GOAL = (1536, 64)  # flash, RAM
 BLINK_DEBUG_GOAL = (4096, 300)
 BLINK_DEBUG_BOUND = (4718, 300)  # achieved: the flash goal is not met (this keeps it from growing), the RAM goal is
+BLINK_DEBUG_LIMIT = (4800, 300)  # what forcing and conditional breakpoints may never push it past
 SERVER_GOAL = (2560, 160)
 SERVER_BOUND = (2808, 160)  # achieved: the flash goal is not met, the RAM goal is
 
@@ -60,8 +61,32 @@ def test_blink_debug_meets_its_ram_goal_and_keeps_within_its_flash_bound(tmp_pat
     s = sizes(avr_build(ROOT / "examples/blink.elab", tmp_path / "b"))
     assert BLINK_DEBUG_BOUND[1] == BLINK_DEBUG_GOAL[1]
     assert s["flash"] <= BLINK_DEBUG_BOUND[0] and s["ram"] <= BLINK_DEBUG_GOAL[1], s
+    assert BLINK_DEBUG_BOUND[0] <= BLINK_DEBUG_LIMIT[0]
     debug_config = (tmp_path / "b" / "el_debug_config.h").read_text()
     assert "#define EL_DBG_FRAME 30u" in debug_config  # sized from the model, not the protocol's 160
+    # forcing and conditional breakpoints only for a model that asks on this part (docs/protocol.md)
+    assert "#define EL_DBG_FORCE_SLOTS 0u" in debug_config and "#define EL_DBG_COND_SLOTS 0u" in debug_config
+
+
+# blink's debug build with the debugger's slots asked for (`debug on uart0 ... SETTINGS`): flash, RAM,
+# as docs/protocol.md ("Forcing and conditional breakpoints") reports them
+ASKED_COST = {
+    "force 2": (5160, 264),
+    "conditions 2": (5726, 353),
+    "force 2 conditions 2": (6178, 373),
+}
+
+
+@pytest.mark.parametrize("asked", ASKED_COST)
+def test_forcing_and_conditions_cost_what_the_protocol_doc_says(tmp_path, asked):
+    model = tmp_path / "blink.elab"
+    model.write_text((ROOT / "examples/blink.elab").read_text().replace(
+        "debug on uart0 baud 115200", f"debug on uart0 baud 115200 {asked}"))
+    s = sizes(avr_build(model, tmp_path / "b"))
+    assert (s["flash"], s["ram"]) == ASKED_COST[asked], s
+    doc = (ROOT / "docs/protocol.md").read_text()
+    flash, ram = ASKED_COST[asked]
+    assert f"| `{asked}` | {flash:,} B" in doc and f"| {ram} B" in doc
 
 
 def test_debug_server_meets_its_ram_goal_and_keeps_within_its_flash_bound(tmp_path):

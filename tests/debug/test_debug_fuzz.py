@@ -10,13 +10,15 @@ import pytest
 
 # The server as a model with every kind of item, chart and range compiles
 # it, and as one without charts, items of several elements and ranges does
-# (el_debug_config.h's switches, runtime_c/el_debug.c): the code left is
+# (el_debug_config.h's switches, runtime_c/el_debug.c), nor forcing and
+# conditional breakpoints, does: the code left is
 # fuzzed on the same tables (their charts then answer E_ID, their arrays
 # show one element, their ranges are not checked).
 SERVERS = {
     "every feature": (),
     "no charts, arrays or ranges": ("-DEL_DBG_HAS_CHARTS=0", "-DEL_DBG_HAS_ARRAYS=0", "-DEL_DBG_RANGES_UNSIGNED=0",
-                                    "-DEL_DBG_RANGES_SIGNED=0", "-DEL_DBG_RANGES_FLOAT=0"),
+                                    "-DEL_DBG_RANGES_SIGNED=0", "-DEL_DBG_RANGES_FLOAT=0",
+                                    "-DEL_DBG_FORCE_SLOTS=0", "-DEL_DBG_COND_SLOTS=0"),
 }
 
 

@@ -9,6 +9,7 @@ from ...core.source import Span, note
 from ...core import types as T
 from .. import ast
 from ..model import ChartInfo, Claim, InterfaceInfo, TaskInfo
+from ...core.debug_protocol import protocol_constants
 from .base import show_value, claim_owner, whole_us
 
 
@@ -122,7 +123,7 @@ class TaskRules:
     # ================================================================ interfaces and resources
 
     _INTERFACE_KEYS = {
-        "debug": {"baud"},
+        "debug": {"baud", "force", "conditions"},
         "modbus-rtu": {"baud", "parity", "unit"},
         "modbus-tcp": {"port", "unit"},
     }
@@ -131,6 +132,10 @@ class TaskRules:
         "modbus-rtu": {"baud": 19200, "parity": "even", "unit": 1},
         "modbus-tcp": {"port": 502, "unit": 1},
     }
+
+    # The debug interface's slots of forced elements and conditional
+    # breakpoints: at most the protocol's (docs/protocol.md, "Forcing").
+    _DEBUG_SLOTS = {"force": protocol_constants().FORCE_MAX, "conditions": protocol_constants().COND_MAX}
 
     def check_interface(self, iface: ast.Interface) -> None:
         kind = "debug" if iface.kind == "debug" else f"modbus-{iface.mode}"
@@ -166,6 +171,9 @@ class TaskRules:
                 continue
             elif a.key == "port" and not 1 <= value <= 65535:
                 self.error(a.value_span, f"TCP port {value} is outside 1..65535")
+                continue
+            elif a.key in self._DEBUG_SLOTS and not 0 <= value <= self._DEBUG_SLOTS[a.key]:
+                self.error(a.value_span, f"'{a.key}' takes 0..{self._DEBUG_SLOTS[a.key]} slots, not {value}")
                 continue
             settings[a.key] = value
         claim = None
