@@ -227,13 +227,21 @@ def page_model(dmap: DebugMap, model_path: Path) -> dict:
     svg = render_svg(model_path)
     els = elements(dmap, element_ids(svg))
     return {"model": dmap.model, "title": dmap.data.get("title"), "program_id": f"0x{dmap.program_id:08x}",
-            "tick_us": dmap.tick_us, "file": str(model_path), "location_file": _location_file(dmap),
+            "tick_us": dmap.tick_us, "file": _shown_path(model_path), "location_file": _location_file(dmap),
             "source": model_path.read_text(encoding="utf-8"), "svg": svg, "elements": els,
             "items": [{"id": it.id, "name": it.name, "kind": it.kind, "type": it.type, "count": it.count,
                        "writable": it.writable, "unit": it.unit, "range": it.range, "location": it.location,
                        "labels": {str(k): v for k, v in it.labels.items()} if it.labels else None}
                       for it in dmap.items],
             "step_units": list(STEP_UNITS)}
+
+
+def _shown_path(path: Path) -> str:
+    """The model's file as the page names it: relative to the working folder when inside it."""
+    try:
+        return str(path.resolve().relative_to(Path.cwd().resolve()))
+    except ValueError:
+        return path.name
 
 
 def _location_file(dmap: DebugMap) -> str | None:

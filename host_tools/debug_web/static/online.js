@@ -248,7 +248,11 @@
     const target = here ? document.querySelector(`.src-line[data-line="${line}"]`) : null;
     if (previous !== target) {
       if (previous) previous.classList.remove("halted-line");
-      if (target) { target.classList.add("halted-line"); target.scrollIntoView({ block: "center" }); }
+      if (target) {  // scrolled into the middle of the text's pane (the page itself stays)
+        target.classList.add("halted-line");
+        const pane = $("source");
+        pane.scrollTop = target.offsetTop - pane.clientHeight / 2;
+      }
     }
   }
 
@@ -276,7 +280,7 @@
 
   function drawScope() {
     const sc = online.scope;
-    if (typeof uPlot === "undefined" || !sc.ids.length) return;
+    if (typeof uPlot === "undefined" || !sc.ids.length || sc.times.length < 2) return;  // no range to draw yet
     const data = [sc.times, ...sc.ids.map((id) => sc.series.get(id))];
     if (!sc.plot) {
       const holder = $("scope");
@@ -297,7 +301,8 @@
     sc.plot.setData(data, true);
     const w = Number($("scope-window").value);
     const last = sc.times[sc.times.length - 1];
-    if (w > 0 && last !== undefined) sc.plot.setScale("x", { min: Math.max(sc.times[0], last - w), max: last });
+    const first = Math.max(sc.times[0], last - w);
+    if (w > 0 && last > first) sc.plot.setScale("x", { min: first, max: last });
   }
 
   function addToScope(id) {

@@ -1,0 +1,115 @@
+"""The online mode's page in Chromium (selenium) against pneumatic_cylinder
+running in real time on its slow cycle (onlinelib.SLOW_CYCLE): on the host
+board the highlighted step follows the stimulus, a breakpoint set by a
+click on `Extending` halts there and the page shows its file:line (and the
+line in the model's text), a step advances, the values on PositionControl's
+edges change while it runs, and the scope plots over logical time and
+exports CSV; against the AVR in simavr and local execution the highlight
+and a breakpoint. The host test saves docs/images/online.png."""
+
+from __future__ import annotations
+
+import time
+
+import pytest
+
+from debug_testlib import ROOT, board, builds, firmware  # noqa: F401 (fixtures)
+from onlinelib import MODEL_FILE, slow_cycle, wait_for
+
+EXTENDING_AT = f"{MODEL_FILE}:44"
+CYCLE = ["step:Cylinder.Retracted", "step:Cylinder.Extending", "step:Cylinder.Extended",
+         "step:Cylinder.Retracting", "step:Cylinder.Retracted"]
+EDGES = ["edge:PositionControl/position.value->pos.x", "edge:PositionControl/pid.y->drive"]
+SCREENSHOT = ROOT / "docs" / "images" / "online.png"
+
+
+def edge_labels(browser) -> list[str]:
+    return browser.js("return arguments[0].map(id => { const t = document.getElementById(id)"
+                      ".querySelector('text.el-value'); return t ? t.textContent : null; })", EDGES)
+
+
+def open_page(browser, server):
+    browser.get("about:blank")  # the last test's page stops polling its server
+    browser.console_errors()  # and its messages are dropped
+    browser.get(server.url)
+    wait_for(lambda: browser.last() is not None, 30, "the first snapshot")
+    assert browser.js("return document.querySelectorAll('#diagram svg g[data-point]').length") > 10
+
+
+def follow_the_cycle(browser, seconds: float, with_edges: bool):
+    """The highlighted steps in order (repeats dropped), and the values seen on the edges."""
+    seen, edges = [], [set(), set()]
+    deadline = time.monotonic() + seconds
+    while time.monotonic() < deadline and seen[:len(CYCLE)] != CYCLE:
+        active = browser.active_steps()
+        if active and (not seen or seen[-1] != active[0]):
+            seen.append(active[0])
+        if with_edges and active == ["step:Cylinder.Extending"]:
+            for k, label in enumerate(edge_labels(browser)):
+                edges[k].add(label)
+        time.sleep(0.02)
+    return seen, edges
+
+
+def halt_at_extending_by_a_click(browser, server):
+    browser.click("step:Cylinder.Extending")
+    wait_for(lambda: "bp" in browser.js("return document.getElementById('step:Cylinder.Extending')"
+                                        ".getAttribute('class')"), 10, "the breakpoint drawn on Extending")
+    bps = server.state(10**9)["link"]["breakpoints"]
+    assert [b["at"] for b in bps] == ["step Cylinder.Extending"], bps
+    last = wait_for(lambda: (s := browser.last()) and s["halted"] and s, 20, "the halt at Extending")
+    assert last["why"] == "breakpoint" and last["location"] == EXTENDING_AT, last
+    wait_for(lambda: EXTENDING_AT in (browser.text("#halt-at") or ""), 10, "the halt's file:line on the page")
+    assert browser.text(".src-line.halted-line .ln") == "44"
+    assert "step:Cylinder.Extending" in browser.active_steps()
+    return last
+
+
+@pytest.mark.realtime
+def test_the_page_follows_breaks_and_steps_pneumatic_cylinder_on_the_host_board(builds, firmware, online, browser,
+                                                                                tmp_path):
+    fw = firmware(builds["pneumatic_cylinder"], "--stimulus", str(slow_cycle(tmp_path)), fast=False)  # halted
+    server = online(fw.map_path, str(fw.link))
+    open_page(browser, server)
+    assert browser.last()["halted"] and browser.text("#run-state").startswith("halted")
+    browser.button("#run")
+    seen, edges = follow_the_cycle(browser, 15, with_edges=True)
+    assert seen[:len(CYCLE)] == CYCLE, seen
+    for edge, values in zip(EDGES, edges):  # the position ramps up, the PID follows it
+        assert len(values - {None, ""}) >= 3, (edge, values)
+    assert browser.last()["consistency"] == "instant"  # a running target: one transaction per refresh
+
+    before = halt_at_extending_by_a_click(browser, server)
+    SCREENSHOT.parent.mkdir(parents=True, exist_ok=True)
+    browser.driver.save_screenshot(str(SCREENSHOT))
+    browser.button("button.step[data-unit='instant']")
+    after = wait_for(lambda: (s := browser.last()) and s["halted"] and s["why"] == "step" and s, 10, "the step")
+    assert after["tick"] == before["tick"] + 1 and after["at"] == "instant", after
+
+    # the scope: a chosen item over logical time, exported as CSV
+    browser.js("document.getElementById('scope-item').value = arguments[0]", str(
+        next(it["id"] for it in server.model()["items"] if it["name"] == "position.value")))
+    browser.button("#scope-add")
+    browser.button("#clear-bps")
+    browser.button("#run")
+    csv = wait_for(lambda: (text := browser.js("return window.easylabOnline.csv()")).count("\n") > 10 and text,
+                   15, "ten points in the scope")
+    rows = [line.split(",") for line in csv.splitlines()]
+    assert rows[0] == ["ms", "position.value"]
+    times = [float(r[0]) for r in rows[1:]]
+    assert times == sorted(times) and times[0] >= after["ms"], times[:5]
+    assert browser.console_errors() == []
+
+
+@pytest.mark.realtime
+@pytest.mark.parametrize("board", ["avr", "interp"], indirect=True)
+def test_the_page_highlights_and_breaks_on_the_avr_and_in_local_execution(board, builds, firmware, online, browser,
+                                                                          tmp_path):
+    fw = firmware(builds["pneumatic_cylinder"], "--stimulus", str(slow_cycle(tmp_path)), fast=False)
+    server = online(fw.map_path, str(fw.link))
+    open_page(browser, server)
+    browser.button("#run")
+    seen, _ = follow_the_cycle(browser, 30, with_edges=False)
+    assert seen[:len(CYCLE)] == CYCLE, seen
+    halt_at_extending_by_a_click(browser, server)
+    assert browser.console_errors() == []
