@@ -118,10 +118,12 @@ def fits_one_transaction(client: DebugClient, items: list[Item]) -> bool:
     return 0 < elements <= tx_max and values <= room and 2 * len(items) <= room
 
 
-def read_in_transaction(client: DebugClient, items: list[Item], wait: float) -> dict[int, object] | None:
-    """The items' values read at one instant by a transaction; None when it
-    was not applied within `wait` seconds (the program halted inside an
-    activation meanwhile: the transaction is aborted)."""
+def read_in_transaction(client: DebugClient, items: list[Item], wait: float,
+                        every: float = 0.001) -> dict[int, object] | None:
+    """The items' values read at one instant by a transaction (its result
+    asked every `every` seconds until applied); None when it was not applied
+    within `wait` seconds (the program halted inside an activation
+    meanwhile: the transaction is aborted)."""
     try:
         client.tx_begin()
     except DebugError as err:
@@ -139,7 +141,7 @@ def read_in_transaction(client: DebugClient, items: list[Item], wait: float) -> 
         if time.monotonic() > deadline:
             client.tx_abort()
             return None
-        time.sleep(0.001)
+        time.sleep(every)
     return decode_items(items, data)
 
 
@@ -363,7 +365,8 @@ class TargetLink:
             consistency = "halted"
         elif items and fits_one_transaction(client, items):
             wait = max(4 * self.map.tick_us / 1e6, 0.2)
-            got = read_in_transaction(client, items, wait)
+            # A commit applies at the next instant: ask for its result a few times a tick, not more.
+            got = read_in_transaction(client, items, wait, every=min(max(self.map.tick_us / 4e6, 0.001), 0.005))
             consistency = "instant"
             if got is None:  # halted inside an activation meanwhile: nothing runs now
                 got, consistency = decode_items_read(client, items), "halted"
