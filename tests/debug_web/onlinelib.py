@@ -29,7 +29,7 @@ MODEL_FILE = "examples/pneumatic_cylinder.elab"  # as the map's locations name i
 # pneumatic_cylinder's cycle slowed down to one step a second (the example's
 # own stimulus runs a cycle in 360 ms): Retracted, Extending from 0.5 s with
 # the position ramping up, Extended from 1.5 s, Retracting from 2.5 s,
-# Retracted from 3.5 s, Extending again from 6.5 s; a timeout of 10 s.
+# Retracted from 3.5 s, the same again from 6.5 s; a timeout of 10 s.
 SLOW_CYCLE = """time_us,start_cmd,position.value,end_out.level,end_in.level,timeout
 0,0,0,0,1,10000
 500000,1,,,0,
@@ -67,9 +67,11 @@ class OnlineServer:
     token, reached over 127.0.0.1."""
 
     def __init__(self, map_path: Path, target: str, listen: str = "127.0.0.1:0", token: str | None = None,
-                 extra: list[str] | None = None):
+                 model: Path | None = MODEL, extra: list[str] | None = None):
         self.args = [sys.executable, "-m", "easylab.host_tools.debug_console", "web", "--map", str(map_path), target,
-                     "--model", str(MODEL), "--listen", listen, "--timeout", "0.3", *(extra or [])]
+                     "--listen", listen, "--timeout", "0.3", *(extra or [])]
+        if model is not None:  # else the server finds it by the map's locations
+            self.args += ["--model", str(model)]
         if token is not None:
             self.args += ["--token", token]
         self.proc = None

@@ -4,8 +4,8 @@ board the highlighted step follows the stimulus, a breakpoint set by a
 click on `Extending` halts there and the page shows its file:line (and the
 line in the model's text), a step advances, the values on PositionControl's
 edges change while it runs, and the scope plots over logical time and
-exports CSV; against the AVR in simavr and local execution the highlight
-and a breakpoint. The host test saves docs/images/online.png."""
+exports CSV; against the AVR in simavr, the PIC18 in gpsim and local
+execution the highlight and a breakpoint. The host test saves docs/images/online.png."""
 
 from __future__ import annotations
 
@@ -32,15 +32,20 @@ def open_page(browser, server):
     browser.get("about:blank")  # the last test's page stops polling its server
     browser.console_errors()  # and its messages are dropped
     browser.get(server.url)
-    wait_for(lambda: browser.last() is not None, 30, "the first snapshot")
+    wait_for(lambda: browser.last() is not None, 30, f"the first snapshot ({''.join(server.err)[-500:]})")
     assert browser.js("return document.querySelectorAll('#diagram svg g[data-point]').length") > 10
+
+
+def has_cycle(seen: list[str]) -> bool:
+    """True when the steps seen hold the whole cycle, in order, one after the other."""
+    return any(seen[k:k + len(CYCLE)] == CYCLE for k in range(len(seen)))
 
 
 def follow_the_cycle(browser, seconds: float, with_edges: bool):
     """The highlighted steps in order (repeats dropped), and the values seen on the edges."""
     seen, edges = [], [set(), set()]
     deadline = time.monotonic() + seconds
-    while time.monotonic() < deadline and seen[:len(CYCLE)] != CYCLE:
+    while time.monotonic() < deadline and not has_cycle(seen):
         active = browser.active_steps()
         if active and (not seen or seen[-1] != active[0]):
             seen.append(active[0])
@@ -51,16 +56,19 @@ def follow_the_cycle(browser, seconds: float, with_edges: bool):
     return seen, edges
 
 
-def halt_at_extending_by_a_click(browser, server):
+def halt_at_extending_by_a_click(browser, server, where: str = EXTENDING_AT):
+    """Click Extending, halt there; `where`: its file:line as the map has it."""
     browser.click("step:Cylinder.Extending")
     wait_for(lambda: "bp" in browser.js("return document.getElementById('step:Cylinder.Extending')"
                                         ".getAttribute('class')"), 10, "the breakpoint drawn on Extending")
     bps = server.state(10**9)["link"]["breakpoints"]
     assert [b["at"] for b in bps] == ["step Cylinder.Extending"], bps
     last = wait_for(lambda: (s := browser.last()) and s["halted"] and s, 20, "the halt at Extending")
-    assert last["why"] == "breakpoint" and last["location"] == EXTENDING_AT, last
-    wait_for(lambda: EXTENDING_AT in (browser.text("#halt-at") or ""), 10, "the halt's file:line on the page")
-    assert browser.text(".src-line.halted-line .ln") == "44"
+    assert last["why"] == "breakpoint" and last["location"] == where, last
+    wait_for(lambda: where in (browser.text("#halt-at") or ""), 10, "the halt's file:line on the page")
+    line = where.rsplit(":", 1)[1]
+    assert browser.text(".src-line.halted-line .ln") == line
+    assert browser.text(".src-line.halted-line").strip() == f"{line}    step Extending {{"
     assert "step:Cylinder.Extending" in browser.active_steps()
     return last
 
@@ -102,14 +110,16 @@ def test_the_page_follows_breaks_and_steps_pneumatic_cylinder_on_the_host_board(
 
 
 @pytest.mark.realtime
-@pytest.mark.parametrize("board", ["avr", "interp"], indirect=True)
-def test_the_page_highlights_and_breaks_on_the_avr_and_in_local_execution(board, builds, firmware, online, browser,
+@pytest.mark.parametrize("board", ["avr", "pic18", "interp"], indirect=True)
+def test_the_page_highlights_and_breaks_on_the_mcus_and_in_local_execution(board, builds, firmware, online, browser,
                                                                           tmp_path):
     fw = firmware(builds["pneumatic_cylinder"], "--stimulus", str(slow_cycle(tmp_path)), fast=False)
-    server = online(fw.map_path, str(fw.link))
+    server = online(fw.map_path, str(fw.link), model=None)  # the model the map names (the PIC18's variant)
     open_page(browser, server)
     browser.button("#run")
     seen, _ = follow_the_cycle(browser, 30, with_edges=False)
-    assert seen[:len(CYCLE)] == CYCLE, seen
-    halt_at_extending_by_a_click(browser, server)
+    assert has_cycle(seen), seen
+    extending = next(s for s in fw.map.charts[0]["steps"] if s["name"] == "Extending")
+    halt_at_extending_by_a_click(browser, server, extending["location"])
     assert browser.console_errors() == []
+
