@@ -3,8 +3,10 @@ running in real time on its slow cycle (onlinelib.SLOW_CYCLE): on the host
 board the highlighted step follows the stimulus, a breakpoint set by a
 click on `Extending` halts there and the page shows its file:line (and the
 line in the model's text), a step advances, the values on PositionControl's
-edges change while it runs, and the scope plots over logical time and
-exports CSV; against the AVR in simavr, the PIC18 in gpsim and local
+edges change while it runs, the scope plots over logical time and exports
+CSV, zooming in leaves what is out of sight unpolled, a write through the
+form shows on the diagram (a value out of range is refused), a reset halts
+at the start; against the AVR in simavr, the PIC18 in gpsim and local
 execution the highlight and a breakpoint. The host test saves docs/images/online.png."""
 
 from __future__ import annotations
@@ -106,6 +108,33 @@ def test_the_page_follows_breaks_and_steps_pneumatic_cylinder_on_the_host_board(
     assert rows[0] == ["ms", "position.value"]
     times = [float(r[0]) for r in rows[1:]]
     assert times == sorted(times) and times[0] >= after["ms"], times[:5]
+
+    # only what is in sight is polled: zoomed in on the top left corner, the
+    # vars and params are out of sight and out of the snapshots (the scope's item stays)
+    everything = set(browser.last()["values"])
+    for _ in range(8):
+        browser.button("#zoom-in")
+    browser.js("document.getElementById('diagram').scrollTo(0, 0)")
+    kp = str(next(it["id"] for it in server.model()["items"] if it["name"] == "kp"))
+    assert kp in everything
+    polled = wait_for(lambda: kp not in (v := set(browser.last()["values"])) and v, 10, "a smaller view")
+    assert polled < everything
+    assert set(map(str, browser.js("return window.easylabOnline.scope.ids"))) <= polled
+    browser.button("#zoom-fit")
+
+    # write once, through the form; reset into a halt
+    browser.js("document.getElementById('write-item').value = 'kp'; document.getElementById('write-value').value = '-5'")
+    browser.button("#write-form button[type='submit']")
+    wait_for(lambda: "outside its range" in browser.text("#msg"), 10, "the range refusal")
+    assert [e["message"].split(" - ")[0].rsplit("/", 1)[1] for e in browser.console_errors()] == ["write"]  # its 400
+    browser.js("document.getElementById('write-value').value = '555'")
+    browser.button("#write-form button[type='submit']")
+    wait_for(lambda: browser.js("return document.getElementById('param:kp').querySelector('text.el-value')"
+                                ".textContent") == "= 555", 10, "the written kp on the diagram")
+    browser.button("#reset")
+    wait_for(lambda: (s := browser.last()) and s["halted"] and s["why"] == "start" and s["tick"] == 0, 20,
+             "the reset into a halt")
+    wait_for(lambda: browser.active_steps() == [], 10, "no active step before the first evolution")
     assert browser.console_errors() == []
 
 
