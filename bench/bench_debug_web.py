@@ -96,11 +96,11 @@ def measure(tmp: Path, refreshes: int) -> dict:
         vars_ = [it for it in dmap.items if it.kind == "var"]
         for n in SIZES:
             items = vars_[:n]
-            poller.read_snapshot(client, items)  # warm up
-            snaps = []
+            snaps = [poller.read_snapshot(client, items)]  # warm up; then as the server does, knowing the last state
             started = time.perf_counter()
             for _ in range(refreshes):
-                snaps.append(poller.read_snapshot(client, items))
+                snaps.append(poller.read_snapshot(client, items, snaps[-1].halted))
+            snaps = snaps[1:]
             seconds = time.perf_counter() - started
             ticks = [s.tick for s in snaps]
             figures[f"items_{n}"] = {

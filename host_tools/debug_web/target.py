@@ -339,7 +339,9 @@ class TargetLink:
         with self._lock:
             items = list(self._view)
         try:
-            snap = self.read_snapshot(self._client, items + [s for s in self.status_items if s not in items])
+            last_halted = self._history[-1].halted if self._history else None
+            snap = self.read_snapshot(self._client, items + [s for s in self.status_items if s not in items],
+                                      last_halted)
         except TransportError as err:
             self._lose(err)
             return
@@ -351,16 +353,19 @@ class TargetLink:
         if self._state == CONNECTED and self._message.startswith("the target refused"):
             self._set_state(CONNECTED, f"connected to {self.target} (model {self.map.model})")
 
-    def read_snapshot(self, client: DebugClient, items: list[Item]) -> Snapshot:
+    def read_snapshot(self, client: DebugClient, items: list[Item], halted: bool | None = None) -> Snapshot:
         """One snapshot of `items` (see the module's docstring for how it is
-        kept consistent), numbered after the last one."""
+        kept consistent), numbered after the last one. `halted`: whether the
+        program was halted at the last snapshot (None: not known, asked
+        first); a guess proved wrong by the flags read after is corrected."""
         started = time.monotonic()
         bytes_before = client.t.bytes_in + client.t.bytes_out
         trips_before = client.round_trips
         values: dict[int, object] = {}
         consistency = "none"
-        flags = client.flags()
-        if items and flags.halted:
+        if halted is None or not items:
+            halted = client.flags().halted
+        if items and halted:
             values = decode_items_read(client, items)
             consistency = "halted"
         elif items and fits_one_transaction(client, items):
@@ -373,8 +378,9 @@ class TargetLink:
             values = got
         elif items:
             values, consistency = decode_items_read(client, items), "split"
-        if consistency in ("instant", "split"):
-            flags = client.flags()  # the state after the reads, and their logical time
+        flags = client.flags()  # the state after the reads, and their logical time
+        if consistency == "halted" and not flags.halted:
+            consistency = "split"  # it ran on meanwhile: plain reads, not one instant
         m = self.map
         loc = flags.location
         halted_at = m.describe(loc.kind, loc.a, loc.b) if flags.halted and loc.kind != K.P_NONE else None
