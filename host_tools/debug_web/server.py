@@ -54,6 +54,7 @@ class OnlinePage:
         self.guard = guard
         self.model = model  # what /api/model answers, computed once
         self.job_wait = job_wait
+        self._model_json: str | None = None
 
     def app(self) -> web.Application:
         app = web.Application(middlewares=[self._guard], client_max_size=MAX_BODY)
@@ -107,7 +108,9 @@ class OnlinePage:
         return web.FileResponse(STATIC / "index.html")
 
     async def api_model(self, request: web.Request) -> web.Response:
-        return web.json_response({**self.model, "csrf": self.guard.csrf, "csrf_header": CSRF_HEADER})
+        if self._model_json is None:  # the drawing and the text are large: serialised once
+            self._model_json = json.dumps({**self.model, "csrf": self.guard.csrf, "csrf_header": CSRF_HEADER})
+        return web.Response(text=self._model_json, content_type="application/json")
 
     async def api_state(self, request: web.Request) -> web.Response:
         try:

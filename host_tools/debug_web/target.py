@@ -348,6 +348,16 @@ class TargetLink:
         except DebugError as err:
             self._set_state(CONNECTED, f"the target refused a read: {err}")
             return
+        previous = self._history[-1] if self._history else None
+        try:
+            if snap.halted and (previous is None or (previous.halted, previous.tick, previous.at)
+                                != (snap.halted, snap.tick, snap.at)):
+                self._list_breakpoints()  # a new halt: the breakpoints' hits changed
+        except TransportError as err:
+            self._lose(err)
+            return
+        except DebugError:
+            pass
         with self._lock:
             self._history.append(snap)
         if self._state == CONNECTED and self._message.startswith("the target refused"):

@@ -72,6 +72,7 @@ def halt_at_extending_by_a_click(browser, server, where: str = EXTENDING_AT):
     assert browser.text(".src-line.halted-line .ln") == line
     assert browser.text(".src-line.halted-line").strip() == f"{line}    step Extending {{"
     assert "step:Cylinder.Extending" in browser.active_steps()
+    wait_for(lambda: browser.text("#bp-list") == "step Cylinder.Extending (hit 1) ✕", 10, "the breakpoints' list")
     return last
 
 

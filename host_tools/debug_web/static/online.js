@@ -163,6 +163,7 @@
   // ------------------------------------------------------------------ snapshots
 
   async function poll() {
+    if (document.hidden) { setTimeout(poll, POLL_MS); return; }  // a hidden page asks nothing: the target rests
     try {
       const r = await api(`/api/state?after=${online.lastSeq}`);
       if (r.ok) {
@@ -191,6 +192,22 @@
     }
     for (const line of document.querySelectorAll(".src-line")) {
       line.classList.toggle("bp-line", bpLines.has(Number(line.dataset.line)));
+    }
+    const listed = online.breakpoints.map((b) => `${b.slot}:${b.hits}`).join(" ");
+    if (listed !== online.bpListed) {  // every breakpoint, those set elsewhere (the console) too
+      online.bpListed = listed;
+      $("bp-list").replaceChildren(...online.breakpoints.map((b) => {
+        const button = document.createElement("button");
+        button.type = "button";
+        button.className = "secondary bp-chip";
+        button.title = "clear this breakpoint";
+        button.textContent = `${b.at} (hit ${b.hits}) ✕`;
+        button.addEventListener("click", async () => {
+          const r = await api("/api/breakpoint", { slot: b.slot });
+          say(r.ok ? `breakpoint ${b.slot} cleared (${b.at})` : r.data.error, r.ok);
+        });
+        return button;
+      }));
     }
   }
 
