@@ -15,10 +15,12 @@ from onlinelib import http, wait_for
 
 
 def value_of(server, name: str):
-    """An item's value in the newest snapshot (the item is put in view first)."""
+    """An item's value in a snapshot taken from now on (the item is put in view first)."""
     item = next(it for it in server.model()["items"] if it["name"] == name)
     assert server.api("POST", "/api/view", {"items": [item["id"]]}).status == 200
-    snap = wait_for(lambda: [s for s in server.state()["snapshots"] if str(item["id"]) in s["values"]], 10,
+    seen = server.state()["snapshots"]
+    after = seen[-1]["seq"] if seen else -1
+    snap = wait_for(lambda: [s for s in server.state(after)["snapshots"] if str(item["id"]) in s["values"]], 10,
                     f"a snapshot with {name}")[-1]
     return snap["values"][str(item["id"])]
 
