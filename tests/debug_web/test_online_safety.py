@@ -140,3 +140,71 @@ def test_a_firmware_of_another_program_is_refused_by_its_id(builds, firmware, on
     server = online(builds["pneumatic_cylinder"].parent / "debug_map.json", str(fw.link))
     link = wait_for(lambda: (s := server.state()["link"])["state"] == "wrong program" and s, 20, "the refusal")
     assert "not the map's" in link["message"] and "pneumatic_cylinder" in link["message"]
+
+
+# A page of another origin, open in the same browser as the online page,
+# tries every way a page can reach the server.
+OTHER_PAGE = """<!doctype html><title>elsewhere</title>
+<iframe name="sink"></iframe>
+<form id="f" method="POST" action="ONLINE/api/write" enctype="text/plain" target="sink">
+<input name='{"name":"kp","value":"1234","pad":"' value='"}'></form>
+<script>
+const tried = {};
+async function attempt() {
+  try {   // a simple request: no preflight
+    await fetch("ONLINE/api/command", {method: "POST", mode: "no-cors", credentials: "include",
+      headers: {"Content-Type": "text/plain"}, body: JSON.stringify({command: "run"})});
+    tried.simple = "sent";
+  } catch (e) { tried.simple = "blocked"; }
+  try {   // JSON with a guessed CSRF header: a preflight the server does not grant
+    const r = await fetch("ONLINE/api/command", {method: "POST", credentials: "include",
+      headers: {"Content-Type": "application/json", "X-EasyLab-CSRF": "guess"}, body: JSON.stringify({command: "run"})});
+    tried.json = "status " + r.status;
+  } catch (e) { tried.json = "blocked"; }
+  try {   // reading the model, to learn the CSRF token
+    const r = await fetch("ONLINE/api/model", {credentials: "include"});
+    tried.read = await r.text();
+  } catch (e) { tried.read = "blocked"; }
+  document.getElementById("f").submit();
+  window.tried = tried;
+}
+attempt();
+</script>"""
+
+
+def test_a_page_from_another_origin_can_neither_command_nor_write(builds, firmware, online, browser):
+    from http.server import BaseHTTPRequestHandler, ThreadingHTTPServer
+
+    fw = firmware(builds["pneumatic_cylinder"])  # halted at its first instant
+    server = online(fw.map_path, str(fw.link))
+    browser.get(server.url)  # the online page is open in the same browser
+    wait_for(lambda: browser.last() is not None, 30, "the online page")
+    page = OTHER_PAGE.replace("ONLINE", server.base).encode()
+
+    class Elsewhere(BaseHTTPRequestHandler):
+        def do_GET(self):
+            self.send_response(200)
+            self.send_header("Content-Type", "text/html")
+            self.end_headers()
+            self.wfile.write(page)
+
+        def log_message(self, *args):
+            pass
+    other = ThreadingHTTPServer(("127.0.0.1", 0), Elsewhere)
+    threading.Thread(target=other.serve_forever, daemon=True).start()
+    try:
+        browser.get(f"http://127.0.0.1:{other.server_address[1]}/")
+        tried = wait_for(lambda: browser.js("return window.tried"), 20, "the other page's attempts")
+        assert tried["json"] == "blocked" and tried["read"] == "blocked", tried
+        # the simple request, the preflight and the form reached the server and were refused there
+        wait_for(lambda: sum("refused a request from another origin" in line for line in server.err) >= 3, 10,
+                 f"the server's refusals ({server.err})")
+        time.sleep(0.3)  # a wrongly accepted request would have landed by now
+        assert value_of(server, "kp") == 400
+        assert server.state(10**9)["link"]["state"] == "connected"
+        assert [s["halted"] for s in server.state()["snapshots"][-3:]] == [True] * 3  # `run` never reached it
+    finally:
+        other.shutdown()
+        other.server_close()
+        browser.get("about:blank")
+        browser.console_errors()  # the other page's blocked requests
