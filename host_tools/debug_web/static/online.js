@@ -364,28 +364,68 @@
     drawScope();
   }
 
-  function exportCsv() {
+  // What the scope recorded as CSV: `ms` then one column per item, empty where no value was read.
+  function csvText() {
     const sc = online.scope;
-    const rows = [["ms", ...sc.ids.map((id) => online.items.get(id).name)].join(",")];
-    sc.times.forEach((t, k) => rows.push([t, ...sc.ids.map((id) => {
-      const v = sc.series.get(id)[k];
-      return v === null ? "" : v;
-    })].join(",")));
-    const blob = new Blob([rows.join("\n") + "\n"], { type: "text/csv" });
+    return [["ms", ...sc.ids.map((id) => online.items.get(id).name)].join(","),
+      ...sc.times.map((t, k) => [t, ...sc.ids.map((id) => sc.series.get(id)[k] ?? "")].join(","))].join("\n") + "\n";
+  }
+
+  const WIDTHS = { bool: 1, int8: 8, uint8: 8, int16: 16, uint16: 16, int32: 32, uint32: 32, time: 32 };
+
+  // The same as VCD, as the host board's traces write it (boards/host/host_trace.c): `$timescale 1us`,
+  // bool a 1-bit wire, integers wires of their width (two's complement), time a 32-bit wire of ms,
+  // float32 `real`, a chart's state a wire of one bit per step (bit i: step i active).
+  function vcdText() {
+    const sc = online.scope;
+    const name = (text) => text.replace(/[^A-Za-z0-9_.]/g, "_");
+    const signals = sc.ids.map((id, k) => {
+      const it = online.items.get(id);
+      const steps = it.labels ? Object.keys(it.labels).filter((key) => it.labels[key] !== null).length : 0;
+      const code = k < 94 ? String.fromCharCode(33 + k) : String.fromCharCode(33 + (k % 94), 33 + Math.floor(k / 94));
+      const real = it.type === "float32";
+      return { id, it, code, real, width: real ? 64 : (it.labels ? Math.max(steps, 1) : WIDTHS[it.type] || 32) };
+    });
+    const value = (sig, v) => {
+      if (sig.real) return `r${v} ${sig.code}`;
+      if (sig.width === 1 && !sig.it.labels) return `${v ? 1 : 0}${sig.code}`;
+      let bits;
+      if (sig.it.labels) bits = [...Array(sig.width)].map((_, i) => (sig.width - 1 - i === v ? "1" : "0")).join("");
+      else bits = (((v % 2 ** sig.width) + 2 ** sig.width) % 2 ** sig.width).toString(2).padStart(sig.width, "0");
+      return `b${bits} ${sig.code}`;
+    };
+    const lines = [`$comment EasyLab online mode: the scope of ${online.model.model} $end`, "$timescale 1us $end",
+      `$scope module ${name(online.model.model)} $end`,
+      ...signals.map((sig) => `$var ${sig.real ? "real" : "wire"} ${sig.width} ${sig.code} ${name(sig.it.name)} $end`),
+      "$upscope $end", "$enddefinitions $end"];
+    const shown = [];
+    sc.times.forEach((t, k) => {
+      const changes = [];
+      signals.forEach((sig, j) => {
+        const v = sc.series.get(sig.id)[k];
+        if (v === null || v === undefined) return;
+        const text = value(sig, v);
+        if (text !== shown[j]) { changes.push(text); shown[j] = text; }
+      });
+      const at = `#${Math.round(t * 1000)}`;
+      if (k === 0) lines.push(at, "$dumpvars", ...changes, "$end");
+      else if (changes.length) lines.push(at, ...changes);
+    });
+    if (sc.times.length) lines.push(`#${Math.round(sc.times[sc.times.length - 1] * 1000) + 1}`);
+    return lines.join("\n") + "\n";
+  }
+
+  function download(text, type, suffix) {
     const a = document.createElement("a");
-    a.href = URL.createObjectURL(blob);
-    a.download = `${online.model.model}-scope.csv`;
+    a.href = URL.createObjectURL(new Blob([text], { type }));
+    a.download = `${online.model.model}-scope.${suffix}`;
     document.body.append(a);
     a.click();
     a.remove();
     setTimeout(() => URL.revokeObjectURL(a.href), 1000);
-    return rows.join("\n");
   }
-  online.csv = () => {  // the CSV text, for the tests
-    const sc = online.scope;
-    return [["ms", ...sc.ids.map((id) => online.items.get(id).name)].join(","),
-      ...sc.times.map((t, k) => [t, ...sc.ids.map((id) => sc.series.get(id)[k] ?? "")].join(","))].join("\n");
-  };
+  online.csv = csvText;  // for the tests
+  online.vcd = vcdText;
 
   // ------------------------------------------------------------------ controls
 
@@ -429,7 +469,8 @@
       if (!sc.paused) drawScope();
     });
     $("scope-window").addEventListener("change", drawScope);
-    $("scope-csv").addEventListener("click", exportCsv);
+    $("scope-csv").addEventListener("click", () => download(csvText(), "text/csv", "csv"));
+    $("scope-vcd").addEventListener("click", () => download(vcdText(), "text/plain", "vcd"));
     $("scope-clear").addEventListener("click", clearScope);
   }
 
