@@ -41,6 +41,7 @@ from ..transport import TransportError
 CONNECTING, CONNECTED, LOST, WRONG_PROGRAM = "connecting", "connected", "lost", "wrong program"
 VIEWER_TIMEOUT = 5.0  # seconds without a page asking: polling stops
 FRAME_OVERHEAD = K.HEADER + K.TRAILER + 2  # seq, cmd, CRC, the status byte, APPLIED or the tx state
+TX_RESULT_APPLIED = 3  # TX_RESULT's state once the commit applied (docs/protocol.md; the header has no name for it)
 
 
 class Busy(Exception):
@@ -136,7 +137,7 @@ def read_in_transaction(client: DebugClient, items: list[Item], wait: float,
     deadline = time.monotonic() + wait
     while how != K.APPLIED:
         state, data = client.tx_result()
-        if state == 3:
+        if state == TX_RESULT_APPLIED:
             break
         if time.monotonic() > deadline:
             client.tx_abort()
