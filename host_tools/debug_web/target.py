@@ -199,11 +199,12 @@ class TargetLink:
         self._refresh_now.set()
         return [it.id for it in items]
 
-    def snapshots_after(self, seq: int) -> list[Snapshot]:
-        """The snapshots newer than `seq` (a page asking keeps the polling on)."""
+    def snapshots_after(self, seq: int, limit: int = 500) -> list[Snapshot]:
+        """The snapshots newer than `seq`, the newest `limit` of them (a page
+        opened late needs no old history); a page asking keeps the polling on."""
         with self._lock:
             self._last_viewer = time.monotonic()
-            return [s for s in self._history if s.seq > seq]
+            return [s for s in self._history if s.seq > seq][-limit:]
 
     def submit(self, job: Callable[[DebugClient], object]) -> concurrent.futures.Future:
         """Queue `job` for the target; Busy when the queue is full,
