@@ -54,10 +54,12 @@ def element_ids(svg: str) -> list[str]:
     return [_unescape(m) for m in ID_RE.findall(svg)]
 
 
-def elements(dmap: DebugMap, ids: list[str]) -> dict[str, dict]:
+def elements(dmap: DebugMap, ids: list[str], guards=None) -> dict[str, dict]:
     """For each element id: ``point`` ([kind, a, b] of its probe point, or
-    None), ``items`` (the ids of the map items drawn on it), and for a step
-    ``chart_item`` and ``step`` (it is active when the chart's item holds it)."""
+    None), ``items`` (the ids of the map items drawn on it; for a
+    transition, those its guard reads, from `guards`: a GuardValues), and
+    for a step ``chart_item`` and ``step`` (it is active when the chart's
+    item holds it)."""
     charts = {c["name"]: c for c in dmap.charts}
     actors = {a["name"]: a for a in dmap.actors}
     tasks = {t["name"]: t for t in dmap.tasks}
@@ -83,6 +85,7 @@ def elements(dmap: DebugMap, ids: list[str]) -> dict[str, dict]:
             if tr is not None:
                 info["point"] = [K.P_TRANSITION, chart["id"], tr["id"]]
                 info["location"] = tr.get("location")
+                info["items"] = guards.needs(el) if guards is not None else []
         elif kind == "actor":
             actor = actors.get(path)
             if actor is not None:

@@ -33,6 +33,7 @@ from ..transport import TransportError
 from ..web.server import CSP, CSRF_HEADER, Guard, _host_name, is_loopback, panel_guard, parse_listen
 from ..web.server import STATIC as PANEL_STATIC
 from .elements import DrawingError, element_ids, elements, model_file, render_svg
+from .guards import GuardValues
 from .target import Busy, NotConnected, TargetLink, breakpoint_job, command_job, write_job
 
 STATIC = Path(__file__).resolve().parent / "static"
@@ -224,11 +225,11 @@ class _Refusal(Exception):
 # ====================================================================== running it
 
 
-def page_model(dmap: DebugMap, model_path: Path) -> dict:
+def page_model(dmap: DebugMap, model_path: Path, guards: GuardValues | None = None) -> dict:
     """What the page is built from: the drawing, the model's text, the map's
     items, charts and probe points, each element's part in the map."""
     svg = render_svg(model_path)
-    els = elements(dmap, element_ids(svg))
+    els = elements(dmap, element_ids(svg), guards)
     return {"model": dmap.model, "title": dmap.data.get("title"), "program_id": f"0x{dmap.program_id:08x}",
             "tick_us": dmap.tick_us, "file": _shown_path(model_path), "location_file": _location_file(dmap),
             "source": model_path.read_text(encoding="utf-8"), "svg": svg, "elements": els,
@@ -278,17 +279,24 @@ def main(argv: list[str]) -> int:
         host, port = parse_listen(args.listen)
         guard = panel_guard(host, args.token)
         guard.cookie = "easylab_online"
-        model = page_model(dmap, model_file(dmap, args.model))
+        path = model_file(dmap, args.model)
+        guards = GuardValues.of_model(path, dmap)
+        model = page_model(dmap, path, guards)
     except (MapError, UsageError, DrawingError) as err:
         print(f"{PROG} web: error: {err}", file=sys.stderr)
         return 2
-    return asyncio.run(_serve(dmap, model, args, host, port, guard))
+    if guards is None:
+        print(f"{PROG} web: {path} is not the program of {dmap.path} (0x{dmap.program_id:08x}): the diagram is "
+              f"drawn, the guards' values are not shown", file=sys.stderr, flush=True)
+    return asyncio.run(_serve(dmap, model, args, host, port, guard, guards))
 
 
-async def _serve(dmap: DebugMap, model: dict, args, host: str, port: int, guard: Guard) -> int:
+async def _serve(dmap: DebugMap, model: dict, args, host: str, port: int, guard: Guard,
+                 guards: GuardValues | None) -> int:
     def log(line: str) -> None:
         print(f"{PROG} web: {line}", file=sys.stderr, flush=True)
-    link = TargetLink(dmap, args.target, elements=model["elements"], timeout=args.timeout, min_period=args.every,
+    link = TargetLink(dmap, args.target, elements=model["elements"], guards=guards, timeout=args.timeout,
+                      min_period=args.every,
                       baud=args.baud, log=log)
     page = OnlinePage(dmap, link, guard, model, job_wait=max(10.0, 8 * args.timeout))
     runner = web.AppRunner(page.app(), access_log=None, handle_signals=False)

@@ -78,6 +78,7 @@ class Snapshot:
     round_trips: int
     seconds: float
     wall: float = field(default_factory=time.time)
+    guards: dict[str, bool] = field(default_factory=dict)  # the transitions' guards on these values
 
     def as_json(self) -> dict:
         out = asdict(self)
@@ -153,7 +154,8 @@ class TargetLink:
     queues one (at most `queue_size` wait) and returns a future of its result.
     """
 
-    def __init__(self, dmap: DebugMap, target: str, *, elements: dict | None = None, timeout: float = 0.5,
+    def __init__(self, dmap: DebugMap, target: str, *, elements: dict | None = None, guards=None,
+                 timeout: float = 0.5,
                  retry: float = 1.0, min_period: float = 0.05, baud: int = 115200, queue_size: int = 4,
                  history: int = 4000, log: Callable[[str], None] | None = None):
         self.map = dmap
@@ -163,6 +165,7 @@ class TargetLink:
         self.retry = retry
         self.min_period = min_period
         self.baud = baud
+        self.guards = guards  # GuardValues, or None
         self.element_of_point = {tuple(e["point"]): el for el, e in (elements or {}).items() if e.get("point")}
         self.status_items = [it for it in dmap.items if it.kind == "status"]
         self.period = min_period
@@ -407,7 +410,8 @@ class TargetLink:
                         halted_at, location, self.element_of_point.get((loc.kind, loc.a, loc.b)) if flags.halted
                         else None, values, consistency,
                         client.t.bytes_in + client.t.bytes_out - bytes_before, client.round_trips - trips_before,
-                        round(time.monotonic() - started, 6))
+                        round(time.monotonic() - started, 6),
+                        guards=self.guards.evaluate(values) if self.guards is not None else {})
 
 
 def decode_items_read(client: DebugClient, items: list[Item]) -> dict[int, object]:

@@ -93,6 +93,10 @@ def halt_at_extending_by_a_click(browser, server, where: str = EXTENDING_AT):
     assert browser.text(".src-line.halted-line").strip() == f"{line}    step Extending {{"
     assert "step:Cylinder.Extending" in browser.active_steps()
     wait_for(lambda: browser.text("#bp-list") == "step Cylinder.Extending (hit 1) ✕", 10, "the breakpoints' list")
+    # the guards on the halted snapshot: start_cmd holds (Retracted -> Extending), `not start_cmd` does not
+    guard = "return document.getElementById(arguments[0]).querySelector('text.el-value').textContent"
+    assert (browser.js(guard, "transition:Cylinder.0"), browser.js(guard, "transition:Cylinder.3")) == \
+        ("✓ true", "✗ false")
     return last
 
 

@@ -4,7 +4,8 @@ host firmware, over seeded random sets of items (the benchmark's model of
 is read with plain reads and gives what the console's reads give; a running
 one is read in one transaction (one instant) exactly when the items fit in
 one, else frame by frame (`split`), every item with a value either way; a
-wrong guess of the program's state is corrected;
+wrong guess of the program's state is corrected; at every breakpoint on a
+transition the firmware takes, the guard evaluated on the snapshot holds;
 the elements' table names only probe points and items of the map."""
 
 from __future__ import annotations
@@ -114,3 +115,40 @@ def test_targets_as_the_console_takes_them():
     assert target_url("tcp:127.0.0.1:5000") == "socket://127.0.0.1:5000"
     assert target_url("/dev/ttyUSB0") == "/dev/ttyUSB0"
     assert target_url("socket://h:1") == "socket://h:1"
+
+
+def test_the_guards_hold_where_the_firmware_takes_their_transitions(builds, firmware):
+    """With a breakpoint on every transition of pneumatic_cylinder (its own
+    stimulus, virtual time), each halt is a transition the firmware found
+    enabled: the guard evaluated on the snapshot read there holds, and the
+    other guards out of the halted step are whatever they are."""
+    from easylab.host_tools.debug_web.guards import GuardValues
+
+    fw = firmware(builds["pneumatic_cylinder"], "--stimulus", str(ROOT / "examples" / "pneumatic_cylinder.stimulus.csv"))
+    client = fw.client()
+    dmap = DebugMap.load(fw.map_path)
+    guards = GuardValues.of_model(ROOT / "examples" / "pneumatic_cylinder.elab", dmap)
+    assert guards is not None and len(guards.guards) == 7
+    poller = TargetLink(dmap, str(fw.link), guards=guards,
+                        elements={el: {"point": [K.P_TRANSITION, 0, int(el.rsplit(".", 1)[1])]} for el in guards.guards})
+    needed = sorted({i for el in guards.guards for i in guards.needs(el)})
+    items = [dmap.by_id[i] for i in needed]
+    for tr in dmap.charts[0]["transitions"]:
+        client.bp_set(K.P_TRANSITION, 0, tr["id"])
+    verified = set()
+    for _ in range(12):  # until the stimulus's cycles are over
+        client.run()
+        try:
+            f = fw.wait_halted(client, timeout=2.0)
+        except AssertionError:
+            break
+        assert f.why == "breakpoint" and f.location.kind == K.P_TRANSITION, f
+        snap = poller.read_snapshot(client, items)
+        element = f"transition:Cylinder.{f.location.b}"
+        assert snap.element == element and snap.guards[element] is True, (element, snap.values, snap.guards)
+        verified.add(element)
+    assert len(verified) >= 5, verified  # the cycle's four transitions, and a timeout's
+    # a guard is not evaluated without every item it reads
+    client.halt()
+    fw.wait_halted(client)
+    assert "transition:Cylinder.1" not in poller.read_snapshot(client, items[:1]).guards

@@ -75,7 +75,10 @@
       info.g = g;
       if (info.point) g.setAttribute("data-point", info.point.join(","));
       else if (info.items.length) g.classList.add("has-items");
-      if (info.items.length) info.label = valueLabel(g, id.startsWith("step:") ? "el-value step-time" : "el-value");
+      if (info.items.length) {
+        const kind = id.startsWith("step:") ? "el-value step-time" : id.startsWith("transition:") ? "el-value guard" : "el-value";
+        info.label = valueLabel(g, kind);
+      }
     }
     const box = svg.viewBox.baseVal;
     online.natural = [box.width, box.height];
@@ -247,7 +250,11 @@
         info.g.classList.toggle("active", steps.includes(info.step));
       }
       info.g.classList.toggle("halted-here", s.halted && s.element === id);
-      if (info.label) {
+      if (info.label && id.startsWith("transition:")) {  // the guard, on this snapshot's values
+        const holds = s.guards[id];
+        info.label.textContent = holds === undefined ? "" : (holds ? "✓ true" : "✗ false");
+        info.label.classList.toggle("holds", holds === true);
+      } else if (info.label) {
         const shown = info.items.filter((i) => online.values.has(i));
         info.label.textContent = shown.map((i) => {
           const it = online.items.get(i);
