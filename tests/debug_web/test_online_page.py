@@ -115,8 +115,18 @@ def test_the_page_follows_breaks_and_steps_pneumatic_cylinder_on_the_host_board(
     assert browser.last()["consistency"] == "instant"  # a running target: one transaction per refresh
 
     before = halt_at_extending_by_a_click(browser, server)
+    # docs/online.md's picture: zoomed in on the chart and PositionControl
+    for _ in range(3):
+        browser.button("#zoom-in")
+    browser.js("const pane = document.getElementById('diagram'), p = pane.getBoundingClientRect();"
+               "const r = document.getElementById('step:Cylinder.Retracted').getBoundingClientRect();"
+               "pane.scrollBy(r.left - p.left - 10, r.top - p.top - 30);")
+    wait_for(lambda: browser.js("return document.querySelector('#diagram g[id^=\"edge:PositionControl\"] "
+                                "text.el-value').textContent") != "", 10, "PositionControl's values in sight")
+    time.sleep(0.3)
     SCREENSHOT.parent.mkdir(parents=True, exist_ok=True)
     browser.driver.save_screenshot(str(SCREENSHOT))
+    browser.button("#zoom-fit")
     browser.button("button.step[data-unit='instant']")
     after = wait_for(lambda: (s := browser.last()) and s["halted"] and s["why"] == "step" and s, 10, "the step")
     assert after["tick"] == before["tick"] + 1 and after["at"] == "instant", after

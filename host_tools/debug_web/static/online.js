@@ -107,7 +107,7 @@
     let x, y;
     if (g.classList.contains("edge") && path) {
       const p = path.getPointAtLength(path.getTotalLength() / 2);
-      x = p.x + 3; y = p.y - 3;
+      x = p.x + 3; y = p.y + 10;  // under the path: Graphviz puts its label above the middle
     } else {
       const b = g.getBBox();
       x = b.x + b.width / 2; y = b.y + b.height + 9;
