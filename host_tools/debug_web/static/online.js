@@ -76,8 +76,8 @@
       if (info.point) g.setAttribute("data-point", info.point.join(","));
       else if (info.items.length) g.classList.add("has-items");
       if (info.items.length) {
-        const kind = id.startsWith("step:") ? "el-value step-time" : id.startsWith("transition:") ? "el-value guard" : "el-value";
-        info.label = valueLabel(g, kind);
+        const kind = id.startsWith("step:") ? "step-time" : id.startsWith("transition:") ? "guard" : "";
+        info.label = valueLabel(g, `el-value ${kind}`.trim());
       }
     }
     const box = svg.viewBox.baseVal;
