@@ -29,7 +29,8 @@ MODEL_FILE = "examples/pneumatic_cylinder.elab"  # as the map's locations name i
 # pneumatic_cylinder's cycle slowed down to one step a second (the example's
 # own stimulus runs a cycle in 360 ms): Retracted, Extending from 0.5 s with
 # the position ramping up, Extended from 1.5 s, Retracting from 2.5 s,
-# Retracted from 3.5 s, the same again from 6.5 s; a timeout of 10 s.
+# Retracted from 3.5 s, the same again from 6.5 s, Extending again from
+# 11.5 s; a timeout of 10 s.
 SLOW_CYCLE = """time_us,start_cmd,position.value,end_out.level,end_in.level,timeout
 0,0,0,0,1,10000
 500000,1,,,0,
@@ -52,6 +53,7 @@ SLOW_CYCLE = """time_us,start_cmd,position.value,end_out.level,end_in.level,time
 8700000,,600,0,,
 9000000,,300,,,
 9500000,,100,,1,
+11500000,1,,,0,
 """
 
 

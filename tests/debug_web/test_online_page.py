@@ -6,8 +6,10 @@ line in the model's text), a step advances, the values on PositionControl's
 edges change while it runs, the scope plots over logical time and exports
 CSV, zooming in leaves what is out of sight unpolled, a write through the
 form shows on the diagram (a value out of range is refused), a reset halts
-at the start; against the AVR in simavr, the PIC18 in gpsim and local
-execution the highlight and a breakpoint. The host test saves docs/images/online.png."""
+at the start, the scope exports CSV and VCD, the guards show on the
+transitions; against the AVR in simavr, the PIC18 in gpsim, local and
+remote execution the highlight and a breakpoint. The host test saves
+docs/images/online.png."""
 
 from __future__ import annotations
 
@@ -17,6 +19,8 @@ import pytest
 
 from debug_testlib import ROOT, board, builds, firmware  # noqa: F401 (fixtures)
 from onlinelib import MODEL_FILE, slow_cycle, wait_for
+
+from easylab.host_tools.debug_map import DebugMap
 
 EXTENDING_AT = f"{MODEL_FILE}:44"
 CYCLE = ["step:Cylinder.Retracted", "step:Cylinder.Extending", "step:Cylinder.Extended",
@@ -190,3 +194,43 @@ def test_the_page_highlights_and_breaks_on_the_mcus_and_in_local_execution(board
     halt_at_extending_by_a_click(browser, server, extending["location"])
     assert browser.console_errors() == []
 
+
+
+@pytest.mark.realtime
+def test_the_page_highlights_and_breaks_in_remote_execution(build_cache, online, browser, tmp_path):
+    """`easylab remote --debug tcp:PORT`: the application on this machine,
+    its devices on a host-board proxy reading the slow cycle's sensors; the
+    page reaches the debug interface as `tcp:127.0.0.1:PORT`. The chart's
+    task runs every 25 ms here (the example's 5 ms leaves a proxy behind its
+    clock on a loaded 2-core machine, and remote execution ends then)."""
+    import subprocess
+    import sys
+    sys.path.insert(0, str(ROOT / "tests" / "remote"))
+    from remote_testlib import EASYLAB, Proxy, device_columns, proxy_of
+    from test_remote_debug import free_port
+    from onlinelib import MODEL
+
+    model = tmp_path / "pneumatic_cylinder.elab"
+    model.write_text(MODEL.read_text().replace("task control period 5 ms", "task control period 25 ms"))
+    stimulus = slow_cycle(tmp_path)
+    proxy = Proxy(proxy_of(build_cache, model), tmp_path / "link", "--stimulus",
+                  str(device_columns(stimulus, model, tmp_path / "devices.csv")))
+    port, maps = free_port(), tmp_path / "maps"
+    host = subprocess.Popen([*EASYLAB, "remote", str(model), "--target", str(proxy.link), "--stimulus", str(stimulus),
+                             "--debug", f"tcp:{port}", "--maps", str(maps)], stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True, stdin=subprocess.DEVNULL, cwd=ROOT)
+    try:
+        wait_for(lambda: (maps / "debug_map.json").exists() or host.poll() is not None, 180, "the maps")
+        assert host.poll() is None, host.communicate()
+        server = online(maps / "debug_map.json", f"tcp:127.0.0.1:{port}", model=model)
+        open_page(browser, server)
+        seen, _ = follow_the_cycle(browser, 20, with_edges=False)
+        assert has_cycle(seen), (seen, host.poll())
+        dmap = DebugMap.load(maps / "debug_map.json")
+        extending = next(s for s in dmap.charts[0]["steps"] if s["name"] == "Extending")
+        halt_at_extending_by_a_click(browser, server, extending["location"])
+        assert browser.console_errors() == []
+    finally:
+        host.kill()
+        host.communicate()
+        proxy.kill()
