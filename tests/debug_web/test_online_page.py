@@ -226,6 +226,8 @@ def test_the_page_highlights_and_breaks_in_remote_execution(build_cache, online,
         open_page(browser, server)
         seen, _ = follow_the_cycle(browser, 20, with_edges=False)
         assert has_cycle(seen), (seen, host.poll())
+        # the task status: remote execution's overrun counters in the header
+        assert "remote.control.overruns" in browser.text("#counts")
         dmap = DebugMap.load(maps / "debug_map.json")
         extending = next(s for s in dmap.charts[0]["steps"] if s["name"] == "Extending")
         halt_at_extending_by_a_click(browser, server, extending["location"])
