@@ -3,6 +3,7 @@
     easylab-debug [--map debug_map.json] URL              interactive
     easylab-debug --map M URL -c "read temperature; stack"
     easylab-debug --map M URL --script FILE [--json]
+    easylab-debug web --map M TARGET [--listen ADDR:PORT]   the online mode (docs/online.md)
 
 URL is anything pyserial opens: a device (/dev/ttyUSB0), a pty or its
 link, ``socket://127.0.0.1:PORT``. The console refuses a firmware whose
@@ -935,6 +936,10 @@ class Mismatch(Exception):
 
 
 def main(argv: list[str] | None = None) -> int:
+    argv = sys.argv[1:] if argv is None else argv
+    if argv[:1] == ["web"]:  # the online mode (docs/online.md)
+        from .debug_web.server import main as web_main
+        return web_main(argv[1:])
     args = build_parser().parse_args(argv)
     try:
         client, dmap = connect(args.url, args.map, args.timeout, args.baud)

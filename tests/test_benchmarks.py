@@ -13,7 +13,8 @@ import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
 RESULTS = {"bench_frontend": "frontend.json", "bench_sdf": "sdf.json", "bench_codegen": "codegen.json",
-           "bench_interp": "interp.json", "bench_debug": "debug.json", "bench_service": "service.json",
+           "bench_interp": "interp.json", "bench_debug": "debug.json", "bench_debug_web": "debug_web.json",
+           "bench_service": "service.json",
            "bench_avr": "avr.json", "bench_pic18": "pic18.json", "bench_remote": "remote.json",
            "bench_distribution": "distribution.json"}
 

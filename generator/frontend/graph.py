@@ -4,7 +4,16 @@ One DOT document with a cluster per part of the model: the device tree
 (composed devices as nested clusters, primitive devices with their data and
 claims), each dataflow (actors with rates on their edges, external data as
 ellipses) and each chart (steps, transitions with guards, bars for parallel
-divergence and convergence).
+divergence and convergence), and the model's vars and params.
+
+Every element carries a stable ``id`` derived from its path in the model
+(Graphviz writes it on the element's ``<g>`` in SVG), which the online mode
+(``easylab-debug web``) uses to draw the running program on the drawing:
+``step:CHART.STEP``, ``transition:CHART.N`` (N: the transition's index; a
+bar's edges add ``.from.STEP`` or ``.to.STEP``), ``actor:DATAFLOW.INSTANCE``,
+``edge:DATAFLOW/SRC->DST``, ``ext:DATAFLOW/NAME`` (a var, param, device datum
+or channel drawn in a dataflow), ``device:PATH``, ``var:NAME``,
+``param:NAME``, ``task:NAME``.
 """
 
 from __future__ import annotations
@@ -23,6 +32,11 @@ def _q(text: str) -> str:
     """A DOT string. Labels use real newlines; record labels may carry DOT's
     own escapes (\\l), so backslashes are left alone: model names never hold one."""
     return '"' + text.replace('"', '\\"').replace("\n", "\\n") + '"'
+
+
+def _id(element_id: str) -> str:
+    """The DOT attribute giving an element its stable id (see the module's docstring)."""
+    return f"id={_q(element_id)}"
 
 
 def _expr_text(e: ast.Expr) -> str:
@@ -74,12 +88,14 @@ def render_dot(model: CheckedModel) -> str:
         _dataflow(dot, df)
     for chart in model.charts.values():
         _chart(dot, chart)
+    _data(dot, model)
     if model.tasks:
         dot.open("tasks", "tasks")
         for task in model.tasks.values():
             runs = ", ".join(r.name for r in task.runs)
             period = _duration(task.period_us)
-            dot.add(f"{_q('task.' + task.name)} [shape=note, label={_q(f'{task.name} every {period}: {runs}')}];")
+            dot.add(f"{_q('task.' + task.name)} [shape=note, {_id('task:' + task.name)}, "
+                    f"label={_q(f'{task.name} every {period}: {runs}')}];")
         dot.close()
     dot.lines.append("}")
     return "\n".join(dot.lines) + "\n"
@@ -90,6 +106,17 @@ def _duration(us) -> str:
         if us % scale == 0:
             return f"{us // scale} {unit}"
     return f"{us} us"
+
+
+def _data(dot: _Dot, model: CheckedModel) -> None:
+    """The vars and params, one node each (where their values are shown online)."""
+    if not model.data:
+        return
+    dot.open("data", "vars and params")
+    for data in model.data.values():
+        dot.add(f"{_q('data.' + data.name)} [shape=plaintext, {_id(data.kind + ':' + data.name)}, "
+                f"label={_q(f'{data.kind} {data.name}: {data.type}')}];")
+    dot.close()
 
 
 def _devices(dot: _Dot, model: CheckedModel) -> None:
@@ -114,7 +141,7 @@ def _device_tree(dot: _Dot, tree: dict, prefix: str) -> None:
                               for p in child.ports.values())
             claims = ", ".join(str(c) for c in child.claims)
             label = f"{{{name} ({child.type.name})|driver {child.driver}|{data}\\l|{claims}}}"
-            dot.add(f"{_q('dev.' + path)} [shape=record, label={_q(label)}];")
+            dot.add(f"{_q('dev.' + path)} [shape=record, {_id('device:' + path)}, label={_q(label)}];")
         else:
             dot.open("dev_" + path, path)
             _device_tree(dot, child, path + ".")
@@ -127,7 +154,8 @@ def _dataflow(dot: _Dot, df) -> None:
     for name, inst in df.instances.items():
         targs = ", ".join(str(t) for t in inst.type_bindings.values())
         label = f"{name}\n{inst.actor_type.name}" + (f"<{targs}>" if targs else "")
-        dot.add(f"{_q(prefix + name)} [shape=box, style=rounded, label={_q(label)}];")
+        dot.add(f"{_q(prefix + name)} [shape=box, style=rounded, {_id(f'actor:{df.name}.{name}')}, "
+                f"label={_q(label)}];")
     externals: set[str] = set()
     for e in df.edges:
         ends = []
@@ -139,15 +167,17 @@ def _dataflow(dot: _Dot, df) -> None:
                 if node not in externals:
                     externals.add(node)
                     shape = {"channel": "cds", "device": "ellipse"}.get(end.kind, "oval")
-                    dot.add(f"{_q(node)} [shape={shape}, label={_q(end.label)}, style=dashed];")
+                    dot.add(f"{_q(node)} [shape={shape}, {_id(f'ext:{df.name}/{end.label}')}, "
+                            f"label={_q(end.label)}, style=dashed];")
                 ends.append(node)
         rates = []
         if e.src.kind == "actor" and e.dst.kind == "actor":
             rates.append(f"{e.src.port} {e.src.rate}:{e.dst.rate} {e.dst.port}")
         if e.initial_tokens:
             rates.append(f"{len(e.initial_tokens)} D")
-        label = f" [label={_q('  '.join(rates))}]" if rates else ""
-        dot.add(f"{_q(ends[0])} -> {_q(ends[1])}{label};")
+        label = f", label={_q('  '.join(rates))}" if rates else ""
+        edge_id = _id(f"edge:{df.name}/{e.src.label}->{e.dst.label}")
+        dot.add(f"{_q(ends[0])} -> {_q(ends[1])} [{edge_id}{label}];")
     if not df.instances and not df.edges:
         dot.add(f"{_q(prefix + 'empty')} [shape=plaintext, label=\"(empty)\"];")
     dot.close()
@@ -162,20 +192,23 @@ def _chart(dot: _Dot, chart) -> None:
         actions += [f"P0 {a.target.text} = {_expr_text(a.value)}" for a in step.decl.exit]
         shape = "doubleoctagon" if step.decl.initial else "box"
         label = step.name + ("\n" + "\n".join(actions) if actions else "")
-        dot.add(f"{_q(prefix + step.name)} [shape={shape}, label={_q(label)}];")
+        dot.add(f"{_q(prefix + step.name)} [shape={shape}, {_id(f'step:{chart.name}.{step.name}')}, "
+                f"label={_q(label)}];")
     for tr in chart.transitions:
         guard = _expr_text(tr.decl.guard)
+        tid = f"transition:{chart.name}.{tr.index}"
         if len(tr.sources) == 1 and len(tr.targets) == 1:
-            dot.add(f"{_q(prefix + tr.sources[0].name)} -> {_q(prefix + tr.targets[0].name)} [label={_q(guard)}];")
+            dot.add(f"{_q(prefix + tr.sources[0].name)} -> {_q(prefix + tr.targets[0].name)} "
+                    f"[{_id(tid)}, label={_q(guard)}];")
             continue
         bar = f"{prefix}t{tr.index}"
-        dot.add(f"{_q(bar)} [shape=box, style=filled, fillcolor=black, height=0.05, width=1, label=\"\"];")
+        dot.add(f"{_q(bar)} [shape=box, style=filled, fillcolor=black, height=0.05, width=1, {_id(tid)}, label=\"\"];")
         for s in tr.sources:
-            dot.add(f"{_q(prefix + s.name)} -> {_q(bar)}"
-                    + (f" [label={_q(guard)}]" if len(tr.sources) == 1 else "") + ";")
+            dot.add(f"{_q(prefix + s.name)} -> {_q(bar)} [{_id(f'{tid}.from.{s.name}')}"
+                    + (f", label={_q(guard)}" if len(tr.sources) == 1 else "") + "];")
         for t in tr.targets:
-            dot.add(f"{_q(bar)} -> {_q(prefix + t.name)}"
-                    + (f" [label={_q(guard)}]" if len(tr.sources) > 1 and t is tr.targets[0] else "") + ";")
+            dot.add(f"{_q(bar)} -> {_q(prefix + t.name)} [{_id(f'{tid}.to.{t.name}')}"
+                    + (f", label={_q(guard)}" if len(tr.sources) > 1 and t is tr.targets[0] else "") + "];")
     dot.close()
 
 

@@ -1,0 +1,1 @@
+"""`easylab-debug web`: the online mode (docs/online.md)."""
