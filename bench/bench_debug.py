@@ -20,19 +20,11 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
 
-if __package__ in (None, ""):
-    # Run as a script from a source checkout: make `easylab` (generator/ plus host_tools/) importable.
-    try:
-        import easylab.host_tools  # noqa: F401
-    except ImportError:  # pragma: no cover - depends on the environment
-        import importlib.util
+if __package__ in (None, ""):  # a script from a source checkout
+    sys.path.insert(0, str(Path(__file__).resolve().parent))
+    from source_checkout import make_easylab_importable
 
-        spec = importlib.util.spec_from_file_location(
-            "easylab", ROOT / "generator" / "__init__.py",
-            submodule_search_locations=[str(ROOT / "generator"), str(ROOT)])
-        module = importlib.util.module_from_spec(spec)
-        sys.modules["easylab"] = module
-        spec.loader.exec_module(module)
+    make_easylab_importable()
 
 from easylab.host_tools.debug_protocol import K, DebugClient, crc16, cobs_encode, encode_frame  # noqa: E402
 

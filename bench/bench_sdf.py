@@ -19,21 +19,11 @@ import sys
 import time
 from pathlib import Path
 
-if __package__ in (None, ""):
-    # Run as a script from a source checkout: make `easylab` importable.
-    _root = Path(__file__).resolve().parent.parent
-    try:
-        import easylab  # noqa: F401
-    except ImportError:  # pragma: no cover - depends on the environment
-        import importlib.util
+if __package__ in (None, ""):  # a script from a source checkout
+    sys.path.insert(0, str(Path(__file__).resolve().parent))
+    from source_checkout import make_easylab_importable
 
-        spec = importlib.util.spec_from_file_location(
-            "easylab", _root / "generator" / "__init__.py",
-            submodule_search_locations=[str(_root / "generator")],
-        )
-        module = importlib.util.module_from_spec(spec)
-        sys.modules["easylab"] = module
-        spec.loader.exec_module(module)
+    make_easylab_importable()
 
 from easylab.analysis.sdf import SdfGraph, analyze, check_deadlock, repetition_vector
 

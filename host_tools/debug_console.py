@@ -340,18 +340,24 @@ class Session:
             name = f"{it.name}[{elem}]" if elem is not None else it.name
             self.emit(f"{name} = {format_value(it, v)}", {"name": name, "value": step_names(it, v)})
 
-    def cmd_write(self, args):
+    def _value_to_set(self, args, verb: str, read_only: str):
+        """`VERB NAME VALUE`'s item, element and stored value, checked as a
+        write is: writable, one element named, within its range."""
         if len(args) != 2:
-            raise CommandError("usage: write NAME VALUE")
+            raise CommandError(f"usage: {verb} NAME VALUE")
         it, elem = self.item(args[0])
         if not it.writable:
-            raise CommandError(f"{it.name} is read-only ({_why_read_only(it)})")
+            raise CommandError(f"{it.name} {read_only} ({_why_read_only(it)})")
         if it.count > 1 and elem is None:
-            raise CommandError(f"{it.name} has {it.count} elements: write {it.name}[i] VALUE")
+            raise CommandError(f"{it.name} has {it.count} elements: {verb} {it.name}[i] VALUE")
         value = parse_value(it, args[1])
         if it.range and not it.range[0] <= value <= it.range[1]:
             raise CommandError(f"{it.name}: {args[1]} is outside its range "
                                f"{format_value(it, it.range[0])}..{format_value(it, it.range[1])}")
+        return it, elem, value
+
+    def cmd_write(self, args):
+        it, elem, value = self._value_to_set(args, "write", "is read-only")
         with self.lock:
             try:
                 how = self.c.write(it.id, it.type, value, elem or 0, what=it.name)
@@ -518,17 +524,9 @@ class Session:
             raise CommandError(_NO_SLOTS.format(what=what, setting=setting))
 
     def cmd_force(self, args):
-        if len(args) != 2:
-            raise CommandError("usage: force NAME VALUE")
-        self._needs_slots("force_slots", "forcing", "force")
-        it, elem = self.item(args[0])
-        if not it.writable:
-            raise CommandError(f"{it.name} cannot be forced: it is read-only ({_why_read_only(it)})")
-        if it.count > 1 and elem is None:
-            raise CommandError(f"{it.name} has {it.count} elements: force {it.name}[i] VALUE")
-        value = parse_value(it, args[1])
-        if it.range and not it.range[0] <= value <= it.range[1]:
-            raise CommandError(f"{it.name}: {args[1]} is outside its range {it.range[0]}..{it.range[1]}")
+        if len(args) == 2:
+            self._needs_slots("force_slots", "forcing", "force")
+        it, elem, value = self._value_to_set(args, "force", "cannot be forced: it is read-only")
         with self.lock:
             try:
                 how = self.c.force(it.id, it.type, value, elem or 0, what=it.name)

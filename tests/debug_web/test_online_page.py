@@ -206,8 +206,7 @@ def test_the_page_highlights_and_breaks_in_remote_execution(build_cache, online,
     import subprocess
     import sys
     sys.path.insert(0, str(ROOT / "tests" / "remote"))
-    from remote_testlib import EASYLAB, Proxy, device_columns, proxy_of
-    from test_remote_debug import free_port
+    from remote_testlib import EASYLAB, Proxy, device_columns, free_port, proxy_of
     from onlinelib import MODEL
 
     model = tmp_path / "pneumatic_cylinder.elab"

@@ -4,9 +4,11 @@ session, run on a pty, and `easylab remote` against them."""
 from __future__ import annotations
 
 import re
+import socket
 import subprocess
 import sys
 import time
+from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -308,3 +310,63 @@ class BaudMismatchRelay:
         self.thread.join(5)
         for fd in (self.proxy_fd, self.master, self.slave):
             os.close(fd)
+
+
+def free_port() -> int:
+    """A TCP port nobody listens on now."""
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+def connect(port: int, proc: subprocess.Popen, timeout: float = 120.0):
+    """A debug client, once the host side listens (its first run compiles
+    the interfaces library)."""
+    from easylab.host_tools.debug_protocol import DebugClient
+
+    deadline = time.monotonic() + timeout
+    while True:
+        try:
+            return DebugClient.open(f"socket://127.0.0.1:{port}", 2.0)
+        except Exception:
+            assert proc.poll() is None, proc.communicate()
+            assert time.monotonic() < deadline, "the debug interface did not open"
+            time.sleep(0.1)
+
+
+@dataclass
+class DebuggedRun:
+    """`easylab remote --fast --debug tcp:PORT,halt` under a test."""
+
+    host: subprocess.Popen
+    client: object
+    maps: Path
+    trace: Path
+
+
+@contextmanager
+def debugged_remote_run(proxy: Proxy, model: Path, tmp_path: Path, *args: str):
+    """Run ``model`` in lock-step against ``proxy`` with its debug interface
+    on a TCP port, halted at its start, its maps and trace in ``tmp_path``;
+    yields a DebuggedRun with a connected client. When the block ends the
+    run must have ended (or end) with status 0, and the proxy too;
+    whatever happens, nothing is left running."""
+    port, maps, trace = free_port(), tmp_path / "maps", tmp_path / "remote.csv"
+    host = subprocess.Popen([*EASYLAB, "remote", str(model), "--target", str(proxy.link), "--fast",
+                             "--trace", str(trace), "--debug", f"tcp:{port},halt", "--maps", str(maps), *args],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, stdin=subprocess.DEVNULL)
+    client = None
+    try:
+        client = connect(port, host)
+        yield DebuggedRun(host, client, maps, trace)
+        _, err = host.communicate(timeout=120)
+        assert host.returncode == 0, err
+        status, proxy_err = proxy.finish()
+        assert status == 0, proxy_err
+    finally:
+        if client:
+            client.close()
+        if host.poll() is None:
+            host.kill()
+            host.communicate()
+        proxy.kill()

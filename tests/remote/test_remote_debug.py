@@ -8,48 +8,21 @@ the device model is refused."""
 from __future__ import annotations
 
 import signal
-import socket
 import subprocess
 import time
 
 from easylab.host_tools.debug_map import DebugMap
-from easylab.host_tools.debug_protocol import DebugClient
 from easylab.pipeline import lower_file
-from remote_testlib import EASYLAB, EXAMPLES, Proxy, proxy_of
+from remote_testlib import EASYLAB, EXAMPLES, Proxy, debugged_remote_run, proxy_of
 
 BLINK = EXAMPLES / "blink.elab"
-
-
-def free_port() -> int:
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
-
-
-def connect(port: int, proc: subprocess.Popen, timeout: float = 120.0) -> DebugClient:
-    """A debug client, once the host side listens (its first run compiles
-    the interfaces library)."""
-    deadline = time.monotonic() + timeout
-    while True:
-        try:
-            return DebugClient.open(f"socket://127.0.0.1:{port}", 2.0)
-        except Exception:
-            assert proc.poll() is None, proc.communicate()
-            assert time.monotonic() < deadline, "the debug interface did not open"
-            time.sleep(0.1)
 
 
 def test_the_host_side_serves_the_debug_interface(build_cache, tmp_path):
     program, _ = lower_file(BLINK)
     proxy = Proxy(proxy_of(build_cache, BLINK), tmp_path / "link", "--fast")
-    port, maps, trace = free_port(), tmp_path / "maps", tmp_path / "remote.csv"
-    host = subprocess.Popen([*EASYLAB, "remote", str(BLINK), "--target", str(proxy.link), "--fast",
-                             "--trace", str(trace), "--debug", f"tcp:{port},halt",
-                             "--maps", str(maps)], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-                            stdin=subprocess.DEVNULL)
-    client = None
-    try:
-        client = connect(port, host)
+    with debugged_remote_run(proxy, BLINK, tmp_path) as run:
+        client, host, maps, trace = run.client, run.host, run.maps, run.trace
         assert client.hello().program_id == program.program_id
         deadline = time.monotonic() + 10
         while not client.flags().halted:  # halted before the first instant
@@ -69,17 +42,6 @@ def test_the_host_side_serves_the_debug_interface(build_cache, tmp_path):
             assert time.monotonic() < deadline, "the run does not go on"
             time.sleep(0.05)
         host.send_signal(signal.SIGTERM)  # the run ends at the next instant; STOP ends the proxy
-        _, err = host.communicate(timeout=120)
-        assert host.returncode == 0, err
-        status, proxy_err = proxy.finish()
-        assert status == 0, proxy_err
-    finally:
-        if client:
-            client.close()
-        if host.poll() is None:
-            host.kill()
-            host.communicate()
-        proxy.kill()
     rows = [line.split(",") for line in trace.read_text().splitlines()]
     column = rows[0].index("led.level")
     changes = [int(r[0]) for r, before in zip(rows[2:], rows[1:]) if r[column] != before[column]]

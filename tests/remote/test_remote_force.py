@@ -8,13 +8,11 @@ release the proxy's reads come through again."""
 from __future__ import annotations
 
 import csv
-import subprocess
 import time
 
 from easylab.host_tools.debug_map import DebugMap
 from easylab.host_tools.debug_protocol import K
-from remote_testlib import EASYLAB, EXAMPLES, Proxy, device_columns, proxy_of
-from test_remote_debug import connect, free_port
+from remote_testlib import EXAMPLES, Proxy, debugged_remote_run, device_columns, proxy_of
 
 MODEL = EXAMPLES / "pneumatic_cylinder.elab"
 STIMULUS = EXAMPLES / "pneumatic_cylinder.stimulus.csv"
@@ -42,14 +40,8 @@ def _value_at(rows: list[dict], column: str, time_us: int) -> str | None:
 def test_force_and_a_conditional_breakpoint_over_the_proxy(build_cache, tmp_path):
     devices = device_columns(STIMULUS, MODEL, tmp_path / "devices.csv")
     proxy = Proxy(proxy_of(build_cache, MODEL), tmp_path / "link", "--fast", "--stimulus", str(devices))
-    port, maps, trace = free_port(), tmp_path / "maps", tmp_path / "remote.csv"
-    host = subprocess.Popen([*EASYLAB, "remote", str(MODEL), "--target", str(proxy.link), "--fast",
-                             "--duration", "600ms", "--trace", str(trace), "--stimulus", str(STIMULUS),
-                             "--debug", f"tcp:{port},halt", "--maps", str(maps)],
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, stdin=subprocess.DEVNULL)
-    client = None
-    try:
-        client = connect(port, host)
+    with debugged_remote_run(proxy, MODEL, tmp_path, "--duration", "600ms", "--stimulus", str(STIMULUS)) as run:
+        client, maps, trace = run.client, run.maps, run.trace
         client.hello()
         _wait_halted(client)
         m = DebugMap.load(maps / "debug_map.json")
@@ -65,17 +57,6 @@ def test_force_and_a_conditional_breakpoint_over_the_proxy(build_cache, tmp_path
         client.release()
         client.bp_clear()
         client.run()
-        _, err = host.communicate(timeout=120)
-        assert host.returncode == 0, err
-        status, proxy_err = proxy.finish()
-        assert status == 0, proxy_err
-    finally:
-        if client:
-            client.close()
-        if host.poll() is None:
-            host.kill()
-            host.communicate()
-        proxy.kill()
     with open(trace, newline="") as fh:
         rows = list(csv.DictReader(fh))
     assert all(_value_at(rows, "end_out.level", t) == "1" for t in range(0, 30001, 5000))

@@ -10,7 +10,6 @@ from __future__ import annotations
 import re
 
 import signal
-import socket
 import subprocess
 import sys
 import time
@@ -20,15 +19,9 @@ from easylab.host_tools.debug_protocol import DebugClient
 from easylab.host_tools.service_map import load_map
 from easylab.pipeline import lower_file
 from easylab.remote.proxy import build_proxy
-from remote_testlib import EASYLAB, EXAMPLES, LatencyRelay, Proxy
+from remote_testlib import EASYLAB, EXAMPLES, LatencyRelay, Proxy, free_port
 
 PT100 = EXAMPLES / "pt100_sensor.elab"
-
-
-def free_port() -> int:
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
 
 
 def until(condition, what: str, proc: subprocess.Popen, timeout: float = 120.0):
