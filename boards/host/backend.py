@@ -55,6 +55,7 @@ class HostBoard(BoardBase):
     out)."""
 
     has_simulator = True
+    runs_threads = True  # a multi-core build runs on POSIX threads (docs/multicore.md)
 
     def device_call(self, device: Device, handler: str) -> str:
         model = handlers.call(device, handler, self.name)
@@ -83,7 +84,11 @@ class HostBoard(BoardBase):
         sources = [p for p in generated if p.suffix == ".c"] + runtime_sources(options.release) \
             + self.description.source_paths + dds_sources + [ranges]
         exe = out_dir / program.name
-        cmd = [compiler, *chain.cflags, *mode_flags(options.release), *options.extra_cflags, *dds_cflags,
+        # A multi-core build: C11 for <stdatomic.h>, the threads' file, pthreads.
+        threads = ["-std=c11", "-pthread", "-DEL_THREADS=1"] if options.threads else []
+        if options.threads:
+            sources.append(self.description.folder / "host_threads.c")
+        cmd = [compiler, *chain.cflags, *threads, *mode_flags(options.release), *options.extra_cflags, *dds_cflags,
                *include_flags(out_dir, self.description), "-o", str(exe), *map(str, sources), *chain.ldflags,
                *dds_libs]
         proc = subprocess.run(cmd, capture_output=True, text=True)

@@ -22,6 +22,7 @@ from .. import __version__
 from ..core import expr as I
 from ..core import types as T
 from ..ir.program import ActorSpec, Buffer, Chart, Dataflow, Fire, Item, Loop, Program, Task
+from . import multicore
 from .c_syntax import C_KIND_ENUM, C_TYPE_ENUM, ExprWriter, c_comment, c_literal, ident, type_param_macros
 from ..core.impl_files import split_impl
 from .status_view import StatusView, status_views
@@ -102,6 +103,21 @@ class CModel:
     status: list[StatusView] = field(default_factory=list)  # the links' fault counters
     probes: bool = False  # the debugger's probes: a debug build of a model with a debug interface
     library: bool = False  # local execution's interfaces library, not a firmware
+    multicore: object = None  # codegen/multicore.py's MulticoreView: a multi-core build
+
+
+@dataclass
+class DataflowLayout:
+    """Where a dataflow's buffers are and how its schedule reaches them."""
+
+    df: Dataflow
+    linear: bool  # single-appearance: offsets are affine in the loop counters
+    bufs: dict[int, dict]  # buffer id -> its C name, size, loop level
+    paths: dict[str, list]  # node -> the loops above it
+    fire_nodes: dict[str, Fire]
+    insts: dict[str, object]  # instance name -> ActorInstance
+    exts: dict[str, object]  # external node -> External
+    item_ref: object  # how an expression reaches an item: the task's local copy
 
 
 class _Builder:
@@ -174,6 +190,45 @@ class _Builder:
 
     def dataflow_code(self, df: Dataflow) -> list[str]:
         """The body of one dataflow's function: its schedule, straight line."""
+        layout = self.layout(df)
+        linear, bufs, paths, fire_nodes = layout.linear, layout.bufs, layout.paths, layout.fire_nodes
+        inst_by_name, ext_by_node, item_ref = layout.insts, layout.exts, layout.item_ref
+        lines: list[str] = []
+        counters: list[str] = []
+        if not linear:
+            runs = df.schedule.run_length()
+            if len(runs) > TABLE_SCHEDULE_RUNS:
+                return self._table_schedule(runs, df, bufs, inst_by_name, ext_by_node, item_ref, paths, fire_nodes)
+        self._emit(df.schedule.body, [], lines, 1, df, bufs, linear, inst_by_name, ext_by_node, item_ref,
+                   counters, paths, fire_nodes)
+        # Delay tokens of edges linear at the top level move to the front once per activation.
+        if linear:
+            lines += self.top_level_shifts(layout)
+        decls = [f"    {'uint16_t' if count <= 0xFFFF else 'uint32_t'} {name};" for name, count in counters]
+        return decls + lines
+
+    def top_level_shifts(self, layout: "DataflowLayout") -> list[str]:
+        """Moving the delay tokens of the edges linear at the top level to
+        the front: once per activation, after every firing."""
+        lines: list[str] = []
+        for info in layout.bufs.values():
+            if info["level"] == 0 and not info["self_loop"]:
+                self._shift(info, lines, 1)
+        return lines
+
+    def fire_one(self, layout: "DataflowLayout", node: str, index: str, ind: str, lines: list[str]) -> None:
+        """One firing of ``node`` of a flat single-appearance layout, its
+        firing index within the iteration the C expression ``index``; then
+        its self-loops' delay tokens move to the front."""
+        self._fire(node, [], index, ind, lines, layout.df, layout.bufs, True, layout.insts, layout.exts,
+                   layout.item_ref, layout.paths, layout.fire_nodes)
+        for info in layout.bufs.values():
+            if info["self_loop"] and info["buf"].src == node:
+                self._shift(info, lines, len(ind) // 4)
+
+    def layout(self, df: Dataflow) -> "DataflowLayout":
+        """Declare the buffers of ``df`` as its schedule places them, and
+        say where each node sits in the schedule's loops."""
         linear = df.schedule.is_single_appearance
         inst_by_name = {self.p.instances[i].name: self.p.instances[i] for i in df.instances}
         ext_by_node = {e.node: e for e in df.externals}
@@ -215,21 +270,7 @@ class _Builder:
             if not linear:
                 self.buffers.append(f"static uint16_t {name}_rd, {name}_wr = {len(b.initial) % info['size']}u;")
             bufs[b.id] = info
-        lines: list[str] = []
-        counters: list[str] = []
-        if not linear:
-            runs = df.schedule.run_length()
-            if len(runs) > TABLE_SCHEDULE_RUNS:
-                return self._table_schedule(runs, df, bufs, inst_by_name, ext_by_node, item_ref, paths, fire_nodes)
-        self._emit(df.schedule.body, [], lines, 1, df, bufs, linear, inst_by_name, ext_by_node, item_ref,
-                   counters, paths, fire_nodes)
-        # Delay tokens of edges linear at the top level move to the front once per activation.
-        if linear:
-            for info in bufs.values():
-                if info["level"] == 0 and not info["self_loop"]:
-                    self._shift(info, lines, 1)
-        decls = [f"    {'uint16_t' if count <= 0xFFFF else 'uint32_t'} {name};" for name, count in counters]
-        return decls + lines
+        return DataflowLayout(df, linear, bufs, paths, fire_nodes, inst_by_name, ext_by_node, item_ref)
 
     def _table_schedule(self, runs, df, bufs, insts, exts, item_ref, paths, fire_nodes) -> list[str]:
         """A long schedule with circular buffers (min-buffer) as data: its
@@ -537,17 +578,28 @@ class _Builder:
         return TaskView(task, fields, release, body, publish)
 
 
-def build_view(program: Program, board, library: bool = False, probes: bool = False) -> CModel:
+def build_view(program: Program, board, library: bool = False, probes: bool = False, plan=None) -> CModel:
     """The view of a program that the C templates print (``library``: for
     local execution's interfaces library rather than a firmware;
     ``probes``: a debug build with a debug interface, whose actor firings
-    call the debugger's probe)."""
+    call the debugger's probe; ``plan``: a multi-core plan
+    (analysis/multicore.py), printed when anything in it is parallel)."""
     b = _Builder(program, board, probes)
     specs = [b.spec_view(s) for s in program.specs]
     states = [(specs[i.spec].state_type, f"el_a{i.id}_{ident(i.name)}",
                f"{program.dataflows[i.dataflow].name}.{i.name} ({c_comment(i.location)})") for i in program.instances]
-    dataflows = [(f"el_df{df.id}_{ident(df.name)}", f"dataflow {df.name} ({c_comment(df.location)}), schedule "
-                  f"{df.schedule.text()}", b.dataflow_code(df)) for df in program.dataflows]
+    mc = multicore.MulticoreView(plan.cores) if plan is not None and plan.parallel else None
+    parallel = {fp.dataflow.id: fp for fp in plan.dataflows if fp.parallel} if mc else {}
+    dataflows = []
+    for df in program.dataflows:
+        comment = f"dataflow {df.name} ({c_comment(df.location)}), schedule {df.schedule.text()}"
+        if df.id in parallel:
+            job = multicore.JOB_TASKS + 1 + len(mc.jobs)
+            body = multicore.dataflow_functions(b, parallel[df.id], job, mc)
+            comment += f", its firings on {mc.cores} cores"
+        else:
+            body = b.dataflow_code(df)
+        dataflows.append((f"el_df{df.id}_{ident(df.name)}", comment, body))
     charts = [b.chart_view(c) for c in program.charts]
     tasks = [b.task_view(t) for t in program.tasks]
     channels = [{"ch": c, "init": ", ".join(c_literal(c.type, v) for v in c.initial)} for c in program.channels]
@@ -573,9 +625,13 @@ def build_view(program: Program, board, library: bool = False, probes: bool = Fa
              for dev in program.devices if dev.read_by]
     instants = [(i.tick, sum(1 << t for t in i.publish), sum(1 << t for t in i.release)) for i in program.instants]
     deadlines = [t.deadline for t in program.tasks]
+    if mc:
+        multicore.group_table(plan, len(program.tasks), mc)
+        boot.append(f"el_threads_start({mc.cores}u); /* the other cores' threads, once */")
+        shutdown.insert(0, "el_threads_stop();")
     return CModel(program, __version__, board.name, b.items, specs, states, b.buffers, dataflows, charts, tasks,
                   channels, boot, shutdown, reads, instants, deadlines, status=status_views(program, library),
-                  probes=probes, library=library)
+                  probes=probes, library=library, multicore=mc)
 
 
 def spec_view(spec: ActorSpec) -> SpecView:

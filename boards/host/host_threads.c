@@ -1,0 +1,120 @@
+/* EasyLab host board: the threads of a multi-core build (el_threads.h). */
+#include <pthread.h>
+#include <sched.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <time.h>
+
+#include "el_threads.h"
+
+#define EL_MAX_CORES 64u
+#define EL_JOB_STOP 0xFFu
+/* Waiting: spin this many times, then yield the processor, then sleep: a
+ * wait inside an iteration is short, the wait for the next job may last
+ * a whole period. */
+#define EL_SPINS 256u
+#define EL_YIELDS 4096u
+
+static pthread_t el_threads[EL_MAX_CORES];
+static uint8_t el_core_count = 1u;
+static uint8_t el_job;                             /* written before el_go is raised */
+static atomic_uint_least32_t el_go;                /* the sequence number of the job posted last */
+static atomic_uint_least32_t el_done[EL_MAX_CORES]; /* per core: the sequence number of its last job done */
+
+static void el_pause(uint32_t round)
+{
+    if (round < EL_SPINS) {
+        return;
+    }
+    if (round < EL_YIELDS) {
+        (void)sched_yield();
+    } else {
+        struct timespec nap = { 0, 20000L };
+        (void)nanosleep(&nap, NULL);
+    }
+}
+
+static uint32_t el_wait_change(atomic_uint_least32_t *word, uint32_t seen)
+{
+    uint32_t round = 0u;
+    uint32_t now;
+    while ((now = (uint32_t)atomic_load_explicit(word, memory_order_acquire)) == seen) {
+        el_pause(round < UINT32_MAX ? round++ : round);
+    }
+    return now;
+}
+
+static void el_wait_equal(atomic_uint_least32_t *word, uint32_t value)
+{
+    uint32_t round = 0u;
+    while ((uint32_t)atomic_load_explicit(word, memory_order_acquire) != value) {
+        el_pause(round < UINT32_MAX ? round++ : round);
+    }
+}
+
+static void *el_worker(void *arg)
+{
+    uint8_t core = (uint8_t)(uintptr_t)arg;
+    uint32_t seen = 0u;
+    for (;;) {
+        seen = el_wait_change(&el_go, seen);
+        if (el_job == EL_JOB_STOP) {
+            return NULL;
+        }
+        el_gen_core_job(el_job, core);
+        atomic_store_explicit(&el_done[core], seen, memory_order_release);
+    }
+}
+
+void el_threads_start(uint8_t cores)
+{
+    uint8_t c;
+    if (cores > EL_MAX_CORES) {
+        cores = EL_MAX_CORES;
+    }
+    for (c = 1u; c < cores; c++) {
+        if (pthread_create(&el_threads[c], NULL, el_worker, (void *)(uintptr_t)c) != 0) {
+            fprintf(stderr, "easylab: cannot start the thread of core %u\n", (unsigned)c);
+            exit(1);
+        }
+        el_core_count = (uint8_t)(c + 1u);
+    }
+}
+
+void el_threads_run(uint8_t job)
+{
+    uint32_t seq;
+    uint8_t c;
+    el_job = job;
+    seq = (uint32_t)atomic_load_explicit(&el_go, memory_order_relaxed) + 1u;
+    atomic_store_explicit(&el_go, seq, memory_order_release);
+    el_gen_core_job(job, 0u);
+    for (c = 1u; c < el_core_count; c++) {
+        el_wait_equal(&el_done[c], seq);
+    }
+}
+
+void el_threads_stop(void)
+{
+    uint8_t c;
+    if (el_core_count < 2u) {
+        return;
+    }
+    el_job = EL_JOB_STOP;
+    atomic_store_explicit(&el_go, (uint32_t)atomic_load_explicit(&el_go, memory_order_relaxed) + 1u,
+                          memory_order_release);
+    for (c = 1u; c < el_core_count; c++) {
+        (void)pthread_join(el_threads[c], NULL);
+    }
+    el_core_count = 1u;
+}
+
+void el_mc_post(el_mc_flag_t *flag, uint32_t epoch)
+{
+    atomic_store_explicit(flag, epoch, memory_order_release);
+}
+
+void el_mc_wait(el_mc_flag_t *flag, uint32_t epoch)
+{
+    el_wait_equal(flag, epoch);
+}
