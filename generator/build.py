@@ -37,11 +37,13 @@ class BuildResult:
 
 
 def generate(program: Program, board: Board, out_dir: Path, release: bool = False,
-             checked: object = None, extra_files: dict[str, str] | None = None, plan=None) -> list[Path]:
+             checked: object = None, extra_files: dict[str, str] | None = None, plan=None,
+             profile: bool = False) -> list[Path]:
     """Write the generated files (model.c, the interfaces' tables and maps,
     the board's own files, ``extra_files``: a node's link; ``plan``: a
-    multi-core plan); returns their paths."""
-    files = render(program, board, release=release, plan=plan)
+    multi-core plan; ``profile``: every firing timed); returns their
+    paths."""
+    files = render(program, board, release=release, plan=plan, profile=profile)
     files.update(extra_files or {})
     files.update(board.produce(program, checked, release))
     return write_files(out_dir, files)
@@ -51,21 +53,23 @@ def build(program: Program, board_name: str, out_dir: Path, extra_cflags: list[s
           cc: str | None = None, release: bool = False, mcu: str | None = None, sim: bool = False,
           schedule: str | None = None, board_path: list[str] | tuple[str, ...] = (),
           check: bool = False, extra_files: dict[str, str] | None = None, cores: int = 1,
-          always_parallel: bool = False) -> BuildResult:
+          always_parallel: bool = False, profile: bool = False) -> BuildResult:
     """Generate and compile ``program`` for a board (found on the board
     path: ``board_path``, EASYLAB_BOARD_PATH, the installation). A release
     build has no debug interface; ``sim`` adds the board's simulator;
     ``check`` runs the board's further checks of the C. ``cores`` > 1: a
     multi-core build where the plan says it pays (``always_parallel``:
-    whatever it says), on a board that runs threads (docs/multicore.md)."""
+    whatever it says), on a board that runs threads; ``profile``: a
+    profiling build of the host board (docs/multicore.md)."""
     if program.deployment is not None:
         raise BuildError(f"model '{program.name}' has nodes: it is built node by node (build_nodes, "
                          "docs/distribution.md)")
     board = load_board(board_name, board_path).configure(mcu, sim)
     plan, plan_notes = _multicore_plan(program, board, cores, always_parallel)
     checked = board.check(program)
-    generated = generate(program, board, out_dir, release, checked, extra_files, plan)
-    options = CompileOptions(release, tuple(extra_cflags or ()), cc, schedule, check, threads=plan is not None)
+    generated = generate(program, board, out_dir, release, checked, extra_files, plan, profile)
+    options = CompileOptions(release, tuple(extra_cflags or ()), cc, schedule, check, threads=plan is not None,
+                             profile=profile)
     compiled = board.compile(program, checked, out_dir, generated, options)
     result = BuildResult(out_dir, board, compiled, generated, plan_notes + list(compiled.size.lines if compiled.size else []))
     result.notes += compiled.notes

@@ -88,6 +88,8 @@ class HostBoard(BoardBase):
         threads = ["-std=c11", "-pthread", "-DEL_THREADS=1"] if options.threads else []
         if options.threads:
             sources.append(self.description.folder / "host_threads.c")
+        if options.profile:
+            sources.append(self.description.folder / "host_profile.c")
         cmd = [compiler, *chain.cflags, *threads, *mode_flags(options.release), *options.extra_cflags, *dds_cflags,
                *include_flags(out_dir, self.description), "-o", str(exe), *map(str, sources), *chain.ldflags,
                *dds_libs]

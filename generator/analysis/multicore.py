@@ -94,11 +94,21 @@ class FiringPlan:
                     covered[c] = position[latest[c]]
         return sorted(waits)
 
+    @property
+    def used_cores(self) -> int:
+        return sum(1 for lst in self.order if lst)
+
     def predicted_ns(self) -> int:
-        """The predicted time of one iteration as the generated code runs it."""
-        if not self.parallel:
+        """The predicted time of one iteration on the cores: the makespan,
+        the cost of a parallel run and of each wait across cores (one
+        core: the sum of the costs)."""
+        if self.used_cores < 2:
             return self.sequential_ns
         return self.makespan_ns + PARALLEL_RUN_NS + CROSS_WAIT_NS * len(self.cross_waits())
+
+    def chosen_ns(self) -> int:
+        """The predicted time of one iteration as the generated code runs it."""
+        return self.predicted_ns() if self.parallel else self.sequential_ns
 
     def summary(self) -> dict:
         """The JSON object of ``easylab analyze --cores N --json`` for this dataflow."""
@@ -111,6 +121,7 @@ class FiringPlan:
             "critical_path_ns": self.critical_path_ns,
             "predicted_ns": self.predicted_ns(),
             "speedup": _ratio(self.sequential_ns, self.predicted_ns()),
+            "cross_core_waits": len(self.cross_waits()),
             "parallel": self.parallel,
             "reason": self.reason,
             "schedule": [[{"firing": _label(self.firings[f]), "start_ns": self.start[f], "cost_ns": self.cost[f]}
@@ -120,9 +131,9 @@ class FiringPlan:
     def render_text(self) -> str:
         s = self.summary()
         lines = [f"dataflow {s['name']} on {self.cores} cores: {s['firings']} firings per iteration, "
-                 f"{s['sequential_ns']} ns on one core, makespan {s['makespan_ns']} ns "
-                 f"(critical path {s['critical_path_ns']} ns), predicted {s['predicted_ns']} ns "
-                 f"(speedup {s['speedup']})",
+                 f"{s['sequential_ns']} ns on one core; on {self.cores}: makespan {s['makespan_ns']} ns "
+                 f"(critical path {s['critical_path_ns']} ns), predicted {s['predicted_ns']} ns with "
+                 f"{s['cross_core_waits']} waits across cores (speedup {s['speedup']})",
                  f"  {'parallel' if self.parallel else 'single core'}: {self.reason}"]
         for c, lst in enumerate(self.order):
             runs = _runs([self.firings[f] for f in lst])
@@ -207,26 +218,23 @@ def firing_plan(program: Program, df: Dataflow, cores: int, costs: dict[str, int
     firings, preds = precedence_graph(program, df)
     cost = [firing_cost(program, df, node, costs) for node, _ in firings]
     if len(firings) > MAX_FIRINGS:
-        core, start, order = _one_core(cost)
+        core, start, order = _one_core(cost, cores)
         return FiringPlan(df, cores, firings, preds, cost, core, start, order, False,
                           f"{len(firings)} firings per iteration, more than {MAX_FIRINGS}: kept on one core")
     core, start, order = list_schedule(preds, cost, cores)
-    fp = FiringPlan(df, cores, firings, preds, cost, core, start, order, True, "")
-    used = sum(1 for lst in order if lst)
+    fp = FiringPlan(df, cores, firings, preds, cost, core, start, order, False, "")
     gain = fp.sequential_ns - fp.predicted_ns()
-    if cores == 1 or used < 2:
-        fp.parallel, fp.reason = False, "no two firings can run at once" if cores > 1 else "one core"
+    if cores == 1:
+        fp.reason = "one core"
+    elif fp.used_cores < 2:
+        fp.reason = "no two firings can run at once"
     elif always:
-        fp.reason = "parallel on request"
+        fp.parallel, fp.reason = True, "parallel on request"
     elif gain <= 0:
-        fp.parallel = False
-        fp.reason = (f"parallel does not pay: it would take {fp.predicted_ns()} ns (synchronisation included) "
-                     f"against {fp.sequential_ns} ns on one core")
+        fp.reason = (f"parallel does not pay: {fp.predicted_ns()} ns on {cores} cores (synchronisation included) "
+                     f"against {fp.sequential_ns} ns on one")
     else:
-        fp.reason = f"saves {gain} ns per iteration"
-    if not fp.parallel:
-        fp.core, fp.start, fp.order = _one_core(cost)
-        fp.order += [[] for _ in range(cores - 1)]
+        fp.parallel, fp.reason = True, f"saves {gain} ns per iteration"
     return fp
 
 
@@ -349,12 +357,12 @@ def _bottom_levels(preds: list[tuple[int, ...]], cost: list[int]) -> list[int]:
     return level
 
 
-def _one_core(cost: list[int]) -> tuple[list[int], list[int], list[list[int]]]:
+def _one_core(cost: list[int], cores: int) -> tuple[list[int], list[int], list[list[int]]]:
     start, t = [], 0
     for c in cost:
         start.append(t)
         t += c
-    return [0] * len(cost), start, [list(range(len(cost)))]
+    return [0] * len(cost), start, [list(range(len(cost)))] + [[] for _ in range(cores - 1)]
 
 
 def task_groups(program: Program, cores: int, flows: list[FiringPlan], costs: dict[str, int],
@@ -383,8 +391,6 @@ def task_groups(program: Program, cores: int, flows: list[FiringPlan], costs: di
                                        f"{max(loads) + PARALLEL_RUN_NS} ns on {cores} (synchronisation included)")
         else:
             parallel, reason = True, f"saves {saved} ns per release"
-        if not parallel:
-            core = {t: 0 for t in tasks}
         groups.append(TaskGroup(list(tasks), [program.tasks[t].name for t in tasks], cost, core, parallel, reason))
     return groups
 

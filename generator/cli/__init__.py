@@ -56,6 +56,10 @@ def build_parser() -> argparse.ArgumentParser:
                         "time against one core, the placement of tasks released together (docs/multicore.md)")
     p.add_argument("--profile", action="store_true",
                    help="with --cores: measure each firing's cost by a profiling run of the host build")
+    p.add_argument("--stimulus", metavar="CSV", help="with --profile: the run's stimulus (default: MODEL.stimulus.csv "
+                                                     "beside the model, if any)")
+    p.add_argument("--duration", default="2s", metavar="T",
+                   help="with --profile: the run's logical duration (default: 2s)")
     p.set_defaults(func=model_commands.cmd_analyze)
 
     p = sub.add_parser("build", help="generate C for a board and compile it",

@@ -151,7 +151,7 @@ def _analyze_cores(args, path: Path) -> int:
     if path.suffix.lower() == ".xml":
         raise CliError(f"{path}: --cores plans a model's dataflows and tasks: give a model file (.elab)")
     program = lower_model(args.file, args.schedule)
-    costs = _profile_costs(program) if args.profile else {}
+    costs = _profile_costs(program, path, args.stimulus, args.duration) if args.profile else {}
     found = multicore.plan(program, args.cores, costs)
     if args.dataflow:
         found.dataflows = [p for p in found.dataflows if p.dataflow.name == args.dataflow]
@@ -167,15 +167,19 @@ def _analyze_cores(args, path: Path) -> int:
     return 0
 
 
-def _profile_costs(program) -> dict[str, int]:
-    """ns per firing by "dataflow.node", from a profiling run of the host build."""
+def _profile_costs(program, path: Path, stimulus: str | None, duration: str) -> dict[str, int]:
+    """ns per firing by "dataflow.node", from a profiling run of the host
+    build with ``stimulus``, else the model's MODEL.stimulus.csv beside it
+    if there is one."""
     import tempfile
 
     from ..analysis.profile import ProfileError, profile_program
 
+    beside = path.with_suffix(".stimulus.csv")
+    found = Path(stimulus) if stimulus else (beside if beside.exists() else None)
     with tempfile.TemporaryDirectory(prefix="easylab-profile-") as tmp:
         try:
-            return profile_program(program, Path(tmp))
+            return profile_program(program, Path(tmp), found, duration)
         except ProfileError as err:
             raise CliError(str(err)) from None
 

@@ -104,6 +104,7 @@ class CModel:
     probes: bool = False  # the debugger's probes: a debug build of a model with a debug interface
     library: bool = False  # local execution's interfaces library, not a firmware
     multicore: object = None  # codegen/multicore.py's MulticoreView: a multi-core build
+    profile: bool = False  # a profiling build (el_profile.h)
 
 
 @dataclass
@@ -125,6 +126,7 @@ class _Builder:
         self.p = program
         self.board = board
         self.probes = probes  # the debugger's probes of actor firings
+        self.profile = False  # a profiling build: every actor firing timed
         self.items = [self._item_view(i) for i in program.items]
         self.buffers: list[str] = []
 
@@ -427,6 +429,8 @@ class _Builder:
         for name, expr in inst.runtime_args.items():
             args.append(ExprWriter(item_ref).write(expr))
         call = f"el_spec{spec.id}_{spec.c_name}_step({', '.join(args)});"
+        if self.profile:  # a profiling build times every firing (docs/multicore.md)
+            call = f"el_prof_begin(); {call} el_prof_end({inst.id}u);"
         if self.probes:  # the debugger's probe of this firing: the instance's id is its debug actor id
             lines.append(f"{ind}EL_DEBUG_PROBE_ACTOR({inst.id}u);")
         if decls or pre or post:
@@ -578,13 +582,16 @@ class _Builder:
         return TaskView(task, fields, release, body, publish)
 
 
-def build_view(program: Program, board, library: bool = False, probes: bool = False, plan=None) -> CModel:
+def build_view(program: Program, board, library: bool = False, probes: bool = False, plan=None,
+               profile: bool = False) -> CModel:
     """The view of a program that the C templates print (``library``: for
     local execution's interfaces library rather than a firmware;
     ``probes``: a debug build with a debug interface, whose actor firings
     call the debugger's probe; ``plan``: a multi-core plan
-    (analysis/multicore.py), printed when anything in it is parallel)."""
+    (analysis/multicore.py), printed when anything in it is parallel;
+    ``profile``: every actor firing timed, for ``easylab analyze --profile``)."""
     b = _Builder(program, board, probes)
+    b.profile = profile
     specs = [b.spec_view(s) for s in program.specs]
     states = [(specs[i.spec].state_type, f"el_a{i.id}_{ident(i.name)}",
                f"{program.dataflows[i.dataflow].name}.{i.name} ({c_comment(i.location)})") for i in program.instances]
@@ -631,7 +638,7 @@ def build_view(program: Program, board, library: bool = False, probes: bool = Fa
         shutdown.insert(0, "el_threads_stop();")
     return CModel(program, __version__, board.name, b.items, specs, states, b.buffers, dataflows, charts, tasks,
                   channels, boot, shutdown, reads, instants, deadlines, status=status_views(program, library),
-                  probes=probes, library=library, multicore=mc)
+                  probes=probes, library=library, multicore=mc, profile=profile)
 
 
 def spec_view(spec: ActorSpec) -> SpecView:

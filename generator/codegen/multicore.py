@@ -53,10 +53,12 @@ def dataflow_functions(builder, fp: FiringPlan, job: int, view: MulticoreView) -
     waits_before: dict[int, list[int]] = {}
     for f, p in waits:
         waits_before.setdefault(f, []).append(p)
-    view.declarations += [f"static uint32_t {name}_epoch; /* iterations run on the cores */",
-                          f"static el_mc_flag_t {name}_done[{max(len(awaited), 1)}]; "
-                          f"/* the epoch of the firings other cores wait for */"]
-    per_core = [f"    const uint32_t el_epoch = {name}_epoch;", "    switch (el_core) {"]
+    # Without a wait across cores (independent firings) there is no epoch to keep.
+    if awaited:
+        view.declarations += [f"static uint32_t {name}_epoch; /* iterations run on the cores */",
+                              f"static el_mc_flag_t {name}_done[{len(awaited)}]; "
+                              f"/* the epoch of the firings other cores wait for */"]
+    per_core = ([f"    const uint32_t el_epoch = {name}_epoch;"] if awaited else []) + ["    switch (el_core) {"]
     uses_loop = False
     for core, order in enumerate(fp.order):
         if not order:
@@ -73,10 +75,10 @@ def dataflow_functions(builder, fp: FiringPlan, job: int, view: MulticoreView) -
     sequential, looped = _firings(builder, layout, fp, list(range(len(fp.firings))), "        ", {}, {}, name)
     body = (["    uint16_t el_r;"] if looped else []) + ["    if (el_mc_serial) { /* the cores run a group of tasks */"]
     body += sequential
-    body += ["    } else {",
-             f"        {name}_epoch = ({name}_epoch == UINT32_MAX) ? 1u : {name}_epoch + 1u;",
-             f"        el_threads_run({job}u);",
-             "    }"]
+    body += ["    } else {"]
+    if awaited:  # 0 is the flags' value before any iteration: never an epoch
+        body.append(f"        {name}_epoch = ({name}_epoch == UINT32_MAX) ? 1u : {name}_epoch + 1u;")
+    body += [f"        el_threads_run({job}u);", "    }"]
     return body + builder.top_level_shifts(layout)
 
 
