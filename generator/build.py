@@ -80,14 +80,23 @@ def build(program: Program, board_name: str, out_dir: Path, extra_cflags: list[s
     return result
 
 
+def threads_problem(board: Board, cores: int) -> str | None:
+    """Why ``board`` cannot run on ``cores`` cores (its board.toml lacks
+    ``threads = true``), else None."""
+    if cores <= 1 or board.description.raw.get("threads", False):
+        return None
+    return (f"board '{board.name}' runs on one core: {cores} cores need a board that runs threads (board.toml: "
+            f"threads = true; the host board; docs/multicore.md)")
+
+
 def _multicore_plan(program: Program, board: Board, cores: int, always: bool):
     """(the plan to print, or None for a single-core build; the notes that
     say what was chosen)."""
     if cores <= 1:
         return None, []
-    if not getattr(board, "runs_threads", False):
-        raise BuildError(f"board '{board.name}' runs on one core: --cores {cores} needs a board that runs threads "
-                         f"(the host board; docs/multicore.md)")
+    problem = threads_problem(board, cores)
+    if problem:
+        raise BuildError(problem)
     from .analysis.multicore import plan as multicore_plan
 
     found = multicore_plan(program, cores, always=always)
@@ -96,7 +105,7 @@ def _multicore_plan(program: Program, board: Board, cores: int, always: bool):
     notes += [f"tasks {', '.join(g.names)}: {'on ' + str(cores) + ' cores' if g.parallel else 'one core'} ({g.reason})"
               for g in found.groups]
     if not found.parallel:
-        return None, notes + [f"--cores {cores}: nothing pays on more than one core: a single-core build"]
+        return None, notes + [f"{cores} cores: nothing pays on more than one core: a single-core build"]
     return found, notes
 
 
@@ -123,5 +132,6 @@ def build_nodes(program: Program, out_dir: Path, extra_cflags: list[str] | None 
         cflags = [*(extra_cflags or ()), *link_defines(node)]
         built[name] = build(node.program, node.node.board, out_dir / name, cflags, None, release,
                             node.node.mcu, sim=board.has_simulator, schedule=schedule,
-                            board_path=board_path, check=check, extra_files=link_files(node))
+                            board_path=board_path, check=check, extra_files=link_files(node),
+                            cores=node.node.cores)
     return built

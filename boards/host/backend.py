@@ -55,7 +55,6 @@ class HostBoard(BoardBase):
     out)."""
 
     has_simulator = True
-    runs_threads = True  # a multi-core build runs on POSIX threads (docs/multicore.md)
 
     def device_call(self, device: Device, handler: str) -> str:
         model = handlers.call(device, handler, self.name)

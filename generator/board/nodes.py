@@ -32,6 +32,10 @@ def node_problems(program: Program, board_path: list[str] | tuple[str, ...] = ()
             dds = dds_problem(board, node.program)
             if dds:
                 raise BuildError(dds)
+            from ..build import threads_problem
+            threads = threads_problem(board, node.node.cores)
+            if threads:
+                raise BuildError(threads)
             board.configure(node.node.mcu).check(node.program)
         except BuildError as err:
             problems.append(f"{where}: {err}")

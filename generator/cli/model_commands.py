@@ -215,7 +215,8 @@ def _build_nodes(program, args) -> int:
     from ..analysis.distribution import round_summary
     from ..build import BuildError, build_nodes
 
-    given = [f"{option} {value}" for option, value in (("--board", args.board), ("--mcu", args.mcu), ("--cc", args.cc))
+    given = [f"{option} {value}" for option, value in (("--board", args.board), ("--mcu", args.mcu), ("--cc", args.cc),
+                                                       ("--cores", getattr(args, "cores", None)))
              if value is not None]
     if given:
         nodes = ", ".join(f"{n.name} on {n.board}{f' ({n.mcu})' if n.mcu else ''}" for n in program.deployment.nodes)

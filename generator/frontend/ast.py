@@ -378,12 +378,14 @@ class Interface(Node):
 
 @dataclass(frozen=True)
 class NodeDecl(Named):
-    """``node NAME board B [mcu M] ["title"]``."""
+    """``node NAME board B [mcu M] [cores N] ["title"]``."""
 
     board: str
     board_span: Span
     mcu: str | None
     title: str | None
+    cores: int | None = None  # a PC node's cores (docs/multicore.md)
+    cores_span: Span | None = None
 
 
 @dataclass(frozen=True)

@@ -466,11 +466,16 @@ class ToAst(Transformer):
     def node_mcu(self, meta, ch):
         return ("mcu", ch[0])
 
+    def node_cores(self, meta, ch):
+        return ("cores", int(ch[0]), self._tspan(ch[0]))
+
     def node_decl(self, meta, ch):
-        mcu = next((str(c[1]) for c in ch[2:] if isinstance(c, tuple)), None)
+        mcu = next((str(c[1]) for c in ch[2:] if isinstance(c, tuple) and c[0] == "mcu"), None)
+        cores = next((c for c in ch[2:] if isinstance(c, tuple) and c[0] == "cores"), None)
         title = next((self._string(c) for c in ch[2:] if isinstance(c, Token) and c.type == "STRING"), None)
         return ast.NodeDecl(**self._named(meta, ch[0]), board=str(ch[1]), board_span=self._tspan(ch[1]),
-                            mcu=mcu, title=title)
+                            mcu=mcu, title=title, cores=cores[1] if cores else None,
+                            cores_span=cores[2] if cores else None)
 
     def link_engine(self, meta, ch):
         return "dds" if ch[0].type == "DDS" else "modbus-" + str(ch[0])

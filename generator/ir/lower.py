@@ -306,7 +306,7 @@ def lower(model: CheckedModel, timing: Timing) -> Program:
 
 def _deployment(model: CheckedModel, timing: Timing, program: Program, low: _Lowering) -> Deployment:
     """Where each task and device runs, the links and what crosses them."""
-    nodes = [NodeSpec(n.name, n.board, n.mcu, n.decl.title) for n in model.nodes.values()]
+    nodes = [NodeSpec(n.name, n.board, n.mcu, n.decl.title, n.decl.cores or 1) for n in model.nodes.values()]
     links = [LinkSpec(lk.name, lk.engine, dict(lk.settings),
                       [LinkMember(m.node.name, m.role, str(m.uart) if m.uart else None, m.unit) for m in lk.members])
              for lk in model.links.values()]

@@ -176,3 +176,31 @@ def test_cores_must_be_a_positive_number(tmp_path):
     assert proc.returncode == 2 and "the number of cores must be 1 to 64" in proc.stderr
     proc = cli("analyze", blink, "--profile")
     assert proc.returncode == 1 and "give --cores N too" in proc.stderr
+
+
+ROBOT = EXAMPLES[0].parent / "robot" / "robot.elab"
+
+
+def test_a_pc_node_says_its_cores_in_the_model(tmp_path):
+    text = ROBOT.read_text(encoding="utf-8").replace("node planner board host", "node planner board host cores 2")
+    program, result = lower_file(ROBOT, text=text)
+    assert program is not None, result.report()
+    assert {n.name: n.cores for n in program.deployment.nodes} == {"planner": 2, "joint1": 1, "joint2": 1}
+    bad = text.replace("cores 2", "cores 0")
+    program, result = lower_file(ROBOT, text=bad)
+    assert program is None
+    line = next(i for i, ln in enumerate(bad.splitlines(), 1) if "cores 0" in ln)
+    col = bad.splitlines()[line - 1].index("0 \"PC") + 1
+    assert f"robot.elab:{line}:{col}: error: node 'planner' has 0 cores: a node runs on 1 to 64" in result.report()
+
+
+def test_an_mcu_node_with_cores_is_refused(tmp_path):
+    model = tmp_path / "robot.elab"
+    for f in ROBOT.parent.iterdir():
+        if f.is_file():
+            (tmp_path / f.name).write_bytes(f.read_bytes())
+    model.write_text(ROBOT.read_text(encoding="utf-8").replace("mcu atmega328p \"shoulder", "mcu atmega328p cores 2 \"shoulder"),
+                     encoding="utf-8")
+    proc = cli("check", model)
+    assert proc.returncode == 1
+    assert "node 'joint1' (board avr, atmega328p): board 'avr' runs on one core" in proc.stderr
