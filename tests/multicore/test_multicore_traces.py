@@ -1,9 +1,10 @@
 """Multi-core builds of the host board give the single-core trace, byte
-for byte: every example, random SDF graphs (the generator of
-tests/native/test_native_sdf_random.py) and a fixed sample of the
-back-to-back random models (tests/crosscheck/modelgen.py), on 1, 2 and 4
-cores, parallel whatever the prediction says; and a ThreadSanitizer build
-of a parallel model runs with no report."""
+for byte, on 1, 2 and 4 cores, parallel whatever the prediction says:
+every example and a fixed sample of the back-to-back random models
+(tests/crosscheck/modelgen.py); random SDF graphs (the generator of
+tests/native/test_native_sdf_random.py) on 2 and 4 cores against its
+reference. A ThreadSanitizer build of a parallel model runs with no
+report."""
 
 from __future__ import annotations
 
@@ -22,17 +23,17 @@ DURATIONS = {"blink": "1s", "cd_to_dat": "100ms", "line_follower": "1s", "pneuma
 
 
 def traces_on_cores(model: Path, work: Path, duration: str, stimulus: Path | None,
-                    cflags: str = "-O1") -> dict[int, str]:
+                    cflags: str = "-O0", cores: tuple[int, ...] = CORES) -> dict[int, str]:
     """cores -> the trace of ``model`` built for that many cores."""
     with ThreadPoolExecutor(max_workers=2) as pool:
-        exes = dict(zip(CORES, pool.map(lambda n: build_cores(model, work / f"c{n}", n, cflags=cflags)[0], CORES)))
+        exes = dict(zip(cores, pool.map(lambda n: build_cores(model, work / f"c{n}", n, cflags=cflags)[0], cores)))
     return {n: run(exe, work / f"c{n}.csv", duration=duration, stimulus=stimulus).trace_text
             for n, exe in exes.items()}
 
 
 @pytest.mark.parametrize("model", EXAMPLES, ids=[p.stem for p in EXAMPLES])
 def test_example_trace_is_the_same_on_1_2_and_4_cores(model, tmp_path):
-    traces = traces_on_cores(model, tmp_path, DURATIONS[model.stem], DATA / f"{model.stem}.stimulus.csv", "-O0")
+    traces = traces_on_cores(model, tmp_path, DURATIONS[model.stem], DATA / f"{model.stem}.stimulus.csv")
     assert traces[1].count("\n") > 2, "no instant traced"
     assert traces[2] == traces[1]
     assert traces[4] == traces[1]
@@ -43,7 +44,7 @@ def _random_sdf():
     return rsdf
 
 
-@settings(max_examples=4, deadline=None, derandomize=True, phases=[Phase.explicit, Phase.generate],
+@settings(max_examples=3, deadline=None, derandomize=True, phases=[Phase.explicit, Phase.generate],
           suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.too_slow,
                                  HealthCheck.data_too_large])
 @given(g=_random_sdf().graphs())
@@ -52,13 +53,14 @@ def test_random_dataflow_trace_is_the_same_on_1_2_and_4_cores(g, tmp_path_factor
     work = tmp_path_factory.mktemp("mc_rsdf")
     model = work / "random_sdf.elab"
     model.write_text(rsdf.elab(g), encoding="utf-8")
-    traces = traces_on_cores(model, work, f"{rsdf.ACTIVATIONS + 1}ms", None, cflags="-O0")
+    # One core's values are the reference's (tests/native/test_native_sdf_random.py): 2 and 4 against it.
+    traces = traces_on_cores(model, work, f"{rsdf.ACTIVATIONS + 1}ms", None, cores=(2, 4))
     expected = rsdf.reference(g, rsdf.ACTIVATIONS)
     from native_testlib import Trace
     trace = Trace(traces[4])
     for name, values in expected.items():
         assert [trace.int(name, 1000 * (a + 1)) for a in range(rsdf.ACTIVATIONS)] == values, model.read_text()
-    assert traces[2] == traces[1] and traces[4] == traces[1]
+    assert traces[2] == traces[4]
 
 
 @pytest.mark.parametrize("seed", [1, 2, 3])
@@ -69,7 +71,7 @@ def test_random_model_trace_is_the_same_on_1_2_and_4_cores(seed, tmp_path):
 
     generated = generate(seed, MODES["host"][0])
     case = write_case(tmp_path, generated.name, generated.text, generated.stimulus, generated.duration_ms)
-    traces = traces_on_cores(case.model, tmp_path, f"{case.duration_ms}ms", case.stimulus, "-O0")
+    traces = traces_on_cores(case.model, tmp_path, f"{case.duration_ms}ms", case.stimulus)
     assert traces[2] == traces[1], case.model
     assert traces[4] == traces[1], case.model
 
