@@ -80,24 +80,17 @@ def build(program: Program, board_name: str, out_dir: Path, extra_cflags: list[s
     return result
 
 
-def threads_problem(board: Board, cores: int) -> str | None:
-    """Why ``board`` cannot run on ``cores`` cores (its board.toml lacks
-    ``threads = true``), else None."""
-    if cores <= 1 or board.description.raw.get("threads", False):
-        return None
-    return (f"board '{board.name}' runs on one core: {cores} cores need a board that runs threads (board.toml: "
-            f"threads = true; the host board; docs/multicore.md)")
-
-
 def _multicore_plan(program: Program, board: Board, cores: int, always: bool):
     """(the plan to print, or None for a single-core build; the notes that
     say what was chosen)."""
     if cores <= 1:
         return None, []
+    from .board.nodes import threads_problem
+
     problem = threads_problem(board, cores)
     if problem:
         raise BuildError(problem)
-    from .analysis.multicore import plan as multicore_plan
+    from .ir.multicore import plan as multicore_plan
 
     found = multicore_plan(program, cores, always=always)
     notes = [f"dataflow {p.dataflow.name}: {'on ' + str(cores) + ' cores' if p.parallel else 'one core'} ({p.reason})"

@@ -146,7 +146,7 @@ def _analyze(args) -> int:
 
 def _analyze_cores(args, path: Path) -> int:
     """``easylab analyze MODEL --cores N [--profile] [--json]``: the multi-core plan (docs/multicore.md)."""
-    from ..analysis import multicore
+    from ..ir import multicore
 
     if path.suffix.lower() == ".xml":
         raise CliError(f"{path}: --cores plans a model's dataflows and tasks: give a model file (.elab)")
@@ -173,7 +173,7 @@ def _profile_costs(program, path: Path, stimulus: str | None, duration: str) -> 
     if there is one."""
     import tempfile
 
-    from ..analysis.profile import ProfileError, profile_program
+    from .profile import ProfileError, profile_program
 
     beside = path.with_suffix(".stimulus.csv")
     found = Path(stimulus) if stimulus else (beside if beside.exists() else None)

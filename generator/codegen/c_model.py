@@ -23,6 +23,7 @@ from ..core import expr as I
 from ..core import types as T
 from ..ir.program import ActorSpec, Buffer, Chart, Dataflow, Fire, Item, Loop, Program, Task
 from . import multicore
+from .dataflow_layout import DataflowLayout, table_schedule
 from .c_syntax import C_KIND_ENUM, C_TYPE_ENUM, ExprWriter, c_comment, c_literal, ident, type_param_macros
 from ..core.impl_files import split_impl
 from .status_view import StatusView, status_views
@@ -107,20 +108,6 @@ class CModel:
     profile: bool = False  # a profiling build (el_profile.h)
 
 
-@dataclass
-class DataflowLayout:
-    """Where a dataflow's buffers are and how its schedule reaches them."""
-
-    df: Dataflow
-    linear: bool  # single-appearance: offsets are affine in the loop counters
-    bufs: dict[int, dict]  # buffer id -> its C name, size, loop level
-    paths: dict[str, list]  # node -> the loops above it
-    fire_nodes: dict[str, Fire]
-    insts: dict[str, object]  # instance name -> ActorInstance
-    exts: dict[str, object]  # external node -> External
-    item_ref: object  # how an expression reaches an item: the task's local copy
-
-
 class _Builder:
     def __init__(self, program: Program, board, probes: bool = False) -> None:
         self.p = program
@@ -200,7 +187,7 @@ class _Builder:
         if not linear:
             runs = df.schedule.run_length()
             if len(runs) > TABLE_SCHEDULE_RUNS:
-                return self._table_schedule(runs, df, bufs, inst_by_name, ext_by_node, item_ref, paths, fire_nodes)
+                return table_schedule(self, runs, layout)
         self._emit(df.schedule.body, [], lines, 1, df, bufs, linear, inst_by_name, ext_by_node, item_ref,
                    counters, paths, fire_nodes)
         # Delay tokens of edges linear at the top level move to the front once per activation.
@@ -209,28 +196,27 @@ class _Builder:
         decls = [f"    {'uint16_t' if count <= 0xFFFF else 'uint32_t'} {name};" for name, count in counters]
         return decls + lines
 
-    def top_level_shifts(self, layout: "DataflowLayout") -> list[str]:
-        """Moving the delay tokens of the edges linear at the top level to
-        the front: once per activation, after every firing."""
+    def top_level_shifts(self, layout: DataflowLayout) -> list[str]:
+        """The delay tokens of edges linear at the top level to the front, after every firing."""
         lines: list[str] = []
         for info in layout.bufs.values():
             if info["level"] == 0 and not info["self_loop"]:
                 self._shift(info, lines, 1)
         return lines
 
-    def fire_one(self, layout: "DataflowLayout", node: str, index: str, ind: str, lines: list[str]) -> None:
-        """One firing of ``node`` of a flat single-appearance layout, its
-        firing index within the iteration the C expression ``index``; then
-        its self-loops' delay tokens move to the front."""
-        self._fire(node, [], index, ind, lines, layout.df, layout.bufs, True, layout.insts, layout.exts,
+    def fire_one(self, layout: DataflowLayout, node: str, index: str | None, ind: str, lines: list[str]) -> None:
+        """One firing of ``node`` outside the schedule's loops: in a flat
+        single-appearance layout, its firing index within the iteration is
+        the C expression ``index``, and its self-loops' delay tokens move
+        to the front after it; over circular buffers, ``index`` is None."""
+        self._fire(node, [], index, ind, lines, layout.df, layout.bufs, layout.linear, layout.insts, layout.exts,
                    layout.item_ref, layout.paths, layout.fire_nodes)
-        for info in layout.bufs.values():
+        for info in layout.bufs.values() if layout.linear else ():
             if info["self_loop"] and info["buf"].src == node:
                 self._shift(info, lines, len(ind) // 4)
 
-    def layout(self, df: Dataflow) -> "DataflowLayout":
-        """Declare the buffers of ``df`` as its schedule places them, and
-        say where each node sits in the schedule's loops."""
+    def layout(self, df: Dataflow) -> DataflowLayout:
+        """Declare the buffers of ``df`` as its schedule places them; where each node sits in its loops."""
         linear = df.schedule.is_single_appearance
         inst_by_name = {self.p.instances[i].name: self.p.instances[i] for i in df.instances}
         ext_by_node = {e.node: e for e in df.externals}
@@ -273,40 +259,6 @@ class _Builder:
                 self.buffers.append(f"static uint16_t {name}_rd, {name}_wr = {len(b.initial) % info['size']}u;")
             bufs[b.id] = info
         return DataflowLayout(df, linear, bufs, paths, fire_nodes, inst_by_name, ext_by_node, item_ref)
-
-    def _table_schedule(self, runs, df, bufs, insts, exts, item_ref, paths, fire_nodes) -> list[str]:
-        """A long schedule with circular buffers (min-buffer) as data: its
-        run-length firing sequence in a ROM table of (node, count) pairs
-        walked by a loop around one switch over the nodes. The firing
-        order is the schedule's, so the values are the same; the code is
-        the size of one firing per node instead of one per appearance."""
-        nodes = list(dict.fromkeys(actor for actor, _ in runs))
-        pairs: list[tuple[int, int]] = []
-        for actor, count in runs:
-            while count > 0:
-                pairs.append((nodes.index(actor), min(count, 255)))
-                count -= 255
-        index_t = "uint16_t" if len(pairs) <= 0xFFFF else "uint32_t"
-        small = len(nodes) <= 256
-        elem_t, read = ("uint8_t", "EL_ROM_READ_U8") if small else ("uint16_t", "EL_ROM_READ_U16")
-        lines = [f"    static const {elem_t} el_seq[{2 * len(pairs)}] EL_ROM = {{ /* (node, firings) */"]
-        flat = [v for pair in pairs for v in pair]
-        for k in range(0, len(flat), 16):
-            lines.append("        " + ", ".join(f"{v}u" for v in flat[k:k + 16]) + ",")
-        lines.append("    };")
-        lines += [f"    {index_t} el_k;", "    uint8_t el_n;",
-                  f"    for (el_k = 0u; el_k < {len(pairs)}u; el_k++) {{",
-                  f"        {elem_t} el_node = {read}(&el_seq[2u * el_k]);",
-                  f"        uint8_t el_times = (uint8_t){read}(&el_seq[2u * el_k + 1u]);",
-                  "        for (el_n = 0u; el_n < el_times; el_n++) {",
-                  "            switch (el_node) {"]
-        for i, node in enumerate(nodes):
-            lines.append(f"            case {i}u:")
-            self._fire(node, [], None, "                ", lines, df, bufs, False, insts, exts, item_ref, paths,
-                       fire_nodes)
-            lines.append("                break;")
-        lines += ["            default: break;", "            }", "        }", "    }"]
-        return lines
 
     @staticmethod
     def _firings_below(path, level, fire) -> int:
@@ -588,7 +540,7 @@ def build_view(program: Program, board, library: bool = False, probes: bool = Fa
     local execution's interfaces library rather than a firmware;
     ``probes``: a debug build with a debug interface, whose actor firings
     call the debugger's probe; ``plan``: a multi-core plan
-    (analysis/multicore.py), printed when anything in it is parallel;
+    (ir/multicore.py), printed when anything in it is parallel;
     ``profile``: every actor firing timed, for ``easylab analyze --profile``)."""
     b = _Builder(program, board, probes)
     b.profile = profile

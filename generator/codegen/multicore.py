@@ -1,5 +1,5 @@
 """The C of a multi-core build (docs/multicore.md): what the plan of
-analysis/multicore.py decided, printed. Nothing here decides anything.
+ir/multicore.py decided, printed. Nothing here decides anything.
 
 A dataflow the plan runs in parallel gets a flat single-appearance layout
 (every edge holds one iteration's tokens after its delay ones, so every
@@ -17,7 +17,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field, replace
 
-from ..analysis.multicore import FiringPlan, MulticorePlan
+from ..ir.multicore import FiringPlan, MulticorePlan
 from ..ir.program import Fire, Schedule
 from .c_syntax import ident
 

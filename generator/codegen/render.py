@@ -69,8 +69,8 @@ def render(program: Program, board: Target, template_dir: Path | None = None,
            release: bool = False, plan=None, profile: bool = False) -> dict[str, str]:
     """The generated files: {file name: text}. Deterministic: the same
     program gives byte-identical files. ``plan``: a multi-core plan
-    (analysis/multicore.py); one that runs nothing in parallel changes
-    nothing. ``profile``: a profiling build (analysis/profile.py)."""
+    (ir/multicore.py); one that runs nothing in parallel changes
+    nothing. ``profile``: a profiling build (cli/profile.py)."""
     view = _view_with_interfaces(program, board, release, plan=plan, profile=profile)
     env = environment(template_dir)
     files = {"model.c": env.get_template("model.c.j2").render(m=view)}

@@ -283,6 +283,8 @@ class ActorType(Named):
     code: tuple[CodeBlock, ...]
     impl: str | None
     impl_span: Span | None
+    cost: object = None  # `cost 20 us`: the time of one firing, for the multi-core plan (docs/multicore.md)
+    cost_span: Span | None = None
 
 
 @dataclass(frozen=True)

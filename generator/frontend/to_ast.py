@@ -348,6 +348,9 @@ class ToAst(Transformer):
     def impl(self, meta, ch):
         return ("impl", self._string(ch[0]), self._span(meta))
 
+    def actor_cost(self, meta, ch):
+        return ("cost", ch[0], self._span(meta))
+
     def actor_type(self, meta, ch):
         name = ch[0]
         rest = list(ch[1:])
@@ -356,7 +359,7 @@ class ToAst(Transformer):
             type_params = rest.pop(0)
         params = rest.pop(0)
         ports, states, code = [], [], []
-        impl = impl_span = None
+        impl = impl_span = cost = None
         for m in rest:
             if isinstance(m, ast.ActorPort):
                 ports.append(m)
@@ -364,13 +367,18 @@ class ToAst(Transformer):
                 states.append(m)
             elif isinstance(m, ast.CodeBlock):
                 code.append(m)
+            elif m[0] == "cost":
+                if cost is not None:
+                    raise ModelError([Diagnostic(m[2], "an actor type has at most one 'cost'")])
+                cost = m
             else:
                 if impl is not None:
                     raise ModelError([Diagnostic(m[2], "an actor type has at most one 'impl'")])
                 impl, impl_span = m[1], m[2]
         return ast.ActorType(**self._named(meta, name), type_params=type_params, params=params,
                              ports=tuple(ports), states=tuple(states), code=tuple(code),
-                             impl=impl, impl_span=impl_span)
+                             impl=impl, impl_span=impl_span, cost=cost[1] if cost else None,
+                             cost_span=cost[2] if cost else None)
 
     # dataflows
     def schedule_choice(self, meta, ch):

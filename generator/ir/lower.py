@@ -110,7 +110,7 @@ class _Lowering:
         same_type = sum(1 for s in self.specs if s.type_name == atype.name)
         spec = ActorSpec(len(self.specs), atype.name, f"{atype.name}_{same_type}", dict(inst.type_bindings),
                          const_args, runtime, ports, states, {b.kind: b.code for b in atype.code}, impl,
-                         location(atype.name_span))
+                         location(atype.name_span), self.m.actor_costs.get(atype.name))
         self.specs.append(spec)
         self.spec_keys[key] = spec.id
         return spec.id

@@ -130,6 +130,7 @@ class ActorSpec:
     code: dict[str, str]  # start / step / stop inline C
     impl: str | None  # path of the impl file
     location: str
+    cost_ns: int | None = None  # declared `cost` of one firing (docs/multicore.md); not part of the program's id
 
 
 @dataclass
@@ -363,8 +364,9 @@ def to_json(program: Program) -> dict:
             return _expr_json(value)
         if isinstance(value, Fraction):
             return str(value)
-        if hasattr(value, "__dataclass_fields__"):
-            return {k: conv(getattr(value, k)) for k in value.__dataclass_fields__}
+        if hasattr(value, "__dataclass_fields__"):  # a cost is a planning hint: the same code with or without
+            return {k: conv(getattr(value, k)) for k in value.__dataclass_fields__
+                    if not (k == "cost_ns" and isinstance(value, ActorSpec))}
         if isinstance(value, dict):
             return {str(k): conv(v) for k, v in value.items()}
         if isinstance(value, (list, tuple)):

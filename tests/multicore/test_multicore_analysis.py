@@ -17,7 +17,7 @@ from hypothesis import strategies as st
 
 from multicore_testlib import EXAMPLES, cli
 
-from easylab.analysis import multicore
+from easylab.ir import multicore
 from easylab.board.registry import load_board
 from easylab.codegen.render import render
 from easylab.pipeline import lower_file
@@ -166,7 +166,7 @@ def test_analyze_profile_measures_every_actor(tmp_path):
 
 
 def test_profile_reads_firings_and_nanoseconds():
-    from easylab.analysis.profile import read_profile
+    from easylab.cli.profile import read_profile
     assert read_profile("G.a 4 1000\nG.b 0 0\nG.c 3 1\n") == {"G.a": 250, "G.c": 1}
 
 
@@ -204,3 +204,65 @@ def test_an_mcu_node_with_cores_is_refused(tmp_path):
     proc = cli("check", model)
     assert proc.returncode == 1
     assert "node 'joint1' (board avr, atmega328p): board 'avr' runs on one core" in proc.stderr
+
+
+FORK = """\
+model fork
+actor type Src() {
+    out y: uint32
+    state n: uint32
+    step {{ n = n + 1u; y = n; }}
+}
+actor type Work(m: uint32) {
+    in  x: uint32
+    out y: uint32
+    COST
+    step {{ y = x * m; }}
+}
+actor type Add() {
+    in  a: uint32
+    in  b: uint32
+    out y: uint32
+    step {{ y = a + b; }}
+}
+var out: uint32
+dataflow F {
+    s  = Src()
+    w1 = Work(m = 3)
+    w2 = Work(m = 5)
+    j  = Add()
+    s.y  -> w1.x
+    s.y  -> w2.x
+    w1.y -> j.a
+    w2.y -> j.b
+    j.y  -> out
+}
+task t period 1 ms { run F }
+"""
+
+
+def test_a_declared_cost_decides_and_changes_no_id():
+    heavy, result = lower_file("fork.elab", text=FORK.replace("COST", "cost 400 us"))
+    assert heavy is not None, result.report()
+    light, _ = lower_file("fork.elab", text=FORK.replace("COST", "cost 0.05 us"))
+    assert [s.cost_ns for s in heavy.specs] == [None, 400_000, 400_000, None]  # Work(3), Work(5): two specs
+    assert heavy.program_id == light.program_id
+    (fp,) = multicore.plan(heavy, 2).dataflows
+    assert fp.parallel and fp.makespan_ns < fp.sequential_ns
+    assert {fp.firings[f][0] for f in fp.order[1]} in ({"w1"}, {"w2"})
+    (fp,) = multicore.plan(light, 2).dataflows
+    assert not fp.parallel and "parallel does not pay" in fp.reason
+
+
+@pytest.mark.parametrize("cost, message", [
+    ("cost 0 us", "must be whole nanoseconds from 0.001 us to 1 s"),
+    ("cost 2 s", "must be whole nanoseconds from 0.001 us to 1 s"),
+    ("cost 0.0005 us", "must be whole nanoseconds from 0.001 us to 1 s"),
+    ("cost 3", "is a 'time'"),
+    ("cost 1 us\n    cost 2 us", "at most one 'cost'"),
+])
+def test_a_bad_cost_is_an_error_at_its_place(cost, message):
+    program, result = lower_file("fork.elab", text=FORK.replace("COST", cost))
+    assert program is None
+    report = result.report()
+    assert message in report and ("fork.elab:10:" in report or "fork.elab:11:5" in report), report

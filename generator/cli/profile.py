@@ -5,7 +5,7 @@ The host program is built with every actor firing timed (a release build:
 no debug interface), run in virtual time (``--fast``) for ``duration``
 with the model's stimulus if one is given, and its profile read back: the
 mean nanoseconds of one firing of each actor instance, by
-``"dataflow.instance"``, the keys analysis/multicore.py takes.
+``"dataflow.instance"``, the keys ir/multicore.py takes.
 """
 
 from __future__ import annotations

@@ -29,7 +29,7 @@ from __future__ import annotations
 import heapq
 from dataclasses import dataclass, field
 
-from ..ir.program import Dataflow, Program
+from .program import Dataflow, Program
 
 # A firing without a measured or declared cost (ns); an external endpoint
 # (a copy between the task's local copy and a buffer).
@@ -312,7 +312,8 @@ def firing_cost(program: Program, df: Dataflow, node: str, costs: dict[str, int]
         return max(int(measured), 1)
     if any(e.node == node for e in df.externals):
         return ENDPOINT_NS
-    declared = costs.get(program.specs[_instance(program, df, node).spec].type_name)
+    spec = program.specs[_instance(program, df, node).spec]
+    declared = costs.get(spec.type_name, spec.cost_ns)
     return max(int(declared), 1) if declared is not None else DEFAULT_FIRING_NS
 
 
