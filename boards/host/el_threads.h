@@ -4,8 +4,9 @@
  * A job is run by every core at once (el_threads_run), each core doing its
  * part (el_gen_core_job, generated); within a job, a core waits for a
  * firing of another core by its flag, which holds the epoch of the
- * iteration that ran it. No locks, no heap: C11 atomics, release on the
- * writer's side and acquire on the reader's, order everything else.
+ * iteration that ran it. No locks around data, no heap: C11 atomics,
+ * release on the writer's side and acquire on the reader's, order
+ * everything; an idle core sleeps on a condition variable.
  * Compiled only into multi-core builds (EL_THREADS). */
 #ifndef EL_THREADS_H
 #define EL_THREADS_H
