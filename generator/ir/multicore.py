@@ -120,7 +120,7 @@ class FiringPlan:
             "makespan_ns": self.makespan_ns,
             "critical_path_ns": self.critical_path_ns,
             "predicted_ns": self.predicted_ns(),
-            "speedup": _ratio(self.sequential_ns, self.predicted_ns()),
+            "speedup": round(self.sequential_ns / self.predicted_ns(), 2) if self.predicted_ns() else None,
             "cross_core_waits": len(self.cross_waits()),
             "parallel": self.parallel,
             "reason": self.reason,
@@ -133,7 +133,7 @@ class FiringPlan:
         lines = [f"dataflow {s['name']} on {self.cores} cores: {s['firings']} firings per iteration, "
                  f"{s['sequential_ns']} ns on one core; on {self.cores}: makespan {s['makespan_ns']} ns "
                  f"(critical path {s['critical_path_ns']} ns), predicted {s['predicted_ns']} ns with "
-                 f"{s['cross_core_waits']} waits across cores (speedup {s['speedup']})",
+                 f"{s['cross_core_waits']} waits across cores (speedup {s['speedup']:.2f})",
                  f"  {'parallel' if self.parallel else 'single core'}: {self.reason}"]
         for c, lst in enumerate(self.order):
             runs = _runs([self.firings[f] for f in lst])
@@ -412,7 +412,3 @@ def _runs(firings: list[tuple[str, int]]) -> list[str]:
         out.append(f"{node}#{k}" if j == i else f"{node}#{k}..{firings[j][1]}")
         i = j + 1
     return out
-
-
-def _ratio(a: int, b: int) -> str:
-    return f"{a / b:.2f}" if b else "-"
