@@ -3,6 +3,9 @@
 #include "el_model.h"
 #include "el_port.h"
 #include "el_debug.h" /* the debugger's hooks: empty macros without a debug server */
+#ifdef EL_THREADS
+#include "el_threads.h" /* a multi-core build: el_gen_bodies runs the bodies (docs/multicore.md) */
+#endif
 
 static el_tick_t el_now;
 
@@ -62,11 +65,16 @@ EL_RUN_ATTRIBUTES void el_run(int argc, char **argv)
             }
             el_port_instant(el_now);
             pending |= release;
+#ifdef EL_THREADS
+            el_gen_bodies(release);
+#endif
             for (task = 0u; release != 0u; task++, release = (el_task_mask_t)(release >> 1)) {
                 if ((release & 1u) != 0u) {
                     el_wtick_t late;
                     EL_DEBUG_TASK_BEGIN(task); /* task breakpoints, step by task */
+#ifndef EL_THREADS
                     el_gen_body(task);
+#endif
                     EL_DEBUG_TASK_END(task);
                     /* Lateness never changes the published values; it is
                      * counted so that it is never silent. */

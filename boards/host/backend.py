@@ -83,7 +83,13 @@ class HostBoard(BoardBase):
         sources = [p for p in generated if p.suffix == ".c"] + runtime_sources(options.release) \
             + self.description.source_paths + dds_sources + [ranges]
         exe = out_dir / program.name
-        cmd = [compiler, *chain.cflags, *mode_flags(options.release), *options.extra_cflags, *dds_cflags,
+        # A multi-core build: C11 for <stdatomic.h>, the threads' file, pthreads.
+        threads = ["-std=c11", "-pthread", "-DEL_THREADS=1"] if options.threads else []
+        if options.threads:
+            sources.append(self.description.folder / "host_threads.c")
+        if options.profile:
+            sources.append(self.description.folder / "host_profile.c")
+        cmd = [compiler, *chain.cflags, *threads, *mode_flags(options.release), *options.extra_cflags, *dds_cflags,
                *include_flags(out_dir, self.description), "-o", str(exe), *map(str, sources), *chain.ldflags,
                *dds_libs]
         proc = subprocess.run(cmd, capture_output=True, text=True)

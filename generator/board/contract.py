@@ -32,6 +32,8 @@ class CompileOptions:
     cc: str | None = None  # --cc: another C compiler than the board's
     schedule: str | None = None  # --schedule, for the hints of a program that does not fit
     check: bool = False  # --check: the board's further checks of the C (a board without any has nothing to add)
+    threads: bool = False  # a multi-core build (docs/multicore.md): only a board that runs threads gets one
+    profile: bool = False  # a profiling build: every actor firing timed (host board; docs/multicore.md)
 
 
 @dataclass

@@ -19,6 +19,15 @@ def dds_problem(board, program: Program) -> str | None:
             f"'{board.name}' has none: put them on a PC node")
 
 
+def threads_problem(board, cores: int) -> str | None:
+    """Why ``board`` cannot run on ``cores`` cores (its board.toml lacks
+    ``threads = true``), else None."""
+    if cores <= 1 or board.description.raw.get("threads", False):
+        return None
+    return (f"board '{board.name}' runs on one core: {cores} cores need a board that runs threads (board.toml: "
+            f"threads = true; the host board; docs/multicore.md)")
+
+
 def node_problems(program: Program, board_path: list[str] | tuple[str, ...] = ()) -> list[str]:
     """What keeps each node's program off its board (a resource its part
     lacks, a pin claimed twice, a driver the board has not), one message
@@ -32,6 +41,9 @@ def node_problems(program: Program, board_path: list[str] | tuple[str, ...] = ()
             dds = dds_problem(board, node.program)
             if dds:
                 raise BuildError(dds)
+            threads = threads_problem(board, node.node.cores)
+            if threads:
+                raise BuildError(threads)
             board.configure(node.node.mcu).check(node.program)
         except BuildError as err:
             problems.append(f"{where}: {err}")

@@ -99,6 +99,10 @@ def cmd_analyze(args) -> int:
 def _analyze(args) -> int:
     """``easylab analyze FILE [--dataflow NAME] [--schedule KIND] [--json]``."""
     path = Path(args.file)
+    if getattr(args, "profile", False) and not getattr(args, "cores", None):
+        raise CliError("--profile measures the costs of the multi-core plan: give --cores N too")
+    if getattr(args, "cores", None):
+        return _analyze_cores(args, path)
     if path.suffix.lower() == ".xml":
         try:
             graph = sdf.load_sdf3(path)
@@ -140,6 +144,46 @@ def _analyze(args) -> int:
     return 0
 
 
+def _analyze_cores(args, path: Path) -> int:
+    """``easylab analyze MODEL --cores N [--profile] [--json]``: the multi-core plan (docs/multicore.md)."""
+    from ..ir import multicore
+
+    if path.suffix.lower() == ".xml":
+        raise CliError(f"{path}: --cores plans a model's dataflows and tasks: give a model file (.elab)")
+    program = lower_model(args.file, args.schedule)
+    costs = _profile_costs(program, path, args.stimulus, args.duration) if args.profile else {}
+    found = multicore.plan(program, args.cores, costs)
+    if args.dataflow:
+        found.dataflows = [p for p in found.dataflows if p.dataflow.name == args.dataflow]
+        if not found.dataflows:
+            names = ", ".join(df.name for df in program.dataflows) or "none"
+            raise CliError(f"model '{program.name}' has no dataflow '{args.dataflow}' (its dataflows: {names})")
+    if args.json:
+        summary = found.summary()
+        summary["costs"] = "profile" if args.profile else "declared"
+        print(json.dumps(summary, indent=2))
+    else:
+        sys.stdout.write(found.render_text())
+    return 0
+
+
+def _profile_costs(program, path: Path, stimulus: str | None, duration: str) -> dict[str, int]:
+    """ns per firing by "dataflow.node", from a profiling run of the host
+    build with ``stimulus``, else the model's MODEL.stimulus.csv beside it
+    if there is one."""
+    import tempfile
+
+    from .profile import ProfileError, profile_program
+
+    beside = path.with_suffix(".stimulus.csv")
+    found = Path(stimulus) if stimulus else (beside if beside.exists() else None)
+    with tempfile.TemporaryDirectory(prefix="easylab-profile-") as tmp:
+        try:
+            return profile_program(program, Path(tmp), found, duration)
+        except ProfileError as err:
+            raise CliError(str(err)) from None
+
+
 def cmd_build(args) -> int:
     """``easylab build FILE``: one board's program, or a model of nodes node by node."""
     import shlex
@@ -154,7 +198,8 @@ def cmd_build(args) -> int:
     try:
         built = build(program, board, out, extra_cflags=shlex.split(args.cflags or ""), cc=args.cc,
                       release=args.release, mcu=args.mcu, sim=args.sim, schedule=args.schedule,
-                      board_path=args.board_path, check=args.check)
+                      board_path=args.board_path, check=args.check, cores=args.cores or 1,
+                      always_parallel=args.parallel == "always")
     except BuildError as err:
         raise CliError(str(err)) from None
     return report_built(built)
@@ -170,7 +215,8 @@ def _build_nodes(program, args) -> int:
     from ..analysis.distribution import round_summary
     from ..build import BuildError, build_nodes
 
-    given = [f"{option} {value}" for option, value in (("--board", args.board), ("--mcu", args.mcu), ("--cc", args.cc))
+    given = [f"{option} {value}" for option, value in (("--board", args.board), ("--mcu", args.mcu), ("--cc", args.cc),
+                                                       ("--cores", getattr(args, "cores", None)))
              if value is not None]
     if given:
         nodes = ", ".join(f"{n.name} on {n.board}{f' ({n.mcu})' if n.mcu else ''}" for n in program.deployment.nodes)

@@ -22,6 +22,8 @@ from .. import __version__
 from ..core import expr as I
 from ..core import types as T
 from ..ir.program import ActorSpec, Buffer, Chart, Dataflow, Fire, Item, Loop, Program, Task
+from . import multicore
+from .dataflow_layout import DataflowLayout, table_schedule
 from .c_syntax import C_KIND_ENUM, C_TYPE_ENUM, ExprWriter, c_comment, c_literal, ident, type_param_macros
 from ..core.impl_files import split_impl
 from .status_view import StatusView, status_views
@@ -102,6 +104,8 @@ class CModel:
     status: list[StatusView] = field(default_factory=list)  # the links' fault counters
     probes: bool = False  # the debugger's probes: a debug build of a model with a debug interface
     library: bool = False  # local execution's interfaces library, not a firmware
+    multicore: object = None  # codegen/multicore.py's MulticoreView: a multi-core build
+    profile: bool = False  # a profiling build (el_profile.h)
 
 
 class _Builder:
@@ -109,6 +113,7 @@ class _Builder:
         self.p = program
         self.board = board
         self.probes = probes  # the debugger's probes of actor firings
+        self.profile = False  # a profiling build: every actor firing timed
         self.items = [self._item_view(i) for i in program.items]
         self.buffers: list[str] = []
 
@@ -174,6 +179,44 @@ class _Builder:
 
     def dataflow_code(self, df: Dataflow) -> list[str]:
         """The body of one dataflow's function: its schedule, straight line."""
+        layout = self.layout(df)
+        linear, bufs, paths, fire_nodes = layout.linear, layout.bufs, layout.paths, layout.fire_nodes
+        inst_by_name, ext_by_node, item_ref = layout.insts, layout.exts, layout.item_ref
+        lines: list[str] = []
+        counters: list[str] = []
+        if not linear:
+            runs = df.schedule.run_length()
+            if len(runs) > TABLE_SCHEDULE_RUNS:
+                return table_schedule(self, runs, layout)
+        self._emit(df.schedule.body, [], lines, 1, df, bufs, linear, inst_by_name, ext_by_node, item_ref,
+                   counters, paths, fire_nodes)
+        # Delay tokens of edges linear at the top level move to the front once per activation.
+        if linear:
+            lines += self.top_level_shifts(layout)
+        decls = [f"    {'uint16_t' if count <= 0xFFFF else 'uint32_t'} {name};" for name, count in counters]
+        return decls + lines
+
+    def top_level_shifts(self, layout: DataflowLayout) -> list[str]:
+        """The delay tokens of edges linear at the top level to the front, after every firing."""
+        lines: list[str] = []
+        for info in layout.bufs.values():
+            if info["level"] == 0 and not info["self_loop"]:
+                self._shift(info, lines, 1)
+        return lines
+
+    def fire_one(self, layout: DataflowLayout, node: str, index: str | None, ind: str, lines: list[str]) -> None:
+        """One firing of ``node`` outside the schedule's loops: in a flat
+        single-appearance layout, its firing index within the iteration is
+        the C expression ``index``, and its self-loops' delay tokens move
+        to the front after it; over circular buffers, ``index`` is None."""
+        self._fire(node, [], index, ind, lines, layout.df, layout.bufs, layout.linear, layout.insts, layout.exts,
+                   layout.item_ref, layout.paths, layout.fire_nodes)
+        for info in layout.bufs.values() if layout.linear else ():
+            if info["self_loop"] and info["buf"].src == node:
+                self._shift(info, lines, len(ind) // 4)
+
+    def layout(self, df: Dataflow) -> DataflowLayout:
+        """Declare the buffers of ``df`` as its schedule places them; where each node sits in its loops."""
         linear = df.schedule.is_single_appearance
         inst_by_name = {self.p.instances[i].name: self.p.instances[i] for i in df.instances}
         ext_by_node = {e.node: e for e in df.externals}
@@ -215,55 +258,7 @@ class _Builder:
             if not linear:
                 self.buffers.append(f"static uint16_t {name}_rd, {name}_wr = {len(b.initial) % info['size']}u;")
             bufs[b.id] = info
-        lines: list[str] = []
-        counters: list[str] = []
-        if not linear:
-            runs = df.schedule.run_length()
-            if len(runs) > TABLE_SCHEDULE_RUNS:
-                return self._table_schedule(runs, df, bufs, inst_by_name, ext_by_node, item_ref, paths, fire_nodes)
-        self._emit(df.schedule.body, [], lines, 1, df, bufs, linear, inst_by_name, ext_by_node, item_ref,
-                   counters, paths, fire_nodes)
-        # Delay tokens of edges linear at the top level move to the front once per activation.
-        if linear:
-            for info in bufs.values():
-                if info["level"] == 0 and not info["self_loop"]:
-                    self._shift(info, lines, 1)
-        decls = [f"    {'uint16_t' if count <= 0xFFFF else 'uint32_t'} {name};" for name, count in counters]
-        return decls + lines
-
-    def _table_schedule(self, runs, df, bufs, insts, exts, item_ref, paths, fire_nodes) -> list[str]:
-        """A long schedule with circular buffers (min-buffer) as data: its
-        run-length firing sequence in a ROM table of (node, count) pairs
-        walked by a loop around one switch over the nodes. The firing
-        order is the schedule's, so the values are the same; the code is
-        the size of one firing per node instead of one per appearance."""
-        nodes = list(dict.fromkeys(actor for actor, _ in runs))
-        pairs: list[tuple[int, int]] = []
-        for actor, count in runs:
-            while count > 0:
-                pairs.append((nodes.index(actor), min(count, 255)))
-                count -= 255
-        index_t = "uint16_t" if len(pairs) <= 0xFFFF else "uint32_t"
-        small = len(nodes) <= 256
-        elem_t, read = ("uint8_t", "EL_ROM_READ_U8") if small else ("uint16_t", "EL_ROM_READ_U16")
-        lines = [f"    static const {elem_t} el_seq[{2 * len(pairs)}] EL_ROM = {{ /* (node, firings) */"]
-        flat = [v for pair in pairs for v in pair]
-        for k in range(0, len(flat), 16):
-            lines.append("        " + ", ".join(f"{v}u" for v in flat[k:k + 16]) + ",")
-        lines.append("    };")
-        lines += [f"    {index_t} el_k;", "    uint8_t el_n;",
-                  f"    for (el_k = 0u; el_k < {len(pairs)}u; el_k++) {{",
-                  f"        {elem_t} el_node = {read}(&el_seq[2u * el_k]);",
-                  f"        uint8_t el_times = (uint8_t){read}(&el_seq[2u * el_k + 1u]);",
-                  "        for (el_n = 0u; el_n < el_times; el_n++) {",
-                  "            switch (el_node) {"]
-        for i, node in enumerate(nodes):
-            lines.append(f"            case {i}u:")
-            self._fire(node, [], None, "                ", lines, df, bufs, False, insts, exts, item_ref, paths,
-                       fire_nodes)
-            lines.append("                break;")
-        lines += ["            default: break;", "            }", "        }", "    }"]
-        return lines
+        return DataflowLayout(df, linear, bufs, paths, fire_nodes, inst_by_name, ext_by_node, item_ref)
 
     @staticmethod
     def _firings_below(path, level, fire) -> int:
@@ -386,6 +381,8 @@ class _Builder:
         for name, expr in inst.runtime_args.items():
             args.append(ExprWriter(item_ref).write(expr))
         call = f"el_spec{spec.id}_{spec.c_name}_step({', '.join(args)});"
+        if self.profile:  # a profiling build times every firing (docs/multicore.md)
+            call = f"el_prof_begin(); {call} el_prof_end({inst.id}u);"
         if self.probes:  # the debugger's probe of this firing: the instance's id is its debug actor id
             lines.append(f"{ind}EL_DEBUG_PROBE_ACTOR({inst.id}u);")
         if decls or pre or post:
@@ -537,17 +534,31 @@ class _Builder:
         return TaskView(task, fields, release, body, publish)
 
 
-def build_view(program: Program, board, library: bool = False, probes: bool = False) -> CModel:
+def build_view(program: Program, board, library: bool = False, probes: bool = False, plan=None,
+               profile: bool = False) -> CModel:
     """The view of a program that the C templates print (``library``: for
     local execution's interfaces library rather than a firmware;
     ``probes``: a debug build with a debug interface, whose actor firings
-    call the debugger's probe)."""
+    call the debugger's probe; ``plan``: a multi-core plan
+    (ir/multicore.py), printed when anything in it is parallel;
+    ``profile``: every actor firing timed, for ``easylab analyze --profile``)."""
     b = _Builder(program, board, probes)
+    b.profile = profile
     specs = [b.spec_view(s) for s in program.specs]
     states = [(specs[i.spec].state_type, f"el_a{i.id}_{ident(i.name)}",
                f"{program.dataflows[i.dataflow].name}.{i.name} ({c_comment(i.location)})") for i in program.instances]
-    dataflows = [(f"el_df{df.id}_{ident(df.name)}", f"dataflow {df.name} ({c_comment(df.location)}), schedule "
-                  f"{df.schedule.text()}", b.dataflow_code(df)) for df in program.dataflows]
+    mc = multicore.MulticoreView(plan.cores) if plan is not None and plan.parallel else None
+    parallel = {fp.dataflow.id: fp for fp in plan.dataflows if fp.parallel} if mc else {}
+    dataflows = []
+    for df in program.dataflows:
+        comment = f"dataflow {df.name} ({c_comment(df.location)}), schedule {df.schedule.text()}"
+        if df.id in parallel:
+            job = multicore.JOB_TASKS + 1 + len(mc.jobs)
+            body = multicore.dataflow_functions(b, parallel[df.id], job, mc)
+            comment += f", its firings on {mc.cores} cores"
+        else:
+            body = b.dataflow_code(df)
+        dataflows.append((f"el_df{df.id}_{ident(df.name)}", comment, body))
     charts = [b.chart_view(c) for c in program.charts]
     tasks = [b.task_view(t) for t in program.tasks]
     channels = [{"ch": c, "init": ", ".join(c_literal(c.type, v) for v in c.initial)} for c in program.channels]
@@ -573,9 +584,13 @@ def build_view(program: Program, board, library: bool = False, probes: bool = Fa
              for dev in program.devices if dev.read_by]
     instants = [(i.tick, sum(1 << t for t in i.publish), sum(1 << t for t in i.release)) for i in program.instants]
     deadlines = [t.deadline for t in program.tasks]
+    if mc:
+        multicore.group_table(plan, len(program.tasks), mc)
+        boot.append(f"el_threads_start({mc.cores}u); /* the other cores' threads, once */")
+        shutdown.insert(0, "el_threads_stop();")
     return CModel(program, __version__, board.name, b.items, specs, states, b.buffers, dataflows, charts, tasks,
                   channels, boot, shutdown, reads, instants, deadlines, status=status_views(program, library),
-                  probes=probes, library=library)
+                  probes=probes, library=library, multicore=mc, profile=profile)
 
 
 def spec_view(spec: ActorSpec) -> SpecView:

@@ -68,10 +68,12 @@ def _environment(template_dir: str) -> jinja2.Environment:
 
 
 def render(program: Program, board: Target, template_dir: Path | None = None,
-           release: bool = False) -> dict[str, str]:
+           release: bool = False, plan=None, profile: bool = False) -> dict[str, str]:
     """The generated files: {file name: text}. Deterministic: the same
-    program gives byte-identical files."""
-    view = _view_with_interfaces(program, board, release)
+    program gives byte-identical files. ``plan``: a multi-core plan
+    (ir/multicore.py); one that runs nothing in parallel changes
+    nothing. ``profile``: a profiling build (cli/profile.py)."""
+    view = _view_with_interfaces(program, board, release, plan=plan, profile=profile)
     env = environment(template_dir)
     files = {"model.c": env.get_template("model.c.j2").render(m=view)}
     for produce in PRODUCERS:
@@ -92,9 +94,10 @@ def render_interfaces(program: Program, board: Target, template_dir: Path | None
     return files
 
 
-def _view_with_interfaces(program: Program, board: Target, release: bool, library: bool = False) -> CModel:
+def _view_with_interfaces(program: Program, board: Target, release: bool, library: bool = False,
+                          plan=None, profile: bool = False) -> CModel:
     probes = not release and not library and debug.has_debug_interface(program)
-    view = build_view(program, board, library, probes)
+    view = build_view(program, board, library, probes, plan, profile)
     for hook in INTERFACE_HOOKS:
         boot, poll = hook(program, release)
         view.interface_boot.extend(boot)

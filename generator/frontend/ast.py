@@ -284,6 +284,8 @@ class ActorType(Named):
     code: tuple[CodeBlock, ...]
     impl: str | None
     impl_span: Span | None
+    cost: object = None  # `cost 20 us`: the time of one firing, for the multi-core plan (docs/multicore.md)
+    cost_span: Span | None = None
 
 
 @dataclass(frozen=True)
@@ -379,12 +381,14 @@ class Interface(Node):
 
 @dataclass(frozen=True)
 class NodeDecl(Named):
-    """``node NAME board B [mcu M] ["title"]``."""
+    """``node NAME board B [mcu M] [cores N] ["title"]``."""
 
     board: str
     board_span: Span
     mcu: str | None
     title: str | None
+    cores: int | None = None  # a PC node's cores (docs/multicore.md)
+    cores_span: Span | None = None
 
 
 @dataclass(frozen=True)

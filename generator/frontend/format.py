@@ -40,6 +40,7 @@ STATEMENTS = frozenset({
     "device_decl", "actor_type", "dataflow", "chart", "task", "debug_iface", "modbus_iface", "node_decl",
     "link_decl", "export_decl", "remote_settings",
     "claims", "data_port", "data_export", "part", "driver", "state_var", "actor_port", "code_block", "impl",
+    "actor_cost",
     "instance", "edge", "step", "transition", "entry_action", "exit_action", "run_action", "link_member",
 })
 

@@ -356,6 +356,7 @@ class CheckedModel:
     interfaces: list[InterfaceInfo]
     claims: list[Claim]
     actor_type_files: dict[str, str] = field(default_factory=dict)
+    actor_costs: dict[str, int] = field(default_factory=dict)  # declared `cost` of one firing, ns, by actor type
     # Distribution (empty for a model without nodes): the nodes, the links,
     # where each task and primitive device runs, the exports.
     nodes: dict[str, NodeInfo] = field(default_factory=dict)

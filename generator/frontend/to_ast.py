@@ -351,6 +351,9 @@ class ToAst(Transformer):
     def impl(self, meta, ch):
         return ("impl", self._string(ch[0]), self._span(meta))
 
+    def actor_cost(self, meta, ch):
+        return ("cost", ch[0], self._span(meta))
+
     def actor_type(self, meta, ch):
         name = ch[0]
         rest = list(ch[1:])
@@ -359,7 +362,7 @@ class ToAst(Transformer):
             type_params = rest.pop(0)
         params = rest.pop(0)
         ports, states, code = [], [], []
-        impl = impl_span = None
+        impl = impl_span = cost = None
         for m in rest:
             if isinstance(m, ast.ActorPort):
                 ports.append(m)
@@ -367,13 +370,18 @@ class ToAst(Transformer):
                 states.append(m)
             elif isinstance(m, ast.CodeBlock):
                 code.append(m)
+            elif m[0] == "cost":
+                if cost is not None:
+                    raise ModelError([Diagnostic(m[2], "an actor type has at most one 'cost'")])
+                cost = m
             else:
                 if impl is not None:
                     raise ModelError([Diagnostic(m[2], "an actor type has at most one 'impl'")])
                 impl, impl_span = m[1], m[2]
         return ast.ActorType(**self._named(meta, name), type_params=type_params, params=params,
                              ports=tuple(ports), states=tuple(states), code=tuple(code),
-                             impl=impl, impl_span=impl_span)
+                             impl=impl, impl_span=impl_span, cost=cost[1] if cost else None,
+                             cost_span=cost[2] if cost else None)
 
     # dataflows
     def schedule_choice(self, meta, ch):
@@ -469,11 +477,16 @@ class ToAst(Transformer):
     def node_mcu(self, meta, ch):
         return ("mcu", ch[0])
 
+    def node_cores(self, meta, ch):
+        return ("cores", int(ch[0]), self._tspan(ch[0]))
+
     def node_decl(self, meta, ch):
-        mcu = next((str(c[1]) for c in ch[2:] if isinstance(c, tuple)), None)
+        mcu = next((str(c[1]) for c in ch[2:] if isinstance(c, tuple) and c[0] == "mcu"), None)
+        cores = next((c for c in ch[2:] if isinstance(c, tuple) and c[0] == "cores"), None)
         title = next((self._string(c) for c in ch[2:] if isinstance(c, Token) and c.type == "STRING"), None)
         return ast.NodeDecl(**self._named(meta, ch[0]), board=str(ch[1]), board_span=self._tspan(ch[1]),
-                            mcu=mcu, title=title)
+                            mcu=mcu, title=title, cores=cores[1] if cores else None,
+                            cores_span=cores[2] if cores else None)
 
     def link_engine(self, meta, ch):
         return "dds" if ch[0].type == "DDS" else "modbus-" + str(ch[0])

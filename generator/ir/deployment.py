@@ -21,6 +21,7 @@ class NodeSpec:
     board: str
     mcu: str | None
     title: str | None
+    cores: int = 1  # `cores N`: a multi-core build where the plan says it pays (docs/multicore.md)
 
 
 @dataclass

@@ -111,7 +111,7 @@ class _Lowering:
         same_type = sum(1 for s in self.specs if s.type_name == atype.name)
         spec = ActorSpec(len(self.specs), atype.name, f"{atype.name}_{same_type}", dict(inst.type_bindings),
                          const_args, runtime, ports, states, {b.kind: b.code for b in atype.code}, impl,
-                         location(atype.name_span))
+                         location(atype.name_span), self.m.actor_costs.get(atype.name))
         self.specs.append(spec)
         self.spec_keys[key] = spec.id
         return spec.id
@@ -307,7 +307,7 @@ def lower(model: CheckedModel, timing: Timing) -> Program:
 
 def _deployment(model: CheckedModel, timing: Timing, program: Program, low: _Lowering) -> Deployment:
     """Where each task and device runs, the links and what crosses them."""
-    nodes = [NodeSpec(n.name, n.board, n.mcu, n.decl.title) for n in model.nodes.values()]
+    nodes = [NodeSpec(n.name, n.board, n.mcu, n.decl.title, n.decl.cores or 1) for n in model.nodes.values()]
     links = [LinkSpec(lk.name, lk.engine, dict(lk.settings),
                       [LinkMember(m.node.name, m.role, str(m.uart) if m.uart else None, m.unit) for m in lk.members])
              for lk in model.links.values()]

@@ -131,6 +131,7 @@ class ActorSpec:
     code: dict[str, str]  # start / step / stop inline C
     impl: str | None  # path of the impl file
     location: str
+    cost_ns: int | None = None  # declared `cost` of one firing (docs/multicore.md); not part of the program's id
 
 
 @dataclass
@@ -350,6 +351,14 @@ class Program:
 # ====================================================================== identity
 
 
+def _left_out(value, field: str) -> bool:
+    """Fields the IR's JSON (and so the program id) leaves out: an item's
+    scale when it has none (the JSON of models before scales), an actor's
+    cost (a planning hint: the same code with or without)."""
+    return (field == "scale" and getattr(value, field) is None) or \
+        (field == "cost_ns" and isinstance(value, ActorSpec))
+
+
 def to_json(program: Program) -> dict:
     """A canonical, JSON-serialisable dump of the IR (also hashed for the id)."""
     def conv(value):
@@ -364,9 +373,8 @@ def to_json(program: Program) -> dict:
             return _expr_json(value)
         if isinstance(value, Fraction):
             return str(value)
-        if hasattr(value, "__dataclass_fields__"):  # an item without a scale: as before scales
-            return {k: conv(getattr(value, k)) for k in value.__dataclass_fields__
-                    if not (k == "scale" and getattr(value, k) is None)}
+        if hasattr(value, "__dataclass_fields__"):
+            return {k: conv(getattr(value, k)) for k in value.__dataclass_fields__ if not _left_out(value, k)}
         if isinstance(value, dict):
             return {str(k): conv(v) for k, v in value.items()}
         if isinstance(value, (list, tuple)):

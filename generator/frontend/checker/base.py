@@ -57,6 +57,7 @@ class CheckerBase:
         self.channels: dict[str, ChannelInfo] = {}
         self.device_types: dict[str, ast.DeviceType] = {}
         self.actor_types: dict[str, ast.ActorType] = {}
+        self.actor_costs: dict[str, int] = {}  # ns per firing, by actor type
         self.actor_type_files: dict[str, str] = {}
         self.declaration_files: dict[int, str] = {}  # id(declaration) -> its file (handler files are relative to it)
         self.devices: list[PrimitiveDevice] = []
@@ -124,7 +125,7 @@ class CheckerBase:
             device_types=self.device_types, devices=self.devices, device_data=self.device_data,
             top_devices=self.top_devices, actor_types=self.actor_types, dataflows=self.dataflows,
             charts=self.charts, tasks=self.tasks, interfaces=self.interfaces, claims=self.claims,
-            actor_type_files=self.actor_type_files, nodes=self.nodes, links=self.links,
+            actor_type_files=self.actor_type_files, actor_costs=self.actor_costs, nodes=self.nodes, links=self.links,
             task_nodes=self.task_nodes, device_nodes=self.device_nodes, exports=self.exports,
             remote=self.remote)
 

@@ -20,6 +20,8 @@ class DataflowRules:
 
     def check_actor_type(self, decl: ast.ActorType) -> None:
         seen: dict[str, Span] = {}
+        if decl.cost is not None:
+            self.check_actor_cost(decl)
 
         def unique(name: str, span: Span, what: str) -> None:
             if name in seen:
@@ -160,6 +162,18 @@ class DataflowRules:
                 if port.direction == "in" and (name, port.name) not in named:
                     self.error(instance.decl.name_span, f"input '{name}.{port.name}' is not connected",
                                f"add an edge such as: something -> {name}.{port.name}")
+
+    def check_actor_cost(self, decl: ast.ActorType) -> None:
+        """`cost T`: whole nanoseconds from 0.001 us to 1 s, kept in ns."""
+        v = self.const_typer().expect_const(decl.cost, T.TIME, f"the cost of actor type '{decl.name}'")
+        if v.type is None:
+            return
+        ns = v.const * 1000  # a time's value is in µs
+        if not 1 <= ns <= 10 ** 9 or ns != int(ns):
+            self.error(decl.cost_span, f"the cost of actor type '{decl.name}' must be whole nanoseconds from "
+                                       f"0.001 us to 1 s", "write: cost 20 us")
+            return
+        self.actor_costs[decl.name] = int(ns)
 
     def explicit_type_args(self, inst: ast.Instance, atype: ast.ActorType) -> dict | None:
         if not inst.type_args:

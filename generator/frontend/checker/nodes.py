@@ -31,6 +31,9 @@ class NodeRules:
     # ================================================================ nodes and links
 
     def check_node(self, decl: ast.NodeDecl) -> None:
+        if decl.cores is not None and not 1 <= decl.cores <= 64:
+            self.error(decl.cores_span, f"node '{decl.name}' has {decl.cores} cores: a node runs on 1 to 64",
+                       "write: cores 2 (docs/multicore.md)")
         self.nodes[decl.name] = NodeInfo(decl, decl.board, decl.mcu)
 
     def check_link(self, decl: ast.LinkDecl) -> None:
