@@ -1,0 +1,124 @@
+"""Forcing and conditional breakpoints on the online mode's page
+(docs/online.md, "Forcing and conditional breakpoints"), against
+pneumatic_cylinder on its example stimulus: `end_out.level` picked on the
+diagram and forced from the page holds across instants (the device trace
+shows it), is drawn as forced and listed until released from the list, and
+its release restores the stimulus; a condition set from the page halts
+where the console's does and the page names it with its file:line and ms
+(host board and the AVR in simavr); over conditions drawn by hypothesis the
+page's breakpoint halts at the instant the console's property test
+predicts from the un-halted trace."""
+
+from __future__ import annotations
+
+import pytest
+from hypothesis import HealthCheck, assume, given, settings, strategies as st
+
+from debug_testlib import Firmware, board, builds, firmware  # noqa: F401 (fixtures)
+from onlinelib import OnlineServer, wait_for
+from test_force_conditions import (DURATION_US, ITEMS, PY_OPS, STIMULUS, TICK_US, _first_true_tick, _unhalted_trace,
+                                   _values_seen, stimulus_at, trace_rows, value_at)
+from test_online_page import open_page
+
+END_OUT = "end_out.level"
+
+
+def drawn_with(server, name: str) -> str:
+    """The id of a drawing's element (not a breakpoint's place) that shows item `name`."""
+    ident = next(it["id"] for it in server.model()["items"] if it["name"] == name)
+    return next(el for el, info in sorted(server.model()["elements"].items())
+                if ident in info["items"] and not info["point"])
+
+
+def set_condition(browser, name: str, op: str, value: str) -> None:
+    browser.js("document.getElementById('when-item').value = arguments[0];"
+               "document.getElementById('when-op').value = arguments[1];"
+               "document.getElementById('when-value').value = arguments[2];", name, op, value)
+    browser.button("#when-form button[type='submit']")
+
+
+def halted(browser, what: str) -> dict:
+    return wait_for(lambda: (s := browser.last()) and s["halted"] and s["why"] == "breakpoint" and s, 30, what)
+
+
+@pytest.mark.parametrize("board", ["host", "avr"], indirect=True)
+def test_a_forced_sensor_holds_and_a_condition_halts_from_the_page(board, builds, firmware, online, browser):
+    fw = firmware(builds["pneumatic_cylinder"], "--stimulus", str(STIMULUS), duration="600ms")
+    server = online(fw.map_path, str(fw.link), model=None)
+    open_page(browser, server)
+    assert browser.js("return document.getElementById('force-none').hidden") is True  # this firmware has slots
+
+    # picked on the diagram (a click on the device plots it and picks it), forced from the form
+    element = drawn_with(server, END_OUT)
+    browser.click(element)
+    assert browser.js("return document.getElementById('force-item').value") == END_OUT
+    browser.js("document.getElementById('force-value').value = '1'")
+    browser.button("#force-form button[type='submit']")
+    wait_for(lambda: browser.text("#forced-list") == "end_out.level = true (forced) ✕", 10, "the forced list")
+    assert "from now" in browser.text("#msg")  # halted at an instant: at once
+    wait_for(lambda: "forced" in browser.js("return document.getElementById(arguments[0]).getAttribute('class')",
+                                            element), 10, "the device drawn as forced")
+    assert "true (forced)" in browser.js("return document.getElementById(arguments[0])"
+                                         ".querySelector('text.el-value').textContent", element)
+    assert [f["name"] for f in server.state(10**9)["link"]["forced"]] == [END_OUT]
+
+    # a condition from the page: halts where the console's does (tests/debug/test_force_conditions.py)
+    set_condition(browser, "cycles", ">=", "1")
+    wait_for(lambda: browser.text("#bp-list") == "when cycles >= 1 (hit 0) ✕", 10, "the condition listed")
+    browser.button("#run")
+    at = fw.map.item("cycles").location
+    last = halted(browser, "the halt on the condition")
+    assert (last["tick"], last["ms"], last["location"]) == (6, 30.0, at), last
+    slot = server.state(10**9)["link"]["breakpoints"][0]["slot"]
+    assert last["at"] == f"breakpoint {slot} when cycles >= 1"
+    wait_for(lambda: browser.text("#halt-at") == f"at breakpoint {slot} when cycles >= 1 ({at})", 10, "the halt shown")
+    assert browser.text("#clock").startswith("30 ms")
+    wait_for(lambda: browser.text("#bp-list") == "when cycles >= 1 (hit 1) ✕", 10, "the hit counted")
+
+    # released from the list, the condition deleted from it: the stimulus again
+    browser.button("#forced-list button")
+    wait_for(lambda: browser.text("#forced-list") == "", 10, "the release")
+    wait_for(lambda: "forced" not in browser.js("return document.getElementById(arguments[0]).getAttribute('class')",
+                                                element), 10, "the device drawn as not forced")
+    browser.button("#bp-list button")
+    wait_for(lambda: browser.text("#bp-list") == "", 10, "the condition deleted")
+    browser.button("#run")
+    status, _, err = fw.wait_exit(timeout=60)
+    assert status == 0, err
+    rows = trace_rows(fw.trace)
+    assert all(value_at(rows, END_OUT, t) == "1" for t in range(0, 30001, TICK_US))
+    assert stimulus_at(END_OUT, 30000) == "0"
+    for t in range(35000, 600000, TICK_US):
+        assert value_at(rows, END_OUT, t) == stimulus_at(END_OUT, t), t
+    assert browser.console_errors() == []
+
+
+@settings(max_examples=4, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture],
+          derandomize=True)
+@given(data=st.data())
+def test_a_condition_from_the_page_halts_where_the_trace_predicts(builds, browser, tmp_path_factory, data):
+    exe = builds["pneumatic_cylinder"]
+    rows = [dict(r) for r in _unhalted_trace(exe, tmp_path_factory.mktemp("unhalted"))]
+    name = data.draw(st.sampled_from(sorted(ITEMS)), label="item")
+    op = data.draw(st.sampled_from(sorted(PY_OPS)), label="op")
+    seen = _values_seen(rows)[name]
+    lo, hi = (0, 1) if name.endswith(".level") else (ITEMS[name][1], max(seen) + 5)
+    value = data.draw(st.one_of(st.sampled_from(seen), st.integers(lo, hi)), label="value")
+    expected = _first_true_tick(rows, ITEMS[name][0], op, value)
+    assume(expected is not None)  # a condition that never holds lets the run end: nothing to show
+    fw = Firmware(exe, tmp_path_factory.mktemp("run"), "--stimulus", str(STIMULUS),
+                  duration=f"{DURATION_US // 1000}ms")
+    server = OnlineServer(fw.map_path, str(fw.link)).start()
+    try:
+        open_page(browser, server)
+        set_condition(browser, name, op, str(value))
+        wait_for(lambda: (browser.text("#bp-list") or "").startswith(f"when {name} {op} "), 10, "the condition")
+        browser.button("#run")
+        last = halted(browser, f"the halt when {name} {op} {value}")
+        assert last["tick"] == expected, (name, op, value, last)
+        assert last["location"] == fw.map.item(name).location
+        wait_for(lambda: f" when {name} {op} " in (browser.text("#halt-at") or ""), 10, "the halt shown")
+        assert browser.text("#clock").startswith(f"{expected * TICK_US / 1000:g} ms")
+    finally:
+        server.stop()
+        fw.stop()
