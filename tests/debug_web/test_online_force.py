@@ -122,3 +122,36 @@ def test_a_condition_from_the_page_halts_where_the_trace_predicts(builds, browse
     finally:
         server.stop()
         fw.stop()
+
+
+def test_a_firmware_without_slots_says_so_in_place_of_the_controls(browser, online, tmp_path):
+    """blink asking for no slots (`force 0 conditions 0`, what the
+    ATmega328P gets by default): HELLO reports none, the page shows the
+    console's words instead of the forms, and the API refuses (409)
+    without asking the target."""
+    from debug_testlib import EXAMPLES, build
+
+    from easylab.host_tools.debug_console import no_slots
+
+    model = tmp_path / "blink.elab"
+    model.write_text((EXAMPLES / "blink.elab").read_text().replace(
+        "debug on uart0 baud 115200", "debug on uart0 baud 115200 force 0 conditions 0"))
+    fw = Firmware(build(model, tmp_path / "build"), tmp_path)
+    try:
+        server = online(fw.map_path, str(fw.link), model=model)
+        browser.get("about:blank")  # the last test's page stops polling its server
+        browser.console_errors()  # and its messages are dropped
+        browser.get(server.url)
+        wait_for(lambda: browser.js("return !document.getElementById('force-none').hidden"), 20, "the no-slots note")
+        assert browser.text("#force-none") == no_slots("forcing", "force")
+        assert browser.text("#when-none") == no_slots("conditional breakpoints", "conditions")
+        assert browser.js("return [document.getElementById('force-form').hidden,"
+                          "document.getElementById('when-form').hidden]") == [True, True]
+        writable = next(it["name"] for it in server.model()["items"] if it["writable"])
+        r = server.api("POST", "/api/force", {"name": writable, "value": "1"})
+        assert r.status == 409 and "`debug on ... force N`" in r.json()["error"]
+        r = server.api("POST", "/api/breakpoint", {"when": {"name": writable, "op": "==", "value": "1"}})
+        assert r.status == 409 and "`debug on ... conditions N`" in r.json()["error"]
+        assert browser.console_errors() == []
+    finally:
+        fw.stop()
