@@ -7,7 +7,8 @@ its release restores the stimulus; a condition set from the page halts
 where the console's does and the page names it with its file:line and ms
 (host board and the AVR in simavr); over conditions drawn by hypothesis the
 page's breakpoint halts at the instant the console's property test
-predicts from the un-halted trace."""
+predicts from the un-halted trace; over drawn values a scaled item is
+forced and compared in its engineering units."""
 
 from __future__ import annotations
 
@@ -155,3 +156,38 @@ def test_a_firmware_without_slots_says_so_in_place_of_the_controls(browser, onli
         assert browser.console_errors() == []
     finally:
         fw.stop()
+
+
+@pytest.fixture
+def pt100(builds, firmware, online):
+    """pt100_sensor (scaled params and vars, 0.1 degC) halted on the host
+    board, its page's server."""
+    fw = firmware(builds["pt100_sensor"])
+    return online(fw.map_path, str(fw.link), model=None)
+
+
+@settings(max_examples=25, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture],
+          derandomize=True)
+@given(stored=st.integers(-500, 500), op=st.sampled_from(sorted(PY_OPS)), limit=st.integers(-2000, 8500))
+def test_forced_values_and_constants_are_in_engineering_units(pt100, stored, op, limit):
+    """What the page sends is in the item's units (cal_offset and
+    temperature: scale 0.1 "degC"); the target holds and compares the
+    stored integers, and lists them back (FORCE_LIST, BP_LIST) as the page
+    shows them."""
+    from easylab.host_tools.units import Scale
+
+    tenth = Scale.of("0.1")
+    text = tenth.show(stored)
+    r = pt100.api("POST", "/api/force", {"name": "cal_offset", "value": text})
+    assert r.status == 200 and r.json()["shown"] == f"{text} degC", r.json()
+    assert [(f["name"], f["value"], f["shown"]) for f in pt100.state(10**9)["link"]["forced"]] == \
+        [("cal_offset", stored, f"{text} degC")]
+    constant = tenth.show(limit)
+    r = pt100.api("POST", "/api/breakpoint", {"when": {"name": "temperature", "op": op, "value": constant}})
+    assert r.status == 200 and r.json()["at"] == f"when temperature {op} {constant} degC", r.json()
+    listed = pt100.state(10**9)["link"]["breakpoints"]
+    assert [(b["at"], b["location"]) for b in listed] == \
+        [(f"when temperature {op} {constant} degC", "examples/pt100_sensor.elab:15")]
+    assert pt100.api("POST", "/api/breakpoint", {"slot": "all"}).status == 200
+    r = pt100.api("POST", "/api/force", {"name": "cal_offset", "value": text + "5"})  # a finer digit than 0.1
+    assert r.status == 400 and "not a multiple of the scale 0.1" in r.json()["error"], r.json()
