@@ -12,16 +12,19 @@ forced and compared in its engineering units."""
 
 from __future__ import annotations
 
+import time
+
 import pytest
 from hypothesis import HealthCheck, assume, given, settings, strategies as st
 
-from debug_testlib import Firmware, board, builds, firmware  # noqa: F401 (fixtures)
+from debug_testlib import ROOT, Firmware, board, builds, firmware  # noqa: F401 (fixtures)
 from onlinelib import OnlineServer, wait_for
 from test_force_conditions import (DURATION_US, ITEMS, PY_OPS, STIMULUS, TICK_US, _first_true_tick, _unhalted_trace,
                                    _values_seen, stimulus_at, trace_rows, value_at)
 from test_online_page import open_page
 
 END_OUT = "end_out.level"
+SCREENSHOT = ROOT / "docs" / "images" / "online_force.png"
 
 
 def drawn_with(server, name: str) -> str:
@@ -75,6 +78,15 @@ def test_a_forced_sensor_holds_and_a_condition_halts_from_the_page(board, builds
     wait_for(lambda: browser.text("#halt-at") == f"at breakpoint {slot} when cycles >= 1 ({at})", 10, "the halt shown")
     assert browser.text("#clock").startswith("30 ms")
     wait_for(lambda: browser.text("#bp-list") == "when cycles >= 1 (hit 1) ✕", 10, "the hit counted")
+    if board == "host":  # docs/online.md's picture: the forced sensor and the halt on the condition
+        for _ in range(2):
+            browser.button("#zoom-in")
+        browser.js("window.scrollTo(0, 0); const pane = document.getElementById('diagram');"
+                   "const p = pane.getBoundingClientRect(), r = document.getElementById(arguments[0])"
+                   ".getBoundingClientRect(); pane.scrollBy(r.left - p.left - 200, r.top - p.top - 150);", element)
+        time.sleep(0.3)
+        browser.driver.save_screenshot(str(SCREENSHOT))
+        browser.button("#zoom-fit")
 
     # released from the list, the condition deleted from it: the stimulus again
     browser.button("#forced-list button")
