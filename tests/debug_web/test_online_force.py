@@ -65,6 +65,7 @@ def test_a_forced_sensor_holds_and_a_condition_halts_from_the_page(board, builds
     assert "true (forced)" in browser.js("return document.getElementById(arguments[0])"
                                          ".querySelector('text.el-value').textContent", element)
     assert [f["name"] for f in server.state(10**9)["link"]["forced"]] == [END_OUT]
+    assert browser.text("#scope-list") == "end_out.level (forced) ✕"  # the click plotted it too
 
     # a condition from the page: halts where the console's does (tests/debug/test_force_conditions.py)
     set_condition(browser, "cycles", ">=", "1")
@@ -91,6 +92,7 @@ def test_a_forced_sensor_holds_and_a_condition_halts_from_the_page(board, builds
     # released from the list, the condition deleted from it: the stimulus again
     browser.button("#forced-list button")
     wait_for(lambda: browser.text("#forced-list") == "", 10, "the release")
+    assert browser.text("#scope-list") == "end_out.level ✕"
     wait_for(lambda: "forced" not in browser.js("return document.getElementById(arguments[0]).getAttribute('class')",
                                                 element), 10, "the device drawn as not forced")
     browser.button("#bp-list button")

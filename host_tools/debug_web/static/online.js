@@ -254,7 +254,18 @@
       });
       return button;
     }));
+    markScopeForced();
     if (online.last) show(online.last);
+  }
+
+  // A plotted item that is forced says so in the scope's list (its values there are the forced ones).
+  function markScopeForced() {
+    for (const b of $("scope-list").querySelectorAll("button[data-item]")) {
+      const id = Number(b.dataset.item);
+      const forced = online.forced.some((f) => f.item === id);
+      b.classList.toggle("forced-chip", forced);
+      b.textContent = `${online.items.get(id).name}${forced ? " (forced)" : ""} ✕`;
+    }
   }
 
   function take(s) {
@@ -408,11 +419,12 @@
       const b = document.createElement("button");
       b.type = "button";
       b.className = "secondary";
-      b.textContent = `${online.items.get(id).name} ✕`;
+      b.dataset.item = String(id);
       b.style.borderLeft = `4px solid ${COLORS[k % COLORS.length]}`;
       b.addEventListener("click", () => removeFromScope(id));
       return b;
     }));
+    markScopeForced();
     if (!sc.ids.length) $("scope").replaceChildren();
     drawScope();
   }
