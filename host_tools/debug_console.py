@@ -71,6 +71,20 @@ _NO_SLOTS = ("this firmware has no {what}: declare slots in the model (`debug on
              "docs/protocol.md) and rebuild it")
 
 
+def no_slots(what: str, setting: str) -> str:
+    """Why a firmware without slots (HELLO reports 0) cannot do `what`
+    (forcing, conditional breakpoints), and the model's `setting` that asks."""
+    return _NO_SLOTS.format(what=what, setting=setting)
+
+
+def describe_comparison(it: Item, b) -> str:
+    """A conditional breakpoint's ``NAME OP VALUE``: its comparison from the
+    breakpoint list (BP_LIST), the constant as the item shows values."""
+    name = f"{it.name}[{b.b}]" if it.count > 1 else it.name
+    value = decode_value(it.type, b.value[:type_size(it.type)])
+    return f"{name} {OP_NAMES.get(b.op, '?')} {format_value(it, value)}"
+
+
 class CommandError(Exception):
     """A command that cannot be done: one line for the user."""
 
@@ -246,11 +260,8 @@ class Session:
 
     def describe_condition(self, b) -> str:
         """A conditional breakpoint's ``NAME OP VALUE (file:line)``."""
-        it = self._item_named(b.a)
-        name = f"{it.name}[{b.b}]" if it.count > 1 else it.name
-        value = decode_value(it.type, b.value[:type_size(it.type)])
         source = self.map.location(K.P_CONDITION, b.a, b.b) if self.map is not None else None
-        return f"{name} {OP_NAMES.get(b.op, '?')} {format_value(it, value)}" + (f" ({source})" if source else "")
+        return describe_comparison(self._item_named(b.a), b) + (f" ({source})" if source else "")
 
     def _item_named(self, item_id: int) -> Item:
         if self.map is not None and item_id in self.map.by_id:
@@ -347,7 +358,7 @@ class Session:
             raise CommandError(f"usage: {verb} NAME VALUE")
         it, elem = self.item(args[0])
         if not it.writable:
-            raise CommandError(f"{it.name} {read_only} ({_why_read_only(it)})")
+            raise CommandError(f"{it.name} {read_only} ({why_read_only(it)})")
         if it.count > 1 and elem is None:
             raise CommandError(f"{it.name} has {it.count} elements: {verb} {it.name}[i] VALUE")
         value = parse_value(it, args[1])
@@ -496,7 +507,7 @@ class Session:
         it, elem = self.item(args[0])
         if it.count > 1 and elem is None:
             raise CommandError(f"{it.name} has {it.count} elements: break when {it.name}[i] {args[1]} VALUE")
-        value = self._step_value(it, args[2]) if it.labels is not None else parse_value(it, args[2])
+        value = self.step_value(it, args[2]) if it.labels is not None else parse_value(it, args[2])
         with self.lock:
             try:
                 slot = self.c.bp_when(it.id, it.type, args[1], value, elem or 0)
@@ -507,7 +518,7 @@ class Session:
                   {"breakpoint": slot, "when": f"{name} {args[1]} {format_value(it, value)}"})
 
     @staticmethod
-    def _step_value(it: Item, text: str) -> int:
+    def step_value(it: Item, text: str) -> int:
         """A chart's step by name (or its id) as the value of Chart.active."""
         by_name = {name: ident for ident, name in it.labels.items() if name is not None}
         if text in by_name:
@@ -521,7 +532,7 @@ class Session:
         with self.lock:
             hello = self.c.hello_info or self.c.hello()
         if getattr(hello, field) == 0:
-            raise CommandError(_NO_SLOTS.format(what=what, setting=setting))
+            raise CommandError(no_slots(what, setting))
 
     def cmd_force(self, args):
         if len(args) == 2:
@@ -757,7 +768,8 @@ class Session:
             raise CommandError(str(err)) from None
 
 
-def _why_read_only(it: Item) -> str:
+def why_read_only(it: Item) -> str:
+    """Why an item cannot be written or forced (one phrase)."""
     if it.kind == "dev_in":
         return "a device `in` datum: the application writes it at every publication"
     if it.kind == "dev_state":

@@ -17,7 +17,6 @@ from __future__ import annotations
 import argparse
 import asyncio
 import errno
-import hmac
 import json
 import signal
 import sys
@@ -25,16 +24,16 @@ from pathlib import Path
 
 from aiohttp import web
 
-from ..debug_console import PROG, parse_value, CommandError
-from ..debug_map import DebugMap, MapError
-from ..debug_protocol import K, STEP_UNITS, DebugError
-from ..service_cli import UsageError
+from ..debug_console import PROG, CommandError, Session, format_value, parse_value, why_read_only
+from ..debug_map import DebugMap, Item, MapError
+from ..debug_protocol import K, OPS, STEP_UNITS, DebugError
 from ..transport import TransportError
-from ..web.server import CSP, CSRF_HEADER, Guard, _host_name, is_loopback, panel_guard, parse_listen
 from ..web.server import STATIC as PANEL_STATIC
+from ..web_guard import CSRF_HEADER, Guard, ListenError, guard_middleware, make_guard, parse_listen
 from .elements import DrawingError, element_ids, elements, model_file, render_svg
 from .guards import GuardValues
-from .target import Busy, NotConnected, TargetLink, breakpoint_job, command_job, write_job
+from .target import (Busy, NotConnected, TargetLink, breakpoint_job, command_job, condition_job, force_job,
+                     release_job, write_job)
 
 STATIC = Path(__file__).resolve().parent / "static"
 DEFAULT_LISTEN = "127.0.0.1:8090"
@@ -58,7 +57,8 @@ class OnlinePage:
         self._model_json: str | None = None
 
     def app(self) -> web.Application:
-        app = web.Application(middlewares=[self._guard], client_max_size=MAX_BODY)
+        app = web.Application(middlewares=[guard_middleware(self.guard, "page", f"{PROG} web")],
+                              client_max_size=MAX_BODY)
         app.router.add_get("/", self.index)
         app.router.add_get("/api/model", self.api_model)
         app.router.add_get("/api/state", self.api_state)
@@ -66,42 +66,11 @@ class OnlinePage:
         app.router.add_post("/api/command", self.api_command)
         app.router.add_post("/api/breakpoint", self.api_breakpoint)
         app.router.add_post("/api/write", self.api_write)
+        app.router.add_post("/api/force", self.api_force)
+        app.router.add_post("/api/release", self.api_release)
         app.router.add_static("/static/", STATIC, follow_symlinks=False)
         app.router.add_static("/vendor/", PANEL_STATIC / "vendor", follow_symlinks=False)
         return app
-
-    @web.middleware
-    async def _guard(self, request: web.Request, handler) -> web.StreamResponse:
-        response = await self._checked(request, handler)
-        response.headers["Content-Security-Policy"] = CSP
-        response.headers["X-Content-Type-Options"] = "nosniff"
-        response.headers["X-Frame-Options"] = "DENY"
-        response.headers["Referrer-Policy"] = "no-referrer"
-        response.headers.setdefault("Cache-Control", "no-store" if request.path.startswith("/api/") else "no-cache")
-        return response
-
-    async def _checked(self, request: web.Request, handler) -> web.StreamResponse:
-        g = self.guard
-        if g.loopback and not is_loopback(_host_name(request.host)):
-            return _error(403, f"this page answers only to a loopback address, not to '{request.host}'")
-        if g.token is not None and request.path == "/" and "token" in request.query:
-            if not hmac.compare_digest(request.query["token"].encode(), g.token.encode()):
-                return _error(401, f"wrong token: open the address that {PROG} web printed")
-            response = web.Response(status=303, headers={"Location": "/"})  # the token leaves the address bar
-            response.set_cookie(g.cookie, g.token, httponly=True, samesite="Strict", path="/")
-            return response
-        if not g.authorized(request):
-            return _error(401, f"this page needs its token: open the address that {PROG} web printed "
-                               "(http://HOST:PORT/?token=...), or send 'Authorization: Bearer TOKEN'")
-        if request.method not in ("GET", "HEAD"):
-            why = g.cross_site(request)
-            if why is not None:
-                print(f"{PROG}: refused {why} to {request.path}", file=sys.stderr, flush=True)
-                return _error(403, f"refused: {why}")
-        try:
-            return await handler(request)
-        except web.HTTPException as exc:
-            return web.Response(status=exc.status, text=exc.text, content_type="text/plain")
 
     # ------------------------------------------------------------ reads
 
@@ -172,10 +141,13 @@ class OnlinePage:
         return web.json_response({"done": command})
 
     async def api_breakpoint(self, request: web.Request) -> web.Response:
-        """{"element": ID} sets a breakpoint at the element's probe point;
+        """{"element": ID} sets a breakpoint at the element's probe point,
+        {"when": {"name": NAME, "op": OP, "value": VALUE}} a conditional one;
         {"slot": N} clears one, {"slot": "all"} every one."""
         try:
             body = await self._body(request)
+            if "when" in body:
+                return await self._condition(body["when"])
             if "element" in body:
                 info = self.model["elements"].get(body["element"]) if isinstance(body["element"], str) else None
                 if info is None or info["point"] is None:
@@ -190,30 +162,95 @@ class OnlinePage:
             return refusal.response
         return web.json_response({"cleared": slot})
 
+    def _element(self, body: dict, verb: str) -> tuple[Item, int]:
+        """The item ``body["name"]`` names (writable unless `verb` is None,
+        a condition's item) and ``body["element"]`` (0 by default)."""
+        name, element = body.get("name"), body.get("element", 0)
+        if not isinstance(name, str):
+            raise _Refusal(_error(400, 'give {"name": NAME, "value": VALUE}'))
+        try:
+            item = self.map.item(name)
+        except MapError as err:
+            raise _Refusal(_error(400, str(err))) from None
+        if verb is not None and not item.writable:
+            raise _Refusal(_error(400, f"{item.name} cannot be {verb}: it is read-only ({why_read_only(item)})"))
+        if not isinstance(element, int) or isinstance(element, bool) or not 0 <= element < item.count:
+            raise _Refusal(_error(400, f"{item.name} has {item.count} element(s)"))
+        return item, element
+
+    @staticmethod
+    def _value(item: Item, text, in_range: bool = True):
+        """The value of `text` for `item`, as the console takes it (a scaled
+        item's in engineering units, a chart's state by a step's name)."""
+        if not isinstance(text, (str, int, float)) or isinstance(text, bool):
+            raise _Refusal(_error(400, f"{item.name}: give the value as text, e.g. \"12\""))
+        try:
+            value = Session.step_value(item, str(text)) if item.labels is not None else parse_value(item, str(text))
+        except CommandError as err:
+            raise _Refusal(_error(400, str(err))) from None
+        if in_range and item.range and not item.range[0] <= value <= item.range[1]:
+            raise _Refusal(_error(400, f"{item.name}: {text} is outside its range {item.range[0]}..{item.range[1]}"))
+        return value
+
+    def _needs_slots(self, feature: str) -> None:
+        """Refuse (409) what the connected firmware has no slots for."""
+        why = self.link.no_slots().get(feature)
+        if why is not None and self.link.link_state()["state"] == "connected":
+            raise _Refusal(_error(409, why))
+
     async def api_write(self, request: web.Request) -> web.Response:
         try:
             body = await self._body(request)
-            name, text, element = body.get("name"), body.get("value"), body.get("element", 0)
-            if not isinstance(name, str) or not isinstance(text, (str, int, float)) or isinstance(text, bool):
-                return _error(400, 'give {"name": NAME, "value": VALUE}')
-            try:
-                item = self.map.item(name)
-            except MapError as err:
-                return _error(400, str(err))
-            if not item.writable:
-                return _error(400, f"{item.name} is read-only")
-            if not isinstance(element, int) or isinstance(element, bool) or not 0 <= element < item.count:
-                return _error(400, f"{item.name} has {item.count} element(s)")
-            try:
-                value = parse_value(item, str(text))
-            except CommandError as err:
-                return _error(400, str(err))
-            if item.range and not item.range[0] <= value <= item.range[1]:
-                return _error(400, f"{item.name}: {text} is outside its range {item.range[0]}..{item.range[1]}")
+            item, element = self._element(body, "written")
+            value = self._value(item, body.get("value"))
             how = await self._on_target(write_job(item, value, element))
         except _Refusal as refusal:
             return refusal.response
         return web.json_response({"name": item.name, "value": value, "applied": how == K.APPLIED})
+
+    async def api_force(self, request: web.Request) -> web.Response:
+        """{"name": NAME, "value": VALUE}: hold an element at VALUE every
+        instant until released (a var, param or device `out` datum)."""
+        try:
+            body = await self._body(request)
+            self._needs_slots("force")
+            item, element = self._element(body, "forced")
+            value = self._value(item, body.get("value"))
+            how = await self._on_target(force_job(item, value, element))
+        except _Refusal as refusal:
+            return refusal.response
+        return web.json_response({"name": item.name, "forced": value, "shown": format_value(item, value),
+                                  "applied": how == K.APPLIED})
+
+    async def api_release(self, request: web.Request) -> web.Response:
+        """{"name": NAME} releases one forced element, {"name": "all"} every one."""
+        try:
+            body = await self._body(request)
+            self._needs_slots("force")
+            if body.get("name") == "all":
+                await self._on_target(release_job(None))
+                return web.json_response({"released": "all"})
+            item, element = self._element(body, None)
+            try:
+                await self._on_target(release_job(item, element))
+            except _Refusal as refusal:
+                if refusal.response.status == 422 and item.id not in {f["item"] for f in self.link.forced}:
+                    return _error(422, f"{item.name} is not forced")
+                raise
+        except _Refusal as refusal:
+            return refusal.response
+        return web.json_response({"released": item.name})
+
+    async def _condition(self, when) -> web.Response:
+        """A conditional breakpoint: {"name": NAME, "op": OP, "value": VALUE}."""
+        if not isinstance(when, dict) or when.get("op") not in OPS:
+            return _error(400, f'give {{"when": {{"name": NAME, "op": OP, "value": VALUE}}}} (OP: {" ".join(OPS)})')
+        self._needs_slots("conditions")
+        item, element = self._element(when, None)
+        value = self._value(item, when.get("value"), in_range=False)
+        slot = await self._on_target(condition_job(item, when["op"], value, element))
+        name = f"{item.name}[{element}]" if item.count > 1 else item.name
+        return web.json_response({"slot": slot, "at": f"when {name} {when['op']} {format_value(item, value)}"})
 
 
 class _Refusal(Exception):
@@ -277,12 +314,11 @@ def main(argv: list[str]) -> int:
     try:
         dmap = DebugMap.load(args.map)
         host, port = parse_listen(args.listen)
-        guard = panel_guard(host, args.token)
-        guard.cookie = "easylab_online"
+        guard = make_guard(host, args.token, "easylab_online")
         path = model_file(dmap, args.model)
         guards = GuardValues.of_model(path, dmap)
         model = page_model(dmap, path, guards)
-    except (MapError, UsageError, DrawingError) as err:
+    except (MapError, ListenError, DrawingError) as err:
         print(f"{PROG} web: error: {err}", file=sys.stderr)
         return 2
     if guards is None:

@@ -34,6 +34,7 @@ from collections import deque
 from dataclasses import asdict, dataclass, field
 from typing import Callable
 
+from ..debug_console import describe_comparison, format_value, no_slots
 from ..debug_map import DebugMap, Item
 from ..debug_protocol import K, DebugClient, DebugError, decode_value, type_size
 from ..transport import TransportError
@@ -171,6 +172,8 @@ class TargetLink:
         self.period = min_period
         self.connects = 0
         self.breakpoints: list[dict] = []
+        self.forced: list[dict] = []
+        self.slots = {"force": 0, "conditions": 0}  # HELLO's: forced elements, conditional breakpoints
         self._log = log or (lambda line: None)
         self._jobs: queue.Queue = queue.Queue(maxsize=queue_size)
         self._history: deque[Snapshot] = deque(maxlen=history)
@@ -228,7 +231,14 @@ class TargetLink:
         with self._lock:
             return {"state": self._state, "message": self._message, "since": round(self._since, 3),
                     "where": self.target, "connects": self.connects, "period": round(self.period, 4),
-                    "waiting": self._jobs.qsize(), "breakpoints": list(self.breakpoints)}
+                    "waiting": self._jobs.qsize(), "breakpoints": list(self.breakpoints),
+                    "forced": list(self.forced), "slots": dict(self.slots), "no_slots": self.no_slots()}
+
+    def no_slots(self) -> dict[str, str]:
+        """Why the connected firmware cannot force or halt on a condition
+        (HELLO reports no slots for it): the console's words, by feature."""
+        with_none = {"force": ("forcing", "force"), "conditions": ("conditional breakpoints", "conditions")}
+        return {key: no_slots(*words) for key, words in with_none.items() if self.slots[key] == 0}
 
     # ------------------------------------------------------------ the target thread
 
@@ -288,8 +298,11 @@ class TargetLink:
             return False
         self._client = client
         self.connects += 1
+        with self._lock:
+            self.slots = {"force": hello.force_slots, "conditions": hello.cond_slots}
         try:
             self._list_breakpoints()
+            self._list_forced()
         except (TransportError, DebugError) as err:
             self._lose(err)
             return False
@@ -325,6 +338,8 @@ class TargetLink:
                 result = job(self._client)
                 if getattr(job, "changes_breakpoints", False):
                     self._list_breakpoints()
+                if getattr(job, "changes_forced", False):
+                    self._list_forced()
             except TransportError as err:
                 future.set_exception(err)
                 self._lose(err)
@@ -334,11 +349,30 @@ class TargetLink:
                 future.set_result(result)
 
     def _list_breakpoints(self) -> None:
-        bps = self._client.bp_list()
-        listed = [{"slot": b.slot, "point": [b.kind, b.a, b.b], "at": self.map.describe(b.kind, b.a, b.b),
-                   "element": self.element_of_point.get((b.kind, b.a, b.b)), "hits": b.hits} for b in bps]
+        listed = []
+        for b in self._client.bp_list():
+            listed.append({"slot": b.slot, "point": [b.kind, b.a, b.b], "at": self.map.describe(b.kind, b.a, b.b),
+                           "element": self.element_of_point.get((b.kind, b.a, b.b)), "hits": b.hits})
+            if b.kind == K.P_CONDITION and b.a in self.map.by_id:  # named by its comparison, as the console does
+                listed[-1].update(at=f"when {describe_comparison(self.map.by_id[b.a], b)}",
+                                  location=self.map.location(b.kind, b.a, b.b))
         with self._lock:
             self.breakpoints = listed
+
+    def _list_forced(self) -> None:
+        """The forced elements (FORCE_LIST), when the firmware can force."""
+        listed = []
+        if self.slots["force"]:
+            for f in self._client.forced():
+                it = self.map.by_id.get(f.item)
+                if it is None:
+                    continue
+                value = decode_value(it.type, f.value)
+                listed.append({"item": it.id, "element": f.elem, "value": _json_value(value),
+                               "name": f"{it.name}[{f.elem}]" if it.count > 1 else it.name,
+                               "shown": format_value(it, value)})
+        with self._lock:
+            self.forced = listed
 
     def _refresh(self) -> None:
         with self._lock:
@@ -358,6 +392,7 @@ class TargetLink:
             if snap.halted and (previous is None or (previous.halted, previous.tick, previous.at)
                                 != (snap.halted, snap.tick, snap.at)):
                 self._list_breakpoints()  # a new halt: the breakpoints' hits changed
+                self._list_forced()  # and a console may have forced or released meanwhile
         except TransportError as err:
             self._lose(err)
             return
@@ -399,6 +434,10 @@ class TargetLink:
         m = self.map
         loc = flags.location
         halted_at = m.describe(loc.kind, loc.a, loc.b) if flags.halted and loc.kind != K.P_NONE else None
+        if flags.halted and loc.kind == K.P_CONDITION:  # `breakpoint N when NAME OP VALUE`, as the console says
+            listed = next((b for b in self.breakpoints if b["slot"] == flags.breakpoint), None)
+            if listed is not None:
+                halted_at = f"breakpoint {flags.breakpoint} {listed['at']}"
         location = m.location(loc.kind, loc.a, loc.b) if flags.halted else None
         if flags.halted and location is None and loc.kind == K.P_INSTANT:
             released = m.released(flags.tick)
@@ -438,6 +477,30 @@ def breakpoint_job(point: tuple[int, int, int] | None, slot: int | None):
     return job
 
 
+def force_job(item: Item, value, element: int = 0):
+    """A job forcing one element of an item (APPLIED or QUEUED)."""
+    def job(client: DebugClient) -> int:
+        return client.force(item.id, item.type, value, element, what=item.name)
+    job.changes_forced = True
+    return job
+
+
+def release_job(item: Item | None, element: int = 0):
+    """A job releasing one forced element, or every one (`item` None)."""
+    def job(client: DebugClient) -> None:
+        client.release(None if item is None else item.id, element)
+    job.changes_forced = True
+    return job
+
+
+def condition_job(item: Item, op: str, value, element: int = 0):
+    """A job setting a conditional breakpoint ``item[element] OP value``; its slot."""
+    def job(client: DebugClient) -> int:
+        return client.bp_when(item.id, item.type, op, value, element)
+    job.changes_breakpoints = True
+    return job
+
+
 def command_job(command: str, unit: str | None = None, program_id: int | None = None):
     """A job for run, break, step UNIT, reset (into a halt)."""
     def job(client: DebugClient):
@@ -453,6 +516,6 @@ def command_job(command: str, unit: str | None = None, program_id: int | None = 
             if program_id is not None and hello.program_id != program_id:
                 raise TransportError(f"after the reset the target runs program 0x{hello.program_id:08x}")
         return None
-    job.changes_breakpoints = command == "reset"  # a restarted firmware has none
+    job.changes_breakpoints = job.changes_forced = command == "reset"  # a restarted firmware has none
     return job
 

@@ -15,15 +15,12 @@ from __future__ import annotations
 
 import asyncio
 import errno
-import hmac
-import ipaddress
 import json
 import re
-import secrets
 import signal
 import sys
 import time
-from dataclasses import asdict, dataclass
+from dataclasses import asdict
 from pathlib import Path
 
 from aiohttp import web
@@ -32,98 +29,16 @@ from ..modbus_link import EXCEPTIONS, DeviceException, LinkError
 from ..service_cli import (PROG, UsageError, backup_document, device_address, parse_period, plan_restore,
                            read_values, restore_params, write_value)
 from ..service_map import MapError, ServiceItem, ServiceMap, ValueError_
+from ..web_guard import CSRF_HEADER, Guard, ListenError, guard_middleware, make_guard, parse_listen
 from .session import Busy, DeviceSession, NotConnected, json_value
 
 STATIC = Path(__file__).resolve().parent / "static"
 DEFAULT_LISTEN = "127.0.0.1:8080"
-CSRF_HEADER = "X-EasyLab-CSRF"
 MAX_BODY = 256 * 1024  # a restore of a few thousand params fits
-TOKEN_RE = re.compile(r"[A-Za-z0-9._~-]{8,128}")
-CSP = ("default-src 'self'; script-src 'self'; style-src 'self'; img-src 'self' data: blob:; connect-src 'self'; "
-       "frame-ancestors 'none'; base-uri 'none'; form-action 'none'")
-
-
-# ====================================================================== addresses and tokens
-
-
-def parse_listen(text: str) -> tuple[str, int]:
-    """ADDR:PORT (``[::1]:8080`` for IPv6; port 0 picks a free one)."""
-    m = re.fullmatch(r"\[([0-9A-Fa-f:.]+)\]:(\d+)|([^:\[\]]+):(\d+)", text.strip())
-    if not m:
-        raise UsageError(f"--listen {text}: give ADDR:PORT, e.g. 127.0.0.1:8080 or 0.0.0.0:8080")
-    host, port = (m.group(1), m.group(2)) if m.group(1) else (m.group(3), m.group(4))
-    if host != "localhost":
-        try:
-            ipaddress.ip_address(host)
-        except ValueError:
-            raise UsageError(f"--listen {text}: {host} is not an IP address (or localhost)") from None
-    if not 0 <= int(port) <= 65535:
-        raise UsageError(f"--listen {text}: port {port} is not 0..65535")
-    return host, int(port)
-
-
-def is_loopback(host: str) -> bool:
-    """True for localhost and the loopback addresses (127.0.0.0/8, ::1)."""
-    host = host.strip("[]").lower()
-    if host in ("localhost", "localhost."):
-        return True
-    try:
-        return ipaddress.ip_address(host).is_loopback
-    except ValueError:
-        return False
-
-
-def _host_name(host_header: str) -> str:
-    """The name in a Host header, without its port ("[::1]:80" -> "::1")."""
-    m = re.fullmatch(r"\[([^\]]*)\](?::\d*)?|([^:]*)(?::\d*)?", host_header)
-    return (m.group(1) or m.group(2) or "") if m else host_header
-
-
-@dataclass
-class Guard:
-    """Who may use the panel: `token` None means no token (loopback only),
-    `loopback` means the Host header must be a loopback name."""
-
-    token: str | None
-    loopback: bool
-    csrf: str
-    cookie: str
-
-    def authorized(self, request: web.Request) -> bool:
-        if self.token is None:
-            return True
-        offered = request.cookies.get(self.cookie)
-        auth = request.headers.get("Authorization", "")
-        if auth.startswith("Bearer "):
-            offered = auth[7:].strip()
-        return offered is not None and hmac.compare_digest(offered.encode(), self.token.encode())
-
-    def cross_site(self, request: web.Request) -> str | None:
-        """Why a request that changes something is refused (None: it is the
-        page's own): it must come from the panel's origin, as JSON, with the
-        CSRF token that only the page can read."""
-        origin = request.headers.get("Origin")
-        if origin is not None and origin != f"{request.scheme}://{request.host}":
-            return f"a request from another origin ({origin})"
-        site = request.headers.get("Sec-Fetch-Site")
-        if origin is None and site not in (None, "same-origin", "none"):
-            return f"a {site} request"
-        if request.content_type != "application/json":
-            return "a request that is not JSON"
-        if not hmac.compare_digest(request.headers.get(CSRF_HEADER, "").encode(), self.csrf.encode()):
-            return f"a request without the panel's {CSRF_HEADER} header"
-        return None
 
 
 def _error(status: int, message: str, **extra) -> web.Response:
     return web.json_response({"error": message, **extra}, status=status)
-
-
-def _refuse(request: web.Request, status: int, message: str) -> web.Response:
-    """A refusal: JSON for the API, a line of text for a person's browser."""
-    if request.path.startswith("/api/"):
-        return _error(status, message)
-    return web.Response(status=status, text=message + "\n", content_type="text/plain")
 
 
 # ====================================================================== the application
@@ -139,7 +54,8 @@ class Panel:
         self.job_wait = job_wait
 
     def app(self) -> web.Application:
-        app = web.Application(middlewares=[self._guard], client_max_size=MAX_BODY)
+        app = web.Application(middlewares=[guard_middleware(self.guard, "panel", f"{PROG} web")],
+                              client_max_size=MAX_BODY)
         app.router.add_get("/", self.index)
         app.router.add_get("/api/map", self.api_map)
         app.router.add_get("/api/samples", self.api_samples)
@@ -148,40 +64,6 @@ class Panel:
         app.router.add_post("/api/restore", self.api_restore)
         app.router.add_static("/static/", STATIC, follow_symlinks=False)
         return app
-
-    @web.middleware
-    async def _guard(self, request: web.Request, handler) -> web.StreamResponse:
-        response = await self._checked(request, handler)
-        response.headers["Content-Security-Policy"] = CSP
-        response.headers["X-Content-Type-Options"] = "nosniff"
-        response.headers["X-Frame-Options"] = "DENY"
-        response.headers["Referrer-Policy"] = "no-referrer"
-        response.headers.setdefault("Cache-Control", "no-store" if request.path.startswith("/api/") else "no-cache")
-        return response
-
-    async def _checked(self, request: web.Request, handler) -> web.StreamResponse:
-        g = self.guard
-        if g.loopback and not is_loopback(_host_name(request.host)):
-            return _refuse(request, 403, f"this panel answers only to a loopback address, not to '{request.host}'")
-        if g.token is not None and request.path == "/" and "token" in request.query:
-            if not hmac.compare_digest(request.query["token"].encode(), g.token.encode()):
-                return _refuse(request, 401, "wrong token: open the address that easylab-service web printed")
-            # The token becomes a cookie and leaves the address bar (and the history).
-            response = web.Response(status=303, headers={"Location": "/"})
-            response.set_cookie(g.cookie, g.token, httponly=True, samesite="Strict", path="/")
-            return response
-        if not g.authorized(request):
-            return _refuse(request, 401, "this panel needs its token: open the address that easylab-service web "
-                                         "printed (http://HOST:PORT/?token=...), or send 'Authorization: Bearer TOKEN'")
-        if request.method not in ("GET", "HEAD"):
-            why = g.cross_site(request)
-            if why is not None:
-                print(f"{PROG}: refused {why} to {request.path}", file=sys.stderr, flush=True)
-                return _refuse(request, 403, f"refused: {why}")
-        try:
-            return await handler(request)
-        except web.HTTPException as exc:  # 404, 405 ...: as plain responses, headers added above
-            return web.Response(status=exc.status, text=exc.text, content_type="text/plain")
 
     # ------------------------------------------------------------ pages and reads
 
@@ -293,27 +175,19 @@ class _Refusal(Exception):
 # ====================================================================== running it
 
 
-def panel_guard(host: str, token: str | None) -> Guard:
-    """The guard for a listener on host:port: a token is required off
-    loopback (made here when none is given) and whenever one is given."""
-    if token is not None and not TOKEN_RE.fullmatch(token):
-        raise UsageError("--token: give 8 to 128 characters among letters, digits and . _ ~ -")
-    loopback = is_loopback(host)
-    if token is None and not loopback:
-        token = secrets.token_urlsafe(18)
-    return Guard(token, loopback, secrets.token_urlsafe(18), "easylab_panel")
-
-
 def run_panel(args, smap: ServiceMap) -> int:
     """Serve the panel until SIGINT or SIGTERM (exit status 0)."""
     address = device_address(args, smap)
     period = parse_period(args.every)
-    host, port = parse_listen(args.listen)
-    return asyncio.run(_serve(smap, address, period, host, port, args.token))
+    try:
+        host, port = parse_listen(args.listen)
+        guard = make_guard(host, args.token, "easylab_panel")
+    except ListenError as err:
+        raise UsageError(str(err)) from None
+    return asyncio.run(_serve(smap, address, period, host, port, guard))
 
 
-async def _serve(smap: ServiceMap, address, period: float, host: str, port: int, token: str | None) -> int:
-    guard = panel_guard(host, token)
+async def _serve(smap: ServiceMap, address, period: float, host: str, port: int, guard: Guard) -> int:
 
     def log(line: str) -> None:
         print(f"{PROG}: {line}", file=sys.stderr, flush=True)

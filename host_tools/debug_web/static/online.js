@@ -4,7 +4,9 @@
 // plots); the page reads the snapshots (/api/state) and draws them: active
 // steps, step times, values on edges, vars, params and device data, the
 // halt with its line in the model's text. Commands, breakpoints and writes
-// go to the server as same-origin JSON with the page's CSRF header.
+// go to the server as same-origin JSON with the page's CSRF header; so do
+// forcing (a value held every instant, drawn on the diagram and listed
+// until released) and conditional breakpoints (halt when ITEM OP VALUE).
 "use strict";
 
 (function () {
@@ -17,7 +19,7 @@
   const online = {                      // also the tests' window on the page
     model: null, items: new Map(), elements: {}, values: new Map(), lastSeq: -1, last: null, link: null,
     view: [], scope: { ids: [], times: [], series: new Map(), paused: false, plot: null },
-    refreshes: [], breakpoints: [],
+    refreshes: [], breakpoints: [], forced: [],
   };
   window.easylabOnline = online;
 
@@ -123,8 +125,18 @@
     const g = event.target.closest("g[id]");
     const info = g && online.elements[g.id];
     if (!info) return;
-    if (info.point) toggleBreakpoint(g.id, info);
-    else for (const id of info.items) addToScope(id);
+    if (info.point) { toggleBreakpoint(g.id, info); return; }
+    for (const id of info.items) addToScope(id);
+    pick(info.items);
+  }
+
+  // An element's item becomes the one to force and to halt on (when the lists hold it).
+  function pick(ids) {
+    for (const list of ["force-item", "when-item"]) {
+      const name = ids.map((id) => online.items.get(id).name)
+        .find((n) => [...$(list).options].some((o) => o.value === n));
+      if (name !== undefined) $(list).value = name;
+    }
   }
 
   async function toggleBreakpoint(elementId, info) {
@@ -191,7 +203,8 @@
     for (const b of online.breakpoints) {
       const info = b.element && online.elements[b.element];
       if (info && info.g) info.g.classList.add("bp");
-      if (info && info.location) bpLines.add(lineOf(info.location));
+      const location = b.location || (info && info.location);  // a condition: its item's declaration
+      if (location) bpLines.add(lineOf(location));
     }
     for (const line of document.querySelectorAll(".src-line")) {
       line.classList.toggle("bp-line", bpLines.has(Number(line.dataset.line)));
@@ -211,6 +224,47 @@
         });
         return button;
       }));
+    }
+    showForcing(link);
+  }
+
+  // What the firmware has no slots for (HELLO) replaces its control; the forced items are listed.
+  function showForcing(link) {
+    const none = link.state === "connected" ? link.no_slots || {} : {};
+    for (const [key, form] of [["force", "force-form"], ["conditions", "when-form"]]) {
+      const why = none[key];
+      $(form).hidden = why !== undefined;
+      const note = $(key === "force" ? "force-none" : "when-none");
+      note.hidden = why === undefined;
+      note.textContent = why || "";
+    }
+    online.forced = link.forced || [];
+    const listed = online.forced.map((f) => `${f.name}=${f.shown}`).join(" ");
+    if (listed === online.forcedListed) return;
+    online.forcedListed = listed;
+    $("forced-list").replaceChildren(...online.forced.map((f) => {
+      const button = document.createElement("button");
+      button.type = "button";
+      button.className = "secondary forced-chip";
+      button.title = "release it";
+      button.textContent = `${f.name} = ${f.shown} (forced) ✕`;
+      button.addEventListener("click", async () => {
+        const r = await api("/api/release", { name: online.items.get(f.item).name, element: f.element });
+        say(r.ok ? `released ${f.name}` : r.data.error, r.ok);
+      });
+      return button;
+    }));
+    markScopeForced();
+    if (online.last) show(online.last);
+  }
+
+  // A plotted item that is forced says so in the scope's list (its values there are the forced ones).
+  function markScopeForced() {
+    for (const b of $("scope-list").querySelectorAll("button[data-item]")) {
+      const id = Number(b.dataset.item);
+      const forced = online.forced.some((f) => f.item === id);
+      b.classList.toggle("forced-chip", forced);
+      b.textContent = `${online.items.get(id).name}${forced ? " (forced)" : ""} ✕`;
     }
   }
 
@@ -255,10 +309,13 @@
         info.label.textContent = holds === undefined ? "" : (holds ? "✓ true" : "✗ false");
         info.label.classList.toggle("holds", holds === true);
       } else if (info.label) {
-        const shown = info.items.filter((i) => online.values.has(i));
+        const forced = new Map(online.forced.filter((f) => info.items.includes(f.item)).map((f) => [f.item, f]));
+        info.g.classList.toggle("forced", forced.size > 0);
+        info.label.classList.toggle("forced", forced.size > 0);
+        const shown = info.items.filter((i) => online.values.has(i) || forced.has(i));
         info.label.textContent = shown.map((i) => {
           const it = online.items.get(i);
-          const v = formatValue(it, online.values.get(i));
+          const v = forced.has(i) ? `${forced.get(i).shown} (forced)` : formatValue(it, online.values.get(i));
           return id.startsWith("step:") ? `t = ${v}` : (info.items.length > 1 ? `${shortName(it.name)}=${v}` : `= ${v}`);
         }).join("  ");
         info.label.classList.toggle("stale", !info.items.every((i) => i in s.values || String(i) in s.values));
@@ -362,11 +419,12 @@
       const b = document.createElement("button");
       b.type = "button";
       b.className = "secondary";
-      b.textContent = `${online.items.get(id).name} ✕`;
+      b.dataset.item = String(id);
       b.style.borderLeft = `4px solid ${COLORS[k % COLORS.length]}`;
       b.addEventListener("click", () => removeFromScope(id));
       return b;
     }));
+    markScopeForced();
     if (!sc.ids.length) $("scope").replaceChildren();
     drawScope();
   }
@@ -465,7 +523,27 @@
       say(r.ok ? `${name} := ${r.data.value} (${r.data.applied ? "applied" : "at the next instant"})`
         : r.data.error, r.ok);
     });
-    const plottable = online.model.items.filter((it) => it.kind !== "status");
+    $("force-item").replaceChildren(...writable.map((it) => new Option(it.name, it.name)));
+    $("force-form").addEventListener("submit", async (event) => {
+      event.preventDefault();
+      const name = $("force-item").value;
+      const r = await api("/api/force", { name, value: $("force-value").value });
+      say(r.ok ? `${name} forced to ${r.data.shown} (${r.data.applied ? "from now" : "from the next instant"}, `
+        + "every instant until released)" : r.data.error, r.ok);
+    });
+    $("release-all").addEventListener("click", async () => {
+      const r = await api("/api/release", { name: "all" });
+      say(r.ok ? "released every forced item" : r.data.error, r.ok);
+    });
+    const comparable = online.model.items.filter((it) => it.kind !== "status");
+    $("when-item").replaceChildren(...comparable.map((it) => new Option(it.name, it.name)));
+    $("when-form").addEventListener("submit", async (event) => {
+      event.preventDefault();
+      const when = { name: $("when-item").value, op: $("when-op").value, value: $("when-value").value };
+      const r = await api("/api/breakpoint", { when });
+      say(r.ok ? `breakpoint ${r.data.slot} ${r.data.at}` : r.data.error, r.ok);
+    });
+    const plottable = comparable;
     $("scope-item").replaceChildren(...plottable.map((it) => new Option(it.name, String(it.id))));
     $("scope-add").addEventListener("click", () => addToScope(Number($("scope-item").value)));
     $("scope-pause").addEventListener("click", () => {
