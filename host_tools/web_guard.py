@@ -12,10 +12,13 @@ of frames and other sites' scripts.
 
 from __future__ import annotations
 
+import asyncio
+import errno
 import hmac
 import ipaddress
 import re
 import secrets
+import signal
 import sys
 from dataclasses import dataclass
 
@@ -158,3 +161,38 @@ def guard_middleware(guard: Guard, page: str, prog: str):
         return response
 
     return middleware
+
+
+async def serve(app: web.Application, host: str, port: int, guard: Guard, cookie: str, title: str,
+                start, stop) -> None:
+    """Serve ``app`` on host:port until SIGINT or SIGTERM: print the page's
+    address (``title``: what it serves) with its token, name the guard's
+    cookie ``cookie_PORT`` (cookies ignore ports), call ``start()`` once
+    listening and ``stop()`` (in a thread) at the end. ListenError when
+    the address cannot be had."""
+    runner = web.AppRunner(app, access_log=None, handle_signals=False)
+    await runner.setup()
+    site = web.TCPSite(runner, host, port, reuse_address=True)
+    try:
+        await site.start()
+    except OSError as err:
+        await runner.cleanup()
+        why = "the port is in use" if err.errno == errno.EADDRINUSE else (err.strerror or str(err))
+        raise ListenError(f"cannot listen on {host}:{port}: {why}") from None
+    done = asyncio.Event()
+    loop = asyncio.get_running_loop()
+    for sig in (signal.SIGINT, signal.SIGTERM):
+        loop.add_signal_handler(sig, done.set)
+    bound = runner.addresses[0][1]
+    guard.cookie = f"{cookie}_{bound}"
+    shown = f"[{host}]" if ":" in host else host
+    url = f"http://{shown}:{bound}/" + (f"?token={guard.token}" if guard.token else "")
+    print(f"{title}: {url}", flush=True)
+    if not guard.loopback:
+        print(f"listening on {host}: open it with this machine's address and the token {guard.token}", flush=True)
+    start()
+    try:
+        await done.wait()
+    finally:
+        await runner.cleanup()
+        await asyncio.to_thread(stop)

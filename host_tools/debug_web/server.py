@@ -16,9 +16,7 @@ from __future__ import annotations
 
 import argparse
 import asyncio
-import errno
 import json
-import signal
 import sys
 from pathlib import Path
 
@@ -29,7 +27,7 @@ from ..debug_map import DebugMap, Item, MapError
 from ..debug_protocol import K, OPS, STEP_UNITS, DebugError
 from ..transport import TransportError
 from ..web.server import STATIC as PANEL_STATIC
-from ..web_guard import CSRF_HEADER, Guard, ListenError, guard_middleware, make_guard, parse_listen
+from ..web_guard import CSRF_HEADER, Guard, ListenError, guard_middleware, make_guard, parse_listen, serve
 from .elements import DrawingError, element_ids, elements, model_file, render_svg
 from .guards import GuardValues
 from .target import (Busy, NotConnected, TargetLink, breakpoint_job, command_job, condition_job, force_job,
@@ -335,31 +333,10 @@ async def _serve(dmap: DebugMap, model: dict, args, host: str, port: int, guard:
                       min_period=args.every,
                       baud=args.baud, log=log)
     page = OnlinePage(dmap, link, guard, model, job_wait=max(10.0, 8 * args.timeout))
-    runner = web.AppRunner(page.app(), access_log=None, handle_signals=False)
-    await runner.setup()
-    site = web.TCPSite(runner, host, port, reuse_address=True)
     try:
-        await site.start()
-    except OSError as err:
-        await runner.cleanup()
-        why = "the port is in use" if err.errno == errno.EADDRINUSE else (err.strerror or str(err))
-        print(f"{PROG} web: error: cannot listen on {host}:{port}: {why}", file=sys.stderr)
+        await serve(page.app(), host, port, guard, "easylab_online", f"online mode of model {dmap.model} (target "
+                    f"{args.target})", link.start, link.stop)
+    except ListenError as err:
+        print(f"{PROG} web: error: {err}", file=sys.stderr)
         return 2
-    stop = asyncio.Event()
-    loop = asyncio.get_running_loop()
-    for sig in (signal.SIGINT, signal.SIGTERM):
-        loop.add_signal_handler(sig, stop.set)
-    bound = runner.addresses[0][1]
-    guard.cookie = f"easylab_online_{bound}"  # cookies ignore ports: one name per page on a host
-    shown = f"[{host}]" if ":" in host else host
-    url = f"http://{shown}:{bound}/" + (f"?token={guard.token}" if guard.token else "")
-    print(f"online mode of model {dmap.model} (target {args.target}): {url}", flush=True)
-    if not guard.loopback:
-        print(f"listening on {host}: open it with this machine's address and the token {guard.token}", flush=True)
-    link.start()
-    try:
-        await stop.wait()
-    finally:
-        await runner.cleanup()
-        await asyncio.to_thread(link.stop)
     return 0

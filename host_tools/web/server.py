@@ -14,10 +14,8 @@ page's CSRF token.
 from __future__ import annotations
 
 import asyncio
-import errno
 import json
 import re
-import signal
 import sys
 import time
 from dataclasses import asdict
@@ -29,7 +27,7 @@ from ..modbus_link import EXCEPTIONS, DeviceException, LinkError
 from ..service_cli import (PROG, UsageError, backup_document, device_address, parse_period, plan_restore,
                            read_values, restore_params, write_value)
 from ..service_map import MapError, ServiceItem, ServiceMap, ValueError_
-from ..web_guard import CSRF_HEADER, Guard, ListenError, guard_middleware, make_guard, parse_listen
+from ..web_guard import CSRF_HEADER, Guard, ListenError, guard_middleware, make_guard, parse_listen, serve
 from .session import Busy, DeviceSession, NotConnected, json_value
 
 STATIC = Path(__file__).resolve().parent / "static"
@@ -193,30 +191,9 @@ async def _serve(smap: ServiceMap, address, period: float, host: str, port: int,
         print(f"{PROG}: {line}", file=sys.stderr, flush=True)
     session = DeviceSession(smap, address, period, log=log)
     panel = Panel(smap, session, guard, job_wait=max(10.0, 3 * address.timeout))
-    runner = web.AppRunner(panel.app(), access_log=None, handle_signals=False)
-    await runner.setup()
-    site = web.TCPSite(runner, host, port, reuse_address=True)
     try:
-        await site.start()
-    except OSError as err:
-        await runner.cleanup()
-        why = "the port is in use" if err.errno == errno.EADDRINUSE else (err.strerror or str(err))
-        raise UsageError(f"cannot listen on {host}:{port}: {why}") from None
-    stop = asyncio.Event()
-    loop = asyncio.get_running_loop()
-    for sig in (signal.SIGINT, signal.SIGTERM):
-        loop.add_signal_handler(sig, stop.set)
-    bound = runner.addresses[0][1]
-    guard.cookie = f"easylab_panel_{bound}"  # cookies ignore ports: one name per panel on a host
-    shown = f"[{host}]" if ":" in host else host
-    url = f"http://{shown}:{bound}/" + (f"?token={guard.token}" if guard.token else "")
-    print(f"service panel of model {smap.model} (device {address.where}): {url}", flush=True)
-    if not guard.loopback:
-        print(f"listening on {host}: open it with this machine's address and the token {guard.token}", flush=True)
-    session.start()
-    try:
-        await stop.wait()
-    finally:
-        await runner.cleanup()
-        await asyncio.to_thread(session.stop)
+        await serve(panel.app(), host, port, guard, "easylab_panel",
+                    f"service panel of model {smap.model} (device {address.where})", session.start, session.stop)
+    except ListenError as err:
+        raise UsageError(str(err)) from None
     return 0
