@@ -30,7 +30,8 @@ from ..web.server import STATIC as PANEL_STATIC
 from ..web_guard import CSRF_HEADER, Guard, ListenError, guard_middleware, make_guard, parse_listen, serve
 from .elements import DrawingError, element_ids, elements, model_file, render_svg
 from .guards import GuardValues
-from .target import (Busy, NotConnected, TargetLink, breakpoint_job, command_job, condition_job, force_job,
+from ..link_jobs import Busy, NotConnected
+from .target import (TargetLink, breakpoint_job, command_job, condition_job, force_job,
                      release_job, write_job)
 
 STATIC = Path(__file__).resolve().parent / "static"

@@ -37,20 +37,13 @@ from typing import Callable
 from ..debug_console import describe_comparison, format_value, no_slots
 from ..debug_map import DebugMap, Item
 from ..debug_protocol import K, DebugClient, DebugError, decode_value, type_size
+from ..link_jobs import JobQueue, NotConnected
 from ..transport import TransportError
 
 CONNECTING, CONNECTED, LOST, WRONG_PROGRAM = "connecting", "connected", "lost", "wrong program"
 VIEWER_TIMEOUT = 5.0  # seconds without a page asking: polling stops
 FRAME_OVERHEAD = K.HEADER + K.TRAILER + 2  # seq, cmd, CRC, the status byte, APPLIED or the tx state
 TX_RESULT_APPLIED = 3  # TX_RESULT's state once the commit applied (docs/protocol.md; the header has no name for it)
-
-
-class Busy(Exception):
-    """Too many requests are already waiting for the target."""
-
-
-class NotConnected(Exception):
-    """The target is not connected now (the message says why)."""
 
 
 def target_url(target: str) -> str:
@@ -175,7 +168,7 @@ class TargetLink:
         self.forced: list[dict] = []
         self.slots = {"force": 0, "conditions": 0}  # HELLO's: forced elements, conditional breakpoints
         self._log = log or (lambda line: None)
-        self._jobs: queue.Queue = queue.Queue(maxsize=queue_size)
+        self._jobs = JobQueue(queue_size, "the target")
         self._history: deque[Snapshot] = deque(maxlen=history)
         self._seq = 0
         self._view: list[Item] = []
@@ -218,11 +211,7 @@ class TargetLink:
         with self._lock:
             if self._state != CONNECTED:
                 raise NotConnected(self._message)
-        future: concurrent.futures.Future = concurrent.futures.Future()
-        try:
-            self._jobs.put_nowait((future, job))
-        except queue.Full:
-            raise Busy(f"{self._jobs.maxsize} requests are already waiting for the target") from None
+        future = self._jobs.put(job)
         self._refresh_now.set()
         return future
 
@@ -231,7 +220,7 @@ class TargetLink:
         with self._lock:
             return {"state": self._state, "message": self._message, "since": round(self._since, 3),
                     "where": self.target, "connects": self.connects, "period": round(self.period, 4),
-                    "waiting": self._jobs.qsize(), "breakpoints": list(self.breakpoints),
+                    "waiting": self._jobs.waiting(), "breakpoints": list(self.breakpoints),
                     "forced": list(self.forced), "slots": dict(self.slots), "no_slots": self.no_slots()}
 
     def no_slots(self) -> dict[str, str]:
@@ -278,7 +267,7 @@ class TargetLink:
                 next_refresh = min(next_refresh, time.monotonic())
         if self._client is not None:
             self._client.close()
-        self._fail_waiting(NotConnected("the server is stopping"))
+        self._jobs.fail_all(NotConnected("the server is stopping"))
 
     def _connect(self) -> bool:
         client = None
@@ -315,21 +304,12 @@ class TargetLink:
             self._client.close()
         self._client = None
         self._set_state(LOST, f"{self.target}: {err}; reconnecting")
-        self._fail_waiting(NotConnected(str(err)))
-
-    def _fail_waiting(self, err: Exception) -> None:
-        while True:
-            try:
-                future, _ = self._jobs.get_nowait()
-            except queue.Empty:
-                return
-            if future.set_running_or_notify_cancel():
-                future.set_exception(err)
+        self._jobs.fail_all(NotConnected(str(err)))
 
     def _run_jobs(self) -> None:
         while self._client is not None:
             try:
-                future, job = self._jobs.get_nowait()
+                future, job = self._jobs.get(0)
             except queue.Empty:
                 return
             if not future.set_running_or_notify_cancel():

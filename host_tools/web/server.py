@@ -28,7 +28,8 @@ from ..service_cli import (PROG, UsageError, backup_document, device_address, pa
                            read_values, restore_params, write_value)
 from ..service_map import MapError, ServiceItem, ServiceMap, ValueError_
 from ..web_guard import CSRF_HEADER, Guard, ListenError, guard_middleware, make_guard, parse_listen, serve
-from .session import Busy, DeviceSession, NotConnected, json_value
+from ..link_jobs import Busy, NotConnected
+from .session import DeviceSession, json_value
 
 STATIC = Path(__file__).resolve().parent / "static"
 DEFAULT_LISTEN = "127.0.0.1:8080"

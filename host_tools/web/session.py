@@ -20,19 +20,12 @@ from collections import deque
 from dataclasses import dataclass
 from typing import Callable
 
+from ..link_jobs import JobQueue, NotConnected
 from ..modbus_link import DeviceException, LinkError, LinkStats, ModbusLink
 from ..service_cli import DeviceAddress, read_values
 from ..service_map import ServiceMap
 
 CONNECTING, CONNECTED, LOST = "connecting", "connected", "lost"
-
-
-class Busy(Exception):
-    """Too many requests are already waiting for the device."""
-
-
-class NotConnected(Exception):
-    """The device is not connected now (the message says why)."""
 
 
 @dataclass(frozen=True)
@@ -70,7 +63,7 @@ class DeviceSession:
         self.stats = LinkStats()
         self.connects = 0
         self._log = log or (lambda line: None)
-        self._jobs: queue.Queue = queue.Queue(maxsize=queue_size)
+        self._jobs = JobQueue(queue_size, "the device")
         self._history: deque[Sample] = deque(maxlen=history)
         self._seq = 0
         self._lock = threading.Lock()
@@ -96,11 +89,7 @@ class DeviceSession:
         with self._lock:
             if self._state != CONNECTED:
                 raise NotConnected(self._message)
-        future: concurrent.futures.Future = concurrent.futures.Future()
-        try:
-            self._jobs.put_nowait((future, job))
-        except queue.Full:
-            raise Busy(f"{self._jobs.maxsize} requests are already waiting for the device") from None
+        future = self._jobs.put(job)
         return future
 
     def link_state(self) -> dict:
@@ -108,7 +97,7 @@ class DeviceSession:
         with self._lock:
             return {"state": self._state, "message": self._message, "since": round(self._since, 3),
                     "where": self.address.where, "connects": self.connects, "stats": self.stats.as_dict(),
-                    "waiting": self._jobs.qsize(), "period": self.period}
+                    "waiting": self._jobs.waiting(), "period": self.period}
 
     def last_seq(self) -> int:
         """The newest sample's number: a write done now shows from the next."""
@@ -146,13 +135,13 @@ class DeviceSession:
                 next_sample = max(next_sample + self.period, time.monotonic())
                 continue
             try:
-                future, job = self._jobs.get(timeout=next_sample - now)
+                future, job = self._jobs.get(next_sample - now)
             except queue.Empty:
                 continue
             self._execute(future, job)
         if self._link is not None:
             self._link.close()
-        self._fail_waiting(NotConnected("the panel is stopping"))
+        self._jobs.fail_all(NotConnected("the panel is stopping"))
 
     def _connect(self) -> bool:
         try:
@@ -172,16 +161,7 @@ class DeviceSession:
             self._link.close()
         self._link = None
         self._set_state(LOST, f"{err}; reconnecting")
-        self._fail_waiting(NotConnected(str(err)))
-
-    def _fail_waiting(self, err: Exception) -> None:
-        while True:
-            try:
-                future, _ = self._jobs.get_nowait()
-            except queue.Empty:
-                return
-            if future.set_running_or_notify_cancel():
-                future.set_exception(err)
+        self._jobs.fail_all(NotConnected(str(err)))
 
     def _sample(self) -> None:
         try:
