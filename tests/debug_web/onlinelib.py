@@ -7,13 +7,7 @@ debug_testlib); HTTP and waiting are the service panel's (tests/web, weblib).
 
 from __future__ import annotations
 
-import os
-import queue
-import re
-import signal
-import subprocess
 import sys
-import threading
 from pathlib import Path
 
 HERE = Path(__file__).resolve().parent
@@ -21,7 +15,7 @@ sys.path.insert(0, str(HERE.parent / "debug"))
 sys.path.insert(0, str(HERE.parent / "web"))
 
 from debug_testlib import ROOT  # noqa: E402
-from weblib import CHROMIUM_FLAGS, http, wait_for  # noqa: E402,F401
+from weblib import CHROMIUM_FLAGS, PageServer, http, wait_for  # noqa: E402,F401
 
 MODEL = ROOT / "examples" / "pneumatic_cylinder.elab"
 MODEL_FILE = "examples/pneumatic_cylinder.elab"  # as the map's locations name it
@@ -63,80 +57,28 @@ def slow_cycle(directory: Path) -> Path:
     return path
 
 
-class OnlineServer:
-    """`easylab-debug web --map MAP TARGET --listen ... [--token T]` in a
-    process; `url` is the address it printed, `base` the same without the
-    token, reached over 127.0.0.1."""
+class OnlineServer(PageServer):
+    """`easylab-debug web --map MAP TARGET --listen ... [--token T]`."""
+
+    what = "easylab-debug web"
+    info = "/api/model"
+    start_timeout = 60.0
 
     def __init__(self, map_path: Path, target: str, listen: str = "127.0.0.1:0", token: str | None = None,
                  model: Path | None = MODEL, extra: list[str] | None = None):
-        self.args = [sys.executable, "-m", "easylab.host_tools.debug_console", "web", "--map", str(map_path), target,
-                     "--listen", listen, "--timeout", "0.3", *(extra or [])]
+        args = [sys.executable, "-m", "easylab.host_tools.debug_console", "web", "--map", str(map_path), target,
+                "--listen", listen, "--timeout", "0.3", *(extra or [])]
         if model is not None:  # else the server finds it by the map's locations
-            self.args += ["--model", str(model)]
+            args += ["--model", str(model)]
         if token is not None:
-            self.args += ["--token", token]
-        self.proc = None
-        self.out: list[str] = []
-        self.err: list[str] = []
-        self._lines: queue.Queue = queue.Queue()
-
-    def start(self) -> "OnlineServer":
-        env = {k: v for k, v in os.environ.items() if k != "PYTHONPATH"}
-        self.proc = subprocess.Popen(self.args, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-                                     stdin=subprocess.DEVNULL, env=env, cwd=ROOT)
-        for stream, sink in ((self.proc.stdout, self.out), (self.proc.stderr, self.err)):
-            threading.Thread(target=self._read, args=(stream, sink), daemon=True).start()
-        first = self._lines.get(timeout=60)
-        if first is None:
-            raise AssertionError(f"easylab-debug web exited {self.proc.wait()}: {''.join(self.err)}")
-        m = re.search(r"(http://\S+)", first)
-        assert m, first
-        self.url = m.group(1)
-        self.port = int(re.search(r":(\d+)/", self.url).group(1))
-        self.token = (re.search(r"token=(\S+)", self.url) or [None, None])[1]
-        self.base = f"http://127.0.0.1:{self.port}"
-        return self
-
-    def _read(self, stream, sink: list[str]) -> None:
-        for line in stream:
-            sink.append(line)
-            if sink is self.out:
-                self._lines.put(line)
-        if sink is self.out:
-            self._lines.put(None)
+            args += ["--token", token]
+        super().__init__(args, cwd=ROOT)
 
     def model(self) -> dict:
-        if not hasattr(self, "_model"):
-            h = {"Authorization": f"Bearer {self.token}"} if self.token else {}
-            self._model = http("GET", self.base + "/api/model", headers=h).json()
-        return self._model
-
-    def api(self, method: str, path: str, body=None, headers: dict | None = None):
-        """A request as the page makes it (the token, if any, as a bearer)."""
-        h = {"Authorization": f"Bearer {self.token}"} if self.token else {}
-        if method == "POST":
-            h[self.model()["csrf_header"]] = self.model()["csrf"]
-            h["Origin"] = self.base
-        h.update(headers or {})
-        return http(method, self.base + path, body, h)
+        return self.document()
 
     def state(self, after: int = -1) -> dict:
         return self.api("GET", f"/api/state?after={after}").json()
-
-    def stop(self) -> None:
-        """SIGTERM; the server must end by itself, with status 0 and no traceback."""
-        if self.proc is None or self.proc.poll() is not None:
-            return
-        self.proc.send_signal(signal.SIGTERM)
-        try:
-            status = self.proc.wait(timeout=15)
-        except subprocess.TimeoutExpired:
-            self.proc.kill()
-            self.proc.wait()
-            raise AssertionError("easylab-debug web did not stop on SIGTERM")
-        err = "".join(self.err)
-        assert status == 0 and "Traceback" not in err, (status, err)
 
 
 class Browser:

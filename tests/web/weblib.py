@@ -120,32 +120,34 @@ def http(method: str, url: str, body=None, headers: dict | None = None, timeout:
 # ---------------------------------------------------------------- the panel process
 
 
-class Panel:
-    """`easylab-service --map MAP DEVICE... web --listen ... [--token T]` in a
-    process; `url` is the address it printed, `base` the same without the
-    token, reached over 127.0.0.1 (it listens there in every test)."""
+class PageServer:
+    """A page's server (`easylab-service ... web`, `easylab-debug web`) in a
+    process, started with ``args``; `url` is the address it printed, `base`
+    the same without the token, reached over 127.0.0.1 (it listens there in
+    every test). ``what`` names it in failures; ``info`` is the API path of
+    its document with the CSRF header's name and value."""
 
-    def __init__(self, smap: Path, device_args: list[str], listen: str = "127.0.0.1:0", token: str | None = None,
-                 timeout: float = 0.5, every: str = "100ms", extra: list[str] | None = None):
-        self.args = [sys.executable, "-m", "easylab.host_tools.service_cli", "--map", str(smap), "--timeout",
-                     str(timeout), *device_args, "web", "--listen", listen, "--every", every]
-        if token is not None:
-            self.args += ["--token", token]
-        self.args += extra or []
+    what = "the server"
+    info = "/api/map"
+    start_timeout = 30.0
+
+    def __init__(self, args: list[str], cwd: Path | None = None):
+        self.args = args
+        self.cwd = cwd
         self.proc = None
         self.out: list[str] = []
         self.err: list[str] = []
         self._lines: queue.Queue = queue.Queue()
 
-    def start(self) -> "Panel":
+    def start(self):
         env = {k: v for k, v in os.environ.items() if k != "PYTHONPATH"}
         self.proc = subprocess.Popen(self.args, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-                                     stdin=subprocess.DEVNULL, env=env)
+                                     stdin=subprocess.DEVNULL, env=env, cwd=self.cwd)
         for stream, sink in ((self.proc.stdout, self.out), (self.proc.stderr, self.err)):
             threading.Thread(target=self._read, args=(stream, sink), daemon=True).start()
-        first = self._lines.get(timeout=30)
+        first = self._lines.get(timeout=self.start_timeout)
         if first is None:
-            raise AssertionError(f"the panel exited {self.proc.wait()}: {''.join(self.err)}")
+            raise AssertionError(f"{self.what} exited {self.proc.wait()}: {''.join(self.err)}")
         m = re.search(r"(http://\S+)", first)
         assert m, first
         self.url = m.group(1)
@@ -162,6 +164,21 @@ class Panel:
         if sink is self.out:
             self._lines.put(None)
 
+    def document(self) -> dict:
+        """The server's own document (``info``), read once."""
+        if not hasattr(self, "_document"):
+            h = {"Authorization": f"Bearer {self.token}"} if self.token else {}
+            self._document = http("GET", self.base + self.info, headers=h).json()
+        return self._document
+
+    @property
+    def csrf(self) -> str:
+        return self.document()["csrf"]
+
+    @property
+    def csrf_header(self) -> str:
+        return self.document()["csrf_header"]
+
     def api(self, method: str, path: str, body=None, headers: dict | None = None) -> Reply:
         """A request as the page makes it (the token, if any, as a bearer)."""
         h = {"Authorization": f"Bearer {self.token}"} if self.token else {}
@@ -171,19 +188,36 @@ class Panel:
         h.update(headers or {})
         return http(method, self.base + path, body, h)
 
-    @property
-    def csrf(self) -> str:
-        return self._map()["csrf"]
+    def stop(self) -> None:
+        """SIGTERM; the server must end by itself, with status 0 and no traceback."""
+        if self.proc is None or self.proc.poll() is not None:
+            return
+        self.proc.send_signal(signal.SIGTERM)
+        try:
+            status = self.proc.wait(timeout=15)
+        except subprocess.TimeoutExpired:
+            self.proc.kill()
+            self.proc.wait()
+            raise AssertionError(f"{self.what} did not stop on SIGTERM")
+        err = "".join(self.err)
+        assert status == 0 and "Traceback" not in err, (status, err)
 
-    @property
-    def csrf_header(self) -> str:
-        return self._map()["csrf_header"]
+
+class Panel(PageServer):
+    """`easylab-service --map MAP DEVICE... web --listen ... [--token T]`."""
+
+    what = "the panel"
+
+    def __init__(self, smap: Path, device_args: list[str], listen: str = "127.0.0.1:0", token: str | None = None,
+                 timeout: float = 0.5, every: str = "100ms", extra: list[str] | None = None):
+        args = [sys.executable, "-m", "easylab.host_tools.service_cli", "--map", str(smap), "--timeout",
+                str(timeout), *device_args, "web", "--listen", listen, "--every", every]
+        if token is not None:
+            args += ["--token", token]
+        super().__init__(args + (extra or []))
 
     def _map(self) -> dict:
-        if not hasattr(self, "_map_doc"):
-            h = {"Authorization": f"Bearer {self.token}"} if self.token else {}
-            self._map_doc = http("GET", self.base + "/api/map", headers=h).json()
-        return self._map_doc
+        return self.document()
 
     def link(self) -> dict:
         return self.api("GET", "/api/samples?after=1000000000").json()["link"]
@@ -193,20 +227,6 @@ class Panel:
         doc = self.api("GET", "/api/samples?after=-1").json()
         names = [it["name"] for it in self._map()["items"]]
         return dict(zip(names, doc["samples"][-1]["v"]))
-
-    def stop(self) -> None:
-        """SIGTERM; the panel must end by itself, with status 0 and no traceback."""
-        if self.proc is None or self.proc.poll() is not None:
-            return
-        self.proc.send_signal(signal.SIGTERM)
-        try:
-            status = self.proc.wait(timeout=15)
-        except subprocess.TimeoutExpired:
-            self.proc.kill()
-            self.proc.wait()
-            raise AssertionError("the panel did not stop on SIGTERM")
-        err = "".join(self.err)
-        assert status == 0 and "Traceback" not in err, (status, err)
 
 
 # ---------------------------------------------------------------- the browser
