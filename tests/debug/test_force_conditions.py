@@ -190,18 +190,25 @@ def _values_seen(rows) -> dict:
     return {name: sorted({int(dict(r)[col]) for r in rows}) for name, (col, _) in ITEMS.items()}
 
 
-@settings(max_examples=30, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture],
-          derandomize=True)
-@given(data=st.data())
-def test_halting_instant_is_where_the_condition_first_turns_true(builds, tmp_path_factory, data):
-    exe = builds["pneumatic_cylinder"]
+def draw_condition(data, exe, tmp_path_factory) -> tuple[str, str, int, int | None]:
+    """A random condition on pneumatic_cylinder's items (a value it takes or
+    one near its range) and the tick at which it first turns true on the
+    un-halted trace of ``exe`` (None: never)."""
     rows = [dict(r) for r in _unhalted_trace(exe, tmp_path_factory.mktemp("unhalted"))]
     name = data.draw(st.sampled_from(sorted(ITEMS)), label="item")
     op = data.draw(st.sampled_from(sorted(PY_OPS)), label="op")
     seen = _values_seen(rows)[name]
     lo, hi = (0, 1) if name.endswith(".level") else (ITEMS[name][1], max(seen) + 5)
     value = data.draw(st.one_of(st.sampled_from(seen), st.integers(lo, hi)), label="value")
-    expected = _first_true_tick(rows, ITEMS[name][0], op, value)
+    return name, op, value, _first_true_tick(rows, ITEMS[name][0], op, value)
+
+
+@settings(max_examples=30, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture],
+          derandomize=True)
+@given(data=st.data())
+def test_halting_instant_is_where_the_condition_first_turns_true(builds, tmp_path_factory, data):
+    exe = builds["pneumatic_cylinder"]
+    name, op, value, expected = draw_condition(data, exe, tmp_path_factory)
     # one process per example, in a folder of its own (the fixture's folder is the test's, shared by examples)
     fw = Firmware(exe, tmp_path_factory.mktemp("run"), "--stimulus", str(STIMULUS),
                   duration=f"{DURATION_US // 1000}ms")

@@ -19,8 +19,8 @@ from hypothesis import HealthCheck, assume, given, settings, strategies as st
 
 from debug_testlib import ROOT, Firmware, board, builds, firmware  # noqa: F401 (fixtures)
 from onlinelib import OnlineServer, wait_for
-from test_force_conditions import (DURATION_US, ITEMS, PY_OPS, STIMULUS, TICK_US, _first_true_tick, _unhalted_trace,
-                                   _values_seen, stimulus_at, trace_rows, value_at)
+from test_force_conditions import (DURATION_US, PY_OPS, STIMULUS, TICK_US, draw_condition, stimulus_at, trace_rows,
+                                   value_at)
 from test_online_page import open_page
 
 END_OUT = "end_out.level"
@@ -113,13 +113,7 @@ def test_a_forced_sensor_holds_and_a_condition_halts_from_the_page(board, builds
 @given(data=st.data())
 def test_a_condition_from_the_page_halts_where_the_trace_predicts(builds, browser, tmp_path_factory, data):
     exe = builds["pneumatic_cylinder"]
-    rows = [dict(r) for r in _unhalted_trace(exe, tmp_path_factory.mktemp("unhalted"))]
-    name = data.draw(st.sampled_from(sorted(ITEMS)), label="item")
-    op = data.draw(st.sampled_from(sorted(PY_OPS)), label="op")
-    seen = _values_seen(rows)[name]
-    lo, hi = (0, 1) if name.endswith(".level") else (ITEMS[name][1], max(seen) + 5)
-    value = data.draw(st.one_of(st.sampled_from(seen), st.integers(lo, hi)), label="value")
-    expected = _first_true_tick(rows, ITEMS[name][0], op, value)
+    name, op, value, expected = draw_condition(data, exe, tmp_path_factory)
     assume(expected is not None)  # a condition that never holds lets the run end: nothing to show
     fw = Firmware(exe, tmp_path_factory.mktemp("run"), "--stimulus", str(STIMULUS),
                   duration=f"{DURATION_US // 1000}ms")
