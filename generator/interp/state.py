@@ -10,6 +10,11 @@ no Python is needed, the bodies. :class:`ProgramState` runs an instant's
 parts for the engine's step (with the stimulus, the interfaces, the trace
 and the charts in between) and whole stretches of instants in one call of
 the runner when nothing in Python has to happen (:meth:`run_native`).
+
+With a multi-core plan (``easylab run --cores N``, docs/multicore.md) the
+parallel dataflows run each activation as one job of the runner on the
+plan's cores, and the bodies of tasks released together that need no
+Python run as one job, each task on its core.
 """
 
 from __future__ import annotations
@@ -18,6 +23,7 @@ import ctypes
 from typing import Callable
 
 from ..core import expr as I
+from ..ir.multicore import MulticorePlan, TaskGroup
 from ..ir.program import Instant, Program, Task
 from . import runner as R
 from . import values as V
@@ -98,10 +104,11 @@ class InstantPlan:
 class ProgramState:
     """The run-time state of one program, built from its IR and plug-ins
     (``plugins[spec id]``; ``runner`` runs the plans), as the firmware holds
-    it at boot."""
+    it at boot. ``multicore``: the plan its parallel parts follow (None:
+    one core)."""
 
     def __init__(self, program: Program, plugins: list[Plugin], runner: R.Runner, io: Interfaces | None = None,
-                 model_devices: ModelDevices | None = None):
+                 model_devices: ModelDevices | None = None, multicore: MulticorePlan | None = None):
         self.program = program
         self.plugins = plugins
         self.io = io
@@ -126,6 +133,12 @@ class ProgramState:
                 continue
             actors = {self.actors[i].instance.name: self.actors[i] for i in df.instances}
             self.dataflows.append(DataflowRunner(program, df, actors, self.tasks[df.task], runner, self.cursor))
+        self.multicore = multicore
+        for firing_plan in multicore.dataflows if multicore is not None else ():
+            flow = self.dataflows[firing_plan.dataflow.id]
+            if firing_plan.parallel and flow is not None:
+                flow.parallelise(firing_plan)
+        self._group_jobs: dict[tuple[int, ...], R.Job | None] = {}
         self.charts = [ChartRunner(program, c, self.tasks[c.task] if c.task is not None else None,
                                    self.run_dataflow) for c in program.charts]
         self.readers = [(d.id, set(d.read_by)) for d in program.devices if d.read_by]
@@ -199,9 +212,11 @@ class ProgramState:
         rows = []  # per instant: its publications, releases and inline bodies, and the inline tasks
         for instant in instants:
             inline = [t for t in instant.release if t in body]
+            job = self._group_job(instant, inline)
+            bodies = [op for t in inline for op in body[t]] if job is None else \
+                [R.parallel(job)] + [R.pending(self.tasks[t].pending_flag) for t in inline]
             rows.append(([op for t in instant.publish for op in publish[t]],
-                         [op for t in instant.release for op in release[t]],
-                         [op for t in inline for op in body[t]], inline))
+                         [op for t in instant.release for op in release[t]], bodies, inline))
         charts = [[t for t in instant.publish if self.charts_of_task[t]] for instant in instants]
         # Python's too: the deadlines and releases with a device running host handlers.
         devices = [[t for t in instant.publish if self.writes_of_task[t]] for instant in instants]
@@ -213,6 +228,29 @@ class ProgramState:
                              table.span(k, len(p), len(r) + len(b)), inline, charts[k], native[k], devices[k])
                  for k, (instant, (p, r, b, inline)) in enumerate(zip(instants, rows))]
         return table, plans
+
+    def _group_job(self, instant: Instant, inline: list[int]) -> R.Job | None:
+        """The job running the bodies of tasks released together, each on
+        its core of the plan (its dataflows in their single-core order):
+        None unless the plan runs the group in parallel and its tasks that
+        need no Python use two cores or more (charts run in Python)."""
+        key = tuple(sorted(instant.release))
+        if key not in self._group_jobs:
+            group = next((g for g in self.multicore.groups if tuple(g.tasks) == key), None) \
+                if self.multicore is not None else None
+            self._group_jobs[key] = self._make_group_job(group, inline) if group is not None else None
+        return self._group_jobs[key]
+
+    def _make_group_job(self, group: TaskGroup, inline: list[int]) -> R.Job | None:
+        if not group.parallel or len({group.core[t] for t in inline}) < 2:
+            return None
+        job = R.Job(self.multicore.cores)
+        lists: list[list[R.Op]] = [[] for _ in range(self.multicore.cores)]
+        for t in inline:
+            lists[group.core[t]] += [op for _, ident in self.tasks[t].task.runs
+                                     for op in self.dataflows[ident].sequential_ops()]
+        job.set_lists(lists)
+        return job
 
     # ------------------------------------------------------------ running
 
