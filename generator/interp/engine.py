@@ -357,9 +357,15 @@ class Engine:
         if released:
             state.release(plan, t, inline)
         self._record(t)
+        # Tasks released together on the cores (--cores) run at once here
+        # too; with interfaces each body has its hooks, so one by one.
+        grouped = not inline and state.io is None and plan.group_bodies is not None
+        if grouped:
+            state.group_bodies(plan)
         for task_id in plan.python if inline else released:
             task_state = state.tasks[task_id]
-            state.body(task_state)
+            if not grouped or task_id not in plan.inline:
+                state.body(task_state)
             if self.clock.late_us(t) > task_state.task.deadline * self.program.tick_us:
                 self.overruns[task_state.task.name] = self.overruns.get(task_state.task.name, 0) + 1
         self._advance()

@@ -85,10 +85,12 @@ class InstantPlan:
     need no Python (``inline``, task ids); the tasks whose bodies need Python
     (``python``, with a chart), the chart tasks it publishes, the tasks it
     publishes that drive a device with host handlers, and whether the runner
-    does all of it (``native``)."""
+    does all of it (``native``). ``group_bodies``: the inline bodies as one
+    job on the cores, when the multi-core plan runs them so (else None)."""
 
     def __init__(self, instant: Instant, publish: R.Span, release: R.Span, release_bodies: R.Span,
-                 inline: list[int], chart_tasks: list[int], native: bool, device_tasks: list[int]):
+                 inline: list[int], chart_tasks: list[int], native: bool, device_tasks: list[int],
+                 group_bodies: R.Span | None = None):
         self.tick = instant.tick
         self.released = instant.release
         self.publish = publish
@@ -99,6 +101,7 @@ class InstantPlan:
         self.chart_tasks = chart_tasks
         self.device_tasks = device_tasks  # tasks whose publication a device's write() follows
         self.native = native
+        self.group_bodies = group_bodies
 
 
 class ProgramState:
@@ -210,6 +213,7 @@ class ProgramState:
             body[task_id] = [R.call(self.dataflows[ident].plan) for _, ident in task.task.runs] + \
                             [R.pending(task.pending_flag)]
         rows = []  # per instant: its publications, releases and inline bodies, and the inline tasks
+        grouped = []  # per instant: its inline bodies are one job
         for instant in instants:
             inline = [t for t in instant.release if t in body]
             job = self._group_job(instant, inline)
@@ -217,6 +221,7 @@ class ProgramState:
                 [R.parallel(job)] + [R.pending(self.tasks[t].pending_flag) for t in inline]
             rows.append(([op for t in instant.publish for op in publish[t]],
                          [op for t in instant.release for op in release[t]], bodies, inline))
+            grouped.append(job is not None)
         charts = [[t for t in instant.publish if self.charts_of_task[t]] for instant in instants]
         # Python's too: the deadlines and releases with a device running host handlers.
         devices = [[t for t in instant.publish if self.writes_of_task[t]] for instant in instants]
@@ -225,7 +230,8 @@ class ProgramState:
         table = R.Table([p + r + b for p, r, b, _ in rows], [i.tick for i in instants], native,
                         self.program.hyperperiod, self.program.tick_us)
         plans = [InstantPlan(instant, table.span(k, 0, len(p)), table.span(k, len(p), len(r)),
-                             table.span(k, len(p), len(r) + len(b)), inline, charts[k], native[k], devices[k])
+                             table.span(k, len(p), len(r) + len(b)), inline, charts[k], native[k], devices[k],
+                             table.span(k, len(p) + len(r), len(b)) if grouped[k] else None)
                  for k, (instant, (p, r, b, inline)) in enumerate(zip(instants, rows))]
         return table, plans
 
@@ -335,6 +341,16 @@ class ProgramState:
             self.run_ops(plan.release_bodies)
         else:
             self.run_ops(plan.release)
+
+    def group_bodies(self, plan: InstantPlan) -> None:
+        """The inline bodies of an instant as one job on the cores (after
+        its releases): for runs that take the bodies one by one (real time),
+        where tasks released together still run at once."""
+        published = self.published
+        for task in plan.inline:
+            for cell, evaluate in self._inline[task]:
+                cell[0] = evaluate(published, None, None)
+        self.run_ops(plan.group_bodies)
 
     def body(self, task_state: TaskState) -> None:
         io = self.io

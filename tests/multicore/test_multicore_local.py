@@ -18,6 +18,7 @@ from test_multicore_traces import DURATIONS
 
 from easylab.cli import main as easylab_main
 from easylab.interp import runner as R
+from easylab.interp.clock import Clock
 from easylab.interp.engine import Engine
 from easylab.interp.plugins import PluginCache
 from easylab.interp.stimulus import load as load_stimulus
@@ -179,16 +180,19 @@ def test_tasks_released_together_run_as_one_job(tmp_path):
     model.write_text(TWO_TASKS, encoding="utf-8")
     program = _lower(model)
     traces = {}
-    for cores in (1, 2):
-        path = tmp_path / f"c{cores}.csv"
+    for cores, pace in ((1, None), (2, None), (2, 50.0)):  # virtual time, and paced (bodies one instant at a time)
+        path = tmp_path / f"c{cores}_{pace}.csv"
         engine = Engine(program, PluginCache(), None, TraceWriter(str(path), program, columns_of(program)),
                         cores=cores, always_parallel=True)
         jobs = [job for job in engine.state._group_jobs.values() if job is not None]
         assert len(jobs) == (cores > 1)
-        _run_engine(engine, 20_000)
+        engine.run(20_000, Clock(pace))
+        engine.shutdown()
         assert all(job.struct.epoch == 10 for job in jobs)
-        traces[cores] = path.read_text()
-    assert traces[2] == traces[1]
+        traces[cores, pace] = path.read_text()
+    assert traces[2, None] == traces[1, None]
+    assert traces[2, 50.0] == traces[1, None]
+    traces[1] = traces[1, None]
     assert traces[1].splitlines()[-1] == "18000,27,63"  # a = 3n, b = 7n, published at the deadline
 
 
