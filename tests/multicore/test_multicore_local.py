@@ -215,3 +215,23 @@ def test_a_fault_on_one_core_stops_the_job_without_a_hang():
     stage.struct.tokens = 1  # now there is one: the next run goes through
     runner.run(plan.all, R.Cursor())
     assert job.struct.epoch == 2 and flags.array[0] == 2
+
+
+@pytest.mark.parametrize("seed", [1, 2, 3])
+def test_random_model_trace_is_the_same_on_1_2_and_4_cores(seed, tmp_path):
+    """A fixed sample of the back-to-back random models (charts, channels,
+    tasks at several rates), as tests/multicore/test_multicore_traces.py
+    builds them for the host board."""
+    from crosscheck import write_case
+    from modelgen import generate
+    from modes import MODES
+
+    generated = generate(seed, MODES["host"][0])
+    case = write_case(tmp_path, generated.name, generated.text, generated.stimulus, generated.duration_ms)
+    duration = f"{case.duration_ms}ms"
+    single = _local_trace(case.model, tmp_path / "c1.csv", duration, case.stimulus)
+    assert single.count("\n") > 2
+    for cores in (2, 4):
+        got = _local_trace(case.model, tmp_path / f"c{cores}.csv", duration, case.stimulus,
+                           "--cores", str(cores), "--parallel", "always")
+        assert got == single, (cores, case.model)
