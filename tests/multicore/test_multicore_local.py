@@ -235,3 +235,81 @@ def test_random_model_trace_is_the_same_on_1_2_and_4_cores(seed, tmp_path):
         got = _local_trace(case.model, tmp_path / f"c{cores}.csv", duration, case.stimulus,
                            "--cores", str(cores), "--parallel", "always")
         assert got == single, (cores, case.model)
+
+
+TSAN_HARNESS = r"""
+#include "runner.c"
+#include <stdio.h>
+
+#define FIRINGS 16
+static int32_t produced[FIRINGS], consumed[FIRINGS];
+
+static void produce(void *state, const void *const *in, void *const *out, const void *const *params)
+{
+    int32_t *n = state;
+    (void)in; (void)params;
+    *n += 1;
+    *(int32_t *)out[0] = *n;
+}
+
+static void consume(void *state, const void *const *in, void *const *out, const void *const *params)
+{
+    (void)state; (void)params;
+    *(int32_t *)out[0] = 2 * *(const int32_t *)in[0];
+}
+
+int main(void)
+{
+    static el_op_t lists[2][2 * FIRINGS], plan[1];
+    static const el_op_t *heads[2] = {lists[0], lists[1]};
+    static uint32_t counts[2] = {2 * FIRINGS, 2 * FIRINGS};
+    static el_cursor_t cursors[2], cursor;
+    static uint64_t flags[FIRINGS];
+    static void *outs[FIRINGS], *ins[FIRINGS], *outs2[FIRINGS];
+    static int32_t counter;
+    static el_job_t job;
+    int k, run;
+    job.cores = 2u; job.lists = heads; job.counts = counts; job.cursors = cursors;
+    for (k = 0; k < FIRINGS; k++) {
+        outs[k] = &produced[k]; ins[k] = &produced[k]; outs2[k] = &consumed[k];
+        lists[0][2 * k] = (el_op_t){.kind = EL_OP_FIRE, .fn = produce, .object = &counter,
+                                    .outputs = (void *const *)&outs[k]};
+        lists[0][2 * k + 1] = (el_op_t){.kind = EL_OP_SIGNAL, .object = &flags[k], .src = &job};
+        lists[1][2 * k] = (el_op_t){.kind = EL_OP_WAIT, .object = &flags[k], .src = &job};
+        lists[1][2 * k + 1] = (el_op_t){.kind = EL_OP_FIRE, .fn = consume, .inputs = (const void *const *)&ins[k],
+                                        .outputs = (void *const *)&outs2[k]};
+    }
+    plan[0] = (el_op_t){.kind = EL_OP_PARALLEL, .object = &job};
+    for (run = 0; run < 200; run++) {
+        if (el_run_ops(plan, 1u, &cursor) != EL_RUN_OK) {
+            return 2;
+        }
+        for (k = 0; k < FIRINGS; k++) {
+            if (consumed[k] != 2 * (run * FIRINGS + k + 1)) {
+                printf("run %d firing %d: %d\n", run, k, (int)consumed[k]);
+                return 1;
+            }
+        }
+    }
+    return 0;
+}
+"""
+
+
+def test_thread_sanitizer_finds_nothing_in_the_runners_jobs(tmp_path):
+    """runner.c's jobs (posting, WAIT and SIGNAL across two cores, the
+    join), built with ThreadSanitizer and run 200 times: right values,
+    no report."""
+    import subprocess
+
+    from easylab.interp.runner import SOURCE
+
+    harness = tmp_path / "harness.c"
+    harness.write_text(TSAN_HARNESS, encoding="utf-8")
+    exe = tmp_path / "harness"
+    build = subprocess.run(["gcc", "-std=c99", "-O1", "-g", "-Wall", "-Wextra", "-Werror", "-D_POSIX_C_SOURCE=200809L",
+                            "-fsanitize=thread", f"-I{SOURCE.parent}", "-o", str(exe), str(harness), "-pthread"],
+                           capture_output=True, text=True)
+    assert build.returncode == 0, build.stderr
+    proc = subprocess.run([str(exe)], capture_output=True, text=True, timeout=120)
+    assert (proc.returncode, proc.stdout, proc.stderr) == (0, "", "")
