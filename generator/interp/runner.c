@@ -379,10 +379,26 @@ static void *worker(void *arg)
     return NULL;
 }
 
+/* A forked child has none of the parent's workers: it starts its own. */
+static void forget_workers(void)
+{
+    el_pool_workers = 0u;
+    pthread_mutex_init(&el_pool_post, NULL);
+    pthread_mutex_init(&el_pool_lock, NULL);
+    pthread_cond_init(&el_pool_wake, NULL);
+}
+
 /* The workers a job of `cores` cores needs, started if not yet (under the
  * pool's lock). */
 static bool start_workers(uint32_t cores)
 {
+    static bool fork_handled = false;
+    if (!fork_handled && el_pool_workers + 1u < cores) {
+        if (pthread_atfork(NULL, NULL, forget_workers) != 0) {
+            return false;
+        }
+        fork_handled = true;
+    }
     while (el_pool_workers + 1u < cores) {
         pthread_t thread;
         uint32_t core = el_pool_workers + 1u;

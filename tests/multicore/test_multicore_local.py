@@ -7,6 +7,7 @@ Without --cores nothing changes."""
 
 from __future__ import annotations
 
+import ctypes
 from pathlib import Path
 
 import pytest
@@ -201,13 +202,14 @@ def test_a_fault_on_one_core_stops_the_job_without_a_hang():
     for: the job ends with that fault (not with core 0's abandoned wait),
     and the job runs again afterwards."""
     from easylab.core import types as T
+    from easylab.interp import values as V
 
     runner = PluginCache().runner
     stage = R.Stage(T.INT16, 0)  # no token to read
-    target = (R.V.ctype(T.INT16) * 1)()
+    target = (V.ctype(T.INT16) * 1)()
     job, flags = R.Job(2), R.Flags(1)
     job.set_lists([[R.wait(flags[0], job)],
-                   [R.read(stage, R.ctypes.addressof(target), T.INT16, True), R.signal(flags[0], job)]])
+                   [R.read(stage, ctypes.addressof(target), T.INT16, True), R.signal(flags[0], job)]])
     plan = R.OpList([R.parallel(job)])
     with pytest.raises(R.RunnerFault) as fault:
         runner.run(plan.all, R.Cursor())
@@ -313,3 +315,33 @@ def test_thread_sanitizer_finds_nothing_in_the_runners_jobs(tmp_path):
     assert build.returncode == 0, build.stderr
     proc = subprocess.run([str(exe)], capture_output=True, text=True, timeout=120)
     assert (proc.returncode, proc.stdout, proc.stderr) == (0, "", "")
+
+
+FORKED = """
+import os, sys
+from easylab.pipeline import lower_file
+from easylab.interp.engine import Engine
+from easylab.interp.plugins import PluginCache
+
+program, _ = lower_file(sys.argv[1])
+Engine(program, PluginCache(), cores=2, always_parallel=True).run(5000)
+pid = os.fork()
+if pid == 0:  # the parent's worker threads are not in the child: it starts its own
+    engine = Engine(program, PluginCache(), cores=2, always_parallel=True)
+    engine.run(5000)
+    os._exit(0 if engine.state.dataflows[0].job.struct.epoch == 5 else 3)
+_, status = os.waitpid(pid, 0)
+sys.exit(os.waitstatus_to_exitcode(status))
+"""
+
+
+def test_a_forked_child_runs_jobs_on_its_own_threads(tmp_path):
+    import subprocess
+    import sys
+
+    from test_multicore_analysis import FORK
+
+    model = tmp_path / "fork.elab"
+    model.write_text(FORK.replace("COST", ""), encoding="utf-8")
+    proc = subprocess.run([sys.executable, "-c", FORKED, str(model)], capture_output=True, text=True, timeout=120)
+    assert proc.returncode == 0, proc.stderr
