@@ -141,7 +141,7 @@ class ProgramState:
             flow = self.dataflows[firing_plan.dataflow.id]
             if firing_plan.parallel and flow is not None:
                 flow.parallelise(firing_plan)
-        self._group_jobs: dict[tuple[int, ...], R.Job | None] = {}
+        self.group_jobs: dict[tuple[int, ...], R.Job | None] = {}  # by released tasks: their job, if any
         self.charts = [ChartRunner(program, c, self.tasks[c.task] if c.task is not None else None,
                                    self.run_dataflow) for c in program.charts]
         self.readers = [(d.id, set(d.read_by)) for d in program.devices if d.read_by]
@@ -241,11 +241,11 @@ class ProgramState:
         None unless the plan runs the group in parallel and its tasks that
         need no Python use two cores or more (charts run in Python)."""
         key = tuple(sorted(instant.release))
-        if key not in self._group_jobs:
+        if key not in self.group_jobs:
             group = next((g for g in self.multicore.groups if tuple(g.tasks) == key), None) \
                 if self.multicore is not None else None
-            self._group_jobs[key] = self._make_group_job(group, inline) if group is not None else None
-        return self._group_jobs[key]
+            self.group_jobs[key] = self._make_group_job(group, inline) if group is not None else None
+        return self.group_jobs[key]
 
     def _make_group_job(self, group: TaskGroup, inline: list[int]) -> R.Job | None:
         if not group.parallel or len({group.core[t] for t in inline}) < 2:

@@ -185,7 +185,7 @@ def test_tasks_released_together_run_as_one_job(tmp_path):
         path = tmp_path / f"c{cores}_{pace}.csv"
         engine = Engine(program, PluginCache(), None, TraceWriter(str(path), program, columns_of(program)),
                         cores=cores, always_parallel=True)
-        jobs = [job for job in engine.state._group_jobs.values() if job is not None]
+        jobs = [job for job in engine.state.group_jobs.values() if job is not None]
         assert len(jobs) == (cores > 1)
         engine.run(20_000, Clock(pace))
         engine.shutdown()
