@@ -93,13 +93,7 @@ def _multicore_plan(program: Program, board: Board, cores: int, always: bool):
     from .ir.multicore import plan as multicore_plan
 
     found = multicore_plan(program, cores, always=always)
-    notes = [f"dataflow {p.dataflow.name}: {'on ' + str(cores) + ' cores' if p.parallel else 'one core'} ({p.reason})"
-             for p in found.dataflows]
-    notes += [f"tasks {', '.join(g.names)}: {'on ' + str(cores) + ' cores' if g.parallel else 'one core'} ({g.reason})"
-              for g in found.groups]
-    if not found.parallel:
-        return None, notes + [f"{cores} cores: nothing pays on more than one core: a single-core build"]
-    return found, notes
+    return (found if found.parallel else None), found.notes()
 
 
 def build_nodes(program: Program, out_dir: Path, extra_cflags: list[str] | None = None, release: bool = False,

@@ -84,6 +84,14 @@ def add_parser(sub) -> None:
                    help="replace the running model when its files change (state kept for what did not change)")
     p.add_argument("--schedule", choices=SCHEDULE_KINDS,
                    help="schedule kind of every dataflow (default: each dataflow's own, else sas)")
+    from . import _cores  # the build's reading of N
+
+    p.add_argument("--cores", type=_cores, metavar="N",
+                   help="run the actors on N threads where the analysis says it pays, on the host board's "
+                        "plan (docs/multicore.md)")
+    p.add_argument("--parallel", choices=("auto", "always"), default="auto",
+                   help="with --cores: 'always' runs every dataflow and task group in parallel whatever the "
+                        "prediction (default: auto)")
     served = p.add_argument_group("debug and service interfaces (the firmware's servers, as on the host board)")
     add_debug_arguments(served)
     add_service_arguments(served)
@@ -222,10 +230,17 @@ def cmd_run(args) -> int:
              f"0x{report.old_id:08x} to 0x{report.new_id:08x}" + (f" ({'; '.join(notes)})" if notes else ""))
 
     interfaces = served_interfaces(args, args.schedule)
+    cores, always = args.cores or 1, args.parallel == "always"
+    if cores > 1:
+        from ..ir.multicore import plan as multicore_plan
+
+        for note in multicore_plan(program, cores, always=always).notes("a single-core run"):
+            _say(f"easylab run: {note}")
     clock = Clock(None if args.fast else (args.pace or 1.0))
     previous_handlers = _on_signals(clock)  # before the interfaces chain their own
     engine, failed = boot_served(lambda: Engine(program, cache, stimulus, trace, on_replace=replaced,
-                                                interfaces=interfaces, say=_say), clock, args, trace, "run")
+                                                interfaces=interfaces, say=_say, cores=cores, always_parallel=always),
+                                 clock, args, trace, "run")
     if engine is None:
         _restore(previous_handlers)
         return failed

@@ -12,6 +12,13 @@ determinacy) the values are the firmware's whatever layout it chose. With
 the layout static, every firing's and every external node's token
 addresses are computed once: an activation is one plan of the runner
 (runner.py), in the schedule's order.
+
+This layout gives every token of an iteration its own place, so it is
+also the host board's layout for a parallel dataflow: on several cores
+(``easylab run --cores N``, docs/multicore.md) the same firings' operations
+run as one job of the runner, each core's list in the order of the IR's
+multi-core plan, with a wait before a firing for the latest firing it
+follows on each other core.
 """
 
 from __future__ import annotations
@@ -20,6 +27,7 @@ import ctypes
 from dataclasses import dataclass, field
 from typing import Callable
 
+from ..ir.multicore import FiringPlan
 from ..ir.program import ActorInstance, ActorSpec, Buffer, Dataflow, Program
 from . import runner as R
 from . import values as V
@@ -127,18 +135,24 @@ class DataflowRunner:
         self._firing: list[int | None] = []  # per operation: the instance it fires, if it is a firing
         self._keep: list = []  # pointer arrays and scratch outputs the plan refers to
         fired: dict[str, int] = {}
+        self._firing_ops: list[list[R.Op]] = []  # per firing of one iteration (schedule order): its operations
         for node in dataflow.schedule.firings():
             k = fired.get(node, 0)
             fired[node] = k + 1
+            first = len(self._ops)
             if node in externals:
                 self._external(externals[node], k)
             else:
                 self._actor(actors[node], k)
-        for edge in self.buffers:  # the delay tokens move to the front
-            if edge.delay:
-                self._add(R.copy(edge.address(0), edge.buffer.type, edge.address(edge.per_iteration),
-                                 edge.buffer.type, edge.delay))
-        self.plan = R.OpList(self._ops)
+            self._firing_ops.append(self._ops[first:])
+        self._rotate = [R.copy(edge.address(0), edge.buffer.type, edge.address(edge.per_iteration),
+                               edge.buffer.type, edge.delay)
+                        for edge in self.buffers if edge.delay]  # the delay tokens move to the front
+        for op in self._rotate:
+            self._add(op)
+        self.sequential = R.OpList(self._ops)  # one core, in schedule order
+        self.plan = self.sequential  # what an activation runs
+        self.job: R.Job | None = None
         self._singles: list[R.Span] | None = None  # the plan one operation at a time (for the probes)
         self.param_evaluators = [pe for a in actors.values() for pe in a.param_evaluators]
 
@@ -150,13 +164,41 @@ class DataflowRunner:
             cell[0] = evaluate(local, None, None)
         if self.armed():
             if self._singles is None:
-                self._singles = [self.plan.span(k, 1) for k in range(self.plan.count)]
-            for single, instance in zip(self._singles, self._firing):
+                self._singles = [self.sequential.span(k, 1) for k in range(self.sequential.count)]
+            for single, instance in zip(self._singles, self._firing):  # on one core
                 if instance is not None:
                     self.probe_actor(instance)
                 self._runner.run(single, self._cursor)
         else:
             self._runner.run(self.plan.all, self._cursor)
+
+    def sequential_ops(self) -> list[R.Op]:
+        """One iteration on one core, as operations (for a task group's job)."""
+        return [op for ops in self._firing_ops for op in ops] + self._rotate
+
+    def parallelise(self, plan: FiringPlan) -> None:
+        """Run each activation on ``plan``'s cores (its firings are this
+        dataflow's, in the same schedule order): one job of the runner,
+        then the delay tokens' move on the calling thread."""
+        assert len(plan.firings) == len(self._firing_ops)
+        job, flags = R.Job(plan.cores), R.Flags(len(plan.firings))
+        waits_before: dict[int, list[int]] = {}
+        for waiting, waited in plan.cross_waits():
+            waits_before.setdefault(waiting, []).append(waited)
+        signalled = {waited for _, waited in plan.cross_waits()}
+        lists = []
+        for firings in plan.order:
+            ops: list[R.Op] = []
+            for f in firings:
+                ops += [R.wait(flags[g], job) for g in waits_before.get(f, ())]
+                ops += self._firing_ops[f]
+                if f in signalled:
+                    ops.append(R.signal(flags[f], job))
+            lists.append(ops)
+        job.set_lists(lists)
+        self.job = job
+        self._keep.append(flags)
+        self.plan = R.OpList([R.parallel(job)] + self._rotate)
 
     # ------------------------------------------------------------ plan
 

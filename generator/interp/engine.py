@@ -75,15 +75,22 @@ class Engine:
     :class:`Replacement` after every swap. With ``interfaces`` each program
     runs with its interfaces library (interfaces.py): the debug and service
     interfaces are served, and a model sent over the debug link replaces
-    the program; ``say`` prints what the run reports (a refused model)."""
+    the program; ``say`` prints what the run reports (a refused model).
+    ``cores`` > 1 runs the parallel parts of the IR's multi-core plan on
+    that many threads where the plan says it pays (``always_parallel``:
+    wherever it can), the program and every replacement
+    (docs/multicore.md)."""
 
     command = "run"  # the easylab command running it, in what it says
 
     def __init__(self, program: Program, plugin_cache: PluginCache | None = None,
                  stimulus: Stimulus | None = None, trace: TraceWriter | None = None,
                  on_replace: Callable[[Replacement], None] | None = None,
-                 interfaces: InterfaceOptions | None = None, say: Callable[[str], None] | None = None):
+                 interfaces: InterfaceOptions | None = None, say: Callable[[str], None] | None = None,
+                 cores: int = 1, always_parallel: bool = False):
         self.cache = plugin_cache or PluginCache()
+        self.cores = cores
+        self.always_parallel = always_parallel
         self.interfaces = interfaces
         self.say = say or (lambda text: None)
         self._load_results: queue.Queue = queue.Queue()  # from the thread checking a sent model
@@ -125,7 +132,18 @@ class Engine:
             if self.interfaces.debug is not None and not io.has_debug:
                 raise PluginError(f"model '{program.name}' has no debug interface, which this run serves "
                                   "(declare one: `debug on uart0`)")
-        return ProgramState(program, plugins, self.cache.runner, io, ModelDevices(program, self.cache))
+        return ProgramState(program, plugins, self.cache.runner, io, ModelDevices(program, self.cache),
+                            self.multicore_plan(program))
+
+    def multicore_plan(self, program: Program):
+        """The IR's multi-core plan of ``program`` on the engine's cores,
+        or None where nothing runs on more than one core."""
+        if self.cores <= 1:
+            return None
+        from ..ir.multicore import plan
+
+        found = plan(program, self.cores, always=self.always_parallel)
+        return found if found.parallel else None
 
     @property
     def io(self) -> Interfaces | None:
@@ -339,9 +357,15 @@ class Engine:
         if released:
             state.release(plan, t, inline)
         self._record(t)
+        # Tasks released together on the cores (--cores) run at once here
+        # too; with interfaces each body has its hooks, so one by one.
+        grouped = not inline and state.io is None and plan.group_bodies is not None
+        if grouped:
+            state.group_bodies(plan)
         for task_id in plan.python if inline else released:
             task_state = state.tasks[task_id]
-            state.body(task_state)
+            if not grouped or task_id not in plan.inline:
+                state.body(task_state)
             if self.clock.late_us(t) > task_state.task.deadline * self.program.tick_us:
                 self.overruns[task_state.task.name] = self.overruns.get(task_state.task.name, 0) + 1
         self._advance()

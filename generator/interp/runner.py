@@ -21,12 +21,13 @@ from . import values as V
 SOURCE = Path(__file__).with_name("runner.c")
 
 # Operation kinds (EL_OP_* of runner.c).
-FIRE, COPY, CALL, PUSH, TAKE, REWIND, READ, WRITE, PUBLISH, PENDING, RELEASE, WIDEN = range(1, 13)
+FIRE, COPY, CALL, PUSH, TAKE, REWIND, READ, WRITE, PUBLISH, PENDING, RELEASE, WIDEN, PARALLEL, WAIT, SIGNAL = \
+    range(1, 16)
 # Value types (EL_T_* of runner.c).
 TYPES = {name: code for code, name in enumerate(
     ("bool", "int8", "uint8", "int16", "uint16", "int32", "uint32", "float32", "time"))}
 # Why a runner stopped early (EL_RUN_* of runner.c).
-RING_FULL, RING_EMPTY, STAGE, NESTED, BAD_OP = range(1, 6)
+RING_FULL, RING_EMPTY, STAGE, NESTED, BAD_OP, THREADS, GAVE_UP = range(1, 8)
 
 
 class Op(ctypes.Structure):
@@ -98,6 +99,21 @@ def release(counter: int, time: int) -> Op:
     return Op(kind=RELEASE, object=counter, dst=time)
 
 
+def parallel(job: "Job") -> Op:
+    """Run ``job``'s lists on its cores; done when every core is."""
+    return Op(kind=PARALLEL, object=job.address)
+
+
+def wait(flag: int, job: "Job") -> Op:
+    """In a job's list: wait until the firing of ``flag`` (a uint64) ran in this run of the job."""
+    return Op(kind=WAIT, object=flag, src=job.address)
+
+
+def signal(flag: int, job: "Job") -> Op:
+    """In a job's list: the firing of ``flag`` ran in this run of the job."""
+    return Op(kind=SIGNAL, object=flag, src=job.address)
+
+
 class Span:
     """Operations ``address`` .. (``count`` of them) for :meth:`Runner.run`,
     with the call's arguments made once (a call converts nothing)."""
@@ -123,6 +139,45 @@ class OpList:
     def span(self, start: int, count: int) -> Span:
         """Operations ``start`` .. ``start + count``."""
         return Span(self.address + start * ctypes.sizeof(Op), count)
+
+
+class _JobStruct(ctypes.Structure):
+    _fields_ = [("cores", ctypes.c_uint32), ("failed", ctypes.c_uint32), ("epoch", ctypes.c_uint64),
+                ("lists", ctypes.c_void_p), ("counts", ctypes.c_void_p), ("cursors", ctypes.c_void_p)]
+
+
+class Job:
+    """``el_job_t``: one list of operations per core, run at once by a
+    :func:`parallel` operation (core 0 on the calling thread). The lists
+    are filled after the job exists (their WAIT and SIGNAL operations
+    refer to it): :meth:`set_lists`."""
+
+    def __init__(self, cores: int):
+        self.struct = _JobStruct(cores=cores)
+        self.address = ctypes.addressof(self.struct)
+        self.lists: list[OpList] = []
+
+    def set_lists(self, lists: list[list[Op]]) -> None:
+        """The operations of each core (as many lists as cores)."""
+        assert len(lists) == self.struct.cores
+        self.lists = [OpList(ops) for ops in lists]
+        self._addresses = (ctypes.c_void_p * len(lists))(*(ol.address for ol in self.lists))
+        self._counts = (ctypes.c_uint32 * len(lists))(*(ol.count for ol in self.lists))
+        self._cursors = (Cursor * len(lists))()
+        self.struct.lists = ctypes.addressof(self._addresses)
+        self.struct.counts = ctypes.addressof(self._counts)
+        self.struct.cursors = ctypes.addressof(self._cursors)
+
+
+class Flags:
+    """One uint64 per firing of a parallel job: the epoch of the job's run
+    in which it last ran."""
+
+    def __init__(self, count: int):
+        self.array = (ctypes.c_uint64 * max(1, count))()
+
+    def __getitem__(self, k: int) -> int:
+        return ctypes.addressof(self.array) + k * ctypes.sizeof(ctypes.c_uint64)
 
 
 # ====================================================================== channels

@@ -10,6 +10,11 @@ no Python is needed, the bodies. :class:`ProgramState` runs an instant's
 parts for the engine's step (with the stimulus, the interfaces, the trace
 and the charts in between) and whole stretches of instants in one call of
 the runner when nothing in Python has to happen (:meth:`run_native`).
+
+With a multi-core plan (``easylab run --cores N``, docs/multicore.md) the
+parallel dataflows run each activation as one job of the runner on the
+plan's cores, and the bodies of tasks released together that need no
+Python run as one job, each task on its core.
 """
 
 from __future__ import annotations
@@ -18,6 +23,7 @@ import ctypes
 from typing import Callable
 
 from ..core import expr as I
+from ..ir.multicore import MulticorePlan, TaskGroup
 from ..ir.program import Instant, Program, Task
 from . import runner as R
 from . import values as V
@@ -79,10 +85,12 @@ class InstantPlan:
     need no Python (``inline``, task ids); the tasks whose bodies need Python
     (``python``, with a chart), the chart tasks it publishes, the tasks it
     publishes that drive a device with host handlers, and whether the runner
-    does all of it (``native``)."""
+    does all of it (``native``). ``group_bodies``: the inline bodies as one
+    job on the cores, when the multi-core plan runs them so (else None)."""
 
     def __init__(self, instant: Instant, publish: R.Span, release: R.Span, release_bodies: R.Span,
-                 inline: list[int], chart_tasks: list[int], native: bool, device_tasks: list[int]):
+                 inline: list[int], chart_tasks: list[int], native: bool, device_tasks: list[int],
+                 group_bodies: R.Span | None = None):
         self.tick = instant.tick
         self.released = instant.release
         self.publish = publish
@@ -93,15 +101,17 @@ class InstantPlan:
         self.chart_tasks = chart_tasks
         self.device_tasks = device_tasks  # tasks whose publication a device's write() follows
         self.native = native
+        self.group_bodies = group_bodies
 
 
 class ProgramState:
     """The run-time state of one program, built from its IR and plug-ins
     (``plugins[spec id]``; ``runner`` runs the plans), as the firmware holds
-    it at boot."""
+    it at boot. ``multicore``: the plan its parallel parts follow (None:
+    one core)."""
 
     def __init__(self, program: Program, plugins: list[Plugin], runner: R.Runner, io: Interfaces | None = None,
-                 model_devices: ModelDevices | None = None):
+                 model_devices: ModelDevices | None = None, multicore: MulticorePlan | None = None):
         self.program = program
         self.plugins = plugins
         self.io = io
@@ -126,6 +136,12 @@ class ProgramState:
                 continue
             actors = {self.actors[i].instance.name: self.actors[i] for i in df.instances}
             self.dataflows.append(DataflowRunner(program, df, actors, self.tasks[df.task], runner, self.cursor))
+        self.multicore = multicore
+        for firing_plan in multicore.dataflows if multicore is not None else ():
+            flow = self.dataflows[firing_plan.dataflow.id]
+            if firing_plan.parallel and flow is not None:
+                flow.parallelise(firing_plan)
+        self.group_jobs: dict[tuple[int, ...], R.Job | None] = {}  # by released tasks: their job, if any
         self.charts = [ChartRunner(program, c, self.tasks[c.task] if c.task is not None else None,
                                    self.run_dataflow) for c in program.charts]
         self.readers = [(d.id, set(d.read_by)) for d in program.devices if d.read_by]
@@ -197,11 +213,15 @@ class ProgramState:
             body[task_id] = [R.call(self.dataflows[ident].plan) for _, ident in task.task.runs] + \
                             [R.pending(task.pending_flag)]
         rows = []  # per instant: its publications, releases and inline bodies, and the inline tasks
+        grouped = []  # per instant: its inline bodies are one job
         for instant in instants:
             inline = [t for t in instant.release if t in body]
+            job = self._group_job(instant, inline)
+            bodies = [op for t in inline for op in body[t]] if job is None else \
+                [R.parallel(job)] + [R.pending(self.tasks[t].pending_flag) for t in inline]
             rows.append(([op for t in instant.publish for op in publish[t]],
-                         [op for t in instant.release for op in release[t]],
-                         [op for t in inline for op in body[t]], inline))
+                         [op for t in instant.release for op in release[t]], bodies, inline))
+            grouped.append(job is not None)
         charts = [[t for t in instant.publish if self.charts_of_task[t]] for instant in instants]
         # Python's too: the deadlines and releases with a device running host handlers.
         devices = [[t for t in instant.publish if self.writes_of_task[t]] for instant in instants]
@@ -210,9 +230,33 @@ class ProgramState:
         table = R.Table([p + r + b for p, r, b, _ in rows], [i.tick for i in instants], native,
                         self.program.hyperperiod, self.program.tick_us)
         plans = [InstantPlan(instant, table.span(k, 0, len(p)), table.span(k, len(p), len(r)),
-                             table.span(k, len(p), len(r) + len(b)), inline, charts[k], native[k], devices[k])
+                             table.span(k, len(p), len(r) + len(b)), inline, charts[k], native[k], devices[k],
+                             table.span(k, len(p) + len(r), len(b)) if grouped[k] else None)
                  for k, (instant, (p, r, b, inline)) in enumerate(zip(instants, rows))]
         return table, plans
+
+    def _group_job(self, instant: Instant, inline: list[int]) -> R.Job | None:
+        """The job running the bodies of tasks released together, each on
+        its core of the plan (its dataflows in their single-core order):
+        None unless the plan runs the group in parallel and its tasks that
+        need no Python use two cores or more (charts run in Python)."""
+        key = tuple(sorted(instant.release))
+        if key not in self.group_jobs:
+            group = next((g for g in self.multicore.groups if tuple(g.tasks) == key), None) \
+                if self.multicore is not None else None
+            self.group_jobs[key] = self._make_group_job(group, inline) if group is not None else None
+        return self.group_jobs[key]
+
+    def _make_group_job(self, group: TaskGroup, inline: list[int]) -> R.Job | None:
+        if not group.parallel or len({group.core[t] for t in inline}) < 2:
+            return None
+        job = R.Job(self.multicore.cores)
+        lists: list[list[R.Op]] = [[] for _ in range(self.multicore.cores)]
+        for t in inline:
+            lists[group.core[t]] += [op for _, ident in self.tasks[t].task.runs
+                                     for op in self.dataflows[ident].sequential_ops()]
+        job.set_lists(lists)
+        return job
 
     # ------------------------------------------------------------ running
 
@@ -297,6 +341,16 @@ class ProgramState:
             self.run_ops(plan.release_bodies)
         else:
             self.run_ops(plan.release)
+
+    def group_bodies(self, plan: InstantPlan) -> None:
+        """The inline bodies of an instant as one job on the cores (after
+        its releases): for runs that take the bodies one by one (real time),
+        where tasks released together still run at once."""
+        published = self.published
+        for task in plan.inline:
+            for cell, evaluate in self._inline[task]:
+                cell[0] = evaluate(published, None, None)
+        self.run_ops(plan.group_bodies)
 
     def body(self, task_state: TaskState) -> None:
         io = self.io

@@ -186,6 +186,18 @@ class MulticorePlan:
                 "dataflows": [p.summary() for p in self.dataflows],
                 "task_groups": [g.summary(self.cores) for g in self.groups]}
 
+    def notes(self, single_core: str = "a single-core build") -> list[str]:
+        """One line per dataflow and task group saying whether it runs on
+        the cores and why, then the verdict when nothing does."""
+        on = f"on {self.cores} cores"
+        notes = [f"dataflow {p.dataflow.name}: {on if p.parallel else 'one core'} ({p.reason})"
+                 for p in self.dataflows]
+        notes += [f"tasks {', '.join(g.names)}: {on if g.parallel else 'one core'} ({g.reason})"
+                  for g in self.groups]
+        if not self.parallel:
+            notes.append(f"{self.cores} cores: nothing pays on more than one core: {single_core}")
+        return notes
+
     def render_text(self) -> str:
         out = [p.render_text() for p in self.dataflows]
         for g in self.groups:
