@@ -13,7 +13,7 @@ import sys
 from .. import __version__
 from ..analysis.sdf.analysis import SCHEDULE_KINDS
 from . import board_commands, model_commands
-from .common import EXIT_MODEL_ERROR, EXIT_USAGE, CliError, add_board_options
+from .common import EXIT_MODEL_ERROR, EXIT_USAGE, CliError, add_board_options, cores_arg
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -51,7 +51,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--schedule", choices=SCHEDULE_KINDS,
                    help="schedule kind (default: the dataflow's own choice, else sas)")
     p.add_argument("--json", action="store_true", help="print one JSON object")
-    p.add_argument("--cores", type=_cores, metavar="N",
+    p.add_argument("--cores", type=cores_arg, metavar="N",
                    help="the multi-core plan on N cores: each dataflow's firings list-scheduled, its predicted "
                         "time against one core, the placement of tasks released together (docs/multicore.md)")
     p.add_argument("--profile", action="store_true",
@@ -81,7 +81,7 @@ def build_parser() -> argparse.ArgumentParser:
                                                       "it (docs/boards.md)")
     p.add_argument("--check", action="store_true", help="the board's further checks of the C, if it has any "
                                                         "(docs/boards.md)")
-    p.add_argument("--cores", type=_cores, metavar="N",
+    p.add_argument("--cores", type=cores_arg, metavar="N",
                    help="run on N cores where the analysis says it pays (host board; docs/multicore.md)")
     p.add_argument("--parallel", choices=("auto", "always"), default="auto",
                    help="with --cores: 'always' runs every dataflow and task group in parallel whatever the "
@@ -97,17 +97,6 @@ def build_parser() -> argparse.ArgumentParser:
     from .remote_commands import add_parsers as add_remote_parsers
     add_remote_parsers(sub)
     return parser
-
-
-def _cores(text: str) -> int:
-    """--cores N: 1 to 64."""
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"not a number of cores: {text!r}") from None
-    if not 1 <= value <= 64:
-        raise argparse.ArgumentTypeError(f"the number of cores must be 1 to 64, not {value}")
-    return value
 
 
 def main(argv: list[str] | None = None) -> int:

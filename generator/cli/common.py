@@ -77,3 +77,14 @@ def report_built(built) -> int:
         print(note)
     print(built.executable)
     return EXIT_OK
+
+
+def cores_arg(text: str) -> int:
+    """--cores N: 1 to 64."""
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not a number of cores: {text!r}") from None
+    if not 1 <= value <= 64:
+        raise argparse.ArgumentTypeError(f"the number of cores must be 1 to 64, not {value}")
+    return value

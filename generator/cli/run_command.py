@@ -20,6 +20,7 @@ import threading
 from fractions import Fraction
 
 from ..analysis.sdf.analysis import SCHEDULE_KINDS
+from .common import cores_arg
 
 EXIT_OK, EXIT_ERROR, EXIT_USAGE = 0, 1, 2
 
@@ -84,9 +85,7 @@ def add_parser(sub) -> None:
                    help="replace the running model when its files change (state kept for what did not change)")
     p.add_argument("--schedule", choices=SCHEDULE_KINDS,
                    help="schedule kind of every dataflow (default: each dataflow's own, else sas)")
-    from . import _cores  # the build's reading of N
-
-    p.add_argument("--cores", type=_cores, metavar="N",
+    p.add_argument("--cores", type=cores_arg, metavar="N",
                    help="run the actors on N threads where the analysis says it pays, on the host board's "
                         "plan (docs/multicore.md)")
     p.add_argument("--parallel", choices=("auto", "always"), default="auto",
@@ -184,7 +183,6 @@ def stimulus_arg(args, program, command: str):
 def cmd_run(args) -> int:
     """Run a model until its duration, a signal, or forever."""
     from ..pipeline import lower_file
-    from pathlib import Path
 
     from ..interp.clock import Clock
     from ..interp.engine import Engine
