@@ -24,7 +24,7 @@ DEB_PACKAGES := gcc make pkg-config graphviz tmux socat \
 	cyclonedds-dev cyclonedds-tools \
 	nodejs
 
-.PHONY: vsix npm fuzz mutations crosscheck-tally setup deps venv toolchains test demo bench clean help flash sim crosscheck
+.PHONY: vsix vscode-packages npm fuzz mutations crosscheck-tally setup deps venv toolchains test demo bench clean help flash sim crosscheck
 
 help:
 	@echo "make setup   install Debian packages (when missing) and the virtual environment"
@@ -108,10 +108,17 @@ npm: deps
 	@command -v npm >/dev/null || { SUDO=$$( [ "$$(id -u)" = 0 ] || echo sudo ); \
 		DEBIAN_FRONTEND=noninteractive $$SUDO apt-get install -y -qq -o DPkg::Lock::Timeout=600 \
 			--no-install-recommends npm >/dev/null; }
+VSCODE_PACKAGES := $(VSCODE_EXT)/node_modules/.installed
+
+vscode-packages: $(VSCODE_PACKAGES)
+
+$(VSCODE_PACKAGES): $(VSCODE_EXT)/package-lock.json | npm
+	@cd $(VSCODE_EXT) && npm ci --no-audit --no-fund --ignore-scripts --loglevel=error
+	@touch $@
+
 VSIX_VERSION = $(shell node -p "require('./$(VSCODE_EXT)/package.json').version")
 
-vsix: npm
-	@cd $(VSCODE_EXT) && npm ci --no-audit --no-fund --ignore-scripts --loglevel=error
+vsix: vscode-packages
 	@mkdir -p build
 	@cd $(VSCODE_EXT) && npx --no-install vsce package --skip-license --allow-missing-repository \
 		-o ../../build/easylab-elab-$(VSIX_VERSION).vsix

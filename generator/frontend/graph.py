@@ -13,7 +13,8 @@ Every element carries a stable ``id`` derived from its path in the model
 bar's edges add ``.from.STEP`` or ``.to.STEP``), ``actor:DATAFLOW.INSTANCE``,
 ``edge:DATAFLOW/SRC->DST``, ``ext:DATAFLOW/NAME`` (a var, param, device datum
 or channel drawn in a dataflow), ``device:PATH``, ``var:NAME``,
-``param:NAME``, ``task:NAME``.
+``param:NAME``, ``task:NAME``. ``element_locations`` maps each id to its
+declaration's span (``easylab graph --serve`` shows it on a click).
 """
 
 from __future__ import annotations

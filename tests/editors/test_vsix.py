@@ -8,13 +8,14 @@ import json
 import subprocess
 import zipfile
 
-from textmate import EXTENSION, ROOT
+from textmate import EXTENSION, ROOT, npm_install
 
 
 def test_make_vsix_packs_the_grammar_configuration_and_client():
     version = json.loads((EXTENSION / "package.json").read_text())["version"]
     vsix = ROOT / "build" / f"easylab-elab-{version}.vsix"
     vsix.unlink(missing_ok=True)
+    npm_install()  # under its lock; then `make vsix` finds the packages installed
     proc = subprocess.run(["make", "-s", "vsix"], cwd=ROOT, capture_output=True, text=True, timeout=900)
     assert proc.returncode == 0, proc.stdout + proc.stderr
     with zipfile.ZipFile(vsix) as z:
@@ -61,7 +62,6 @@ Module._load = function (request, ...rest) {
 };
 require("./extension.js").activate({subscriptions: []}).then(() => console.log(JSON.stringify(started)));
 """
-    from textmate import npm_install
     npm_install()
     proc = subprocess.run(["node", "-e", script], cwd=EXTENSION, capture_output=True, text=True, timeout=60)
     assert proc.returncode == 0, proc.stderr
