@@ -103,7 +103,9 @@ def build() -> dict:
             },
             "constants": {"name": "constant.language.boolean.elab", "match": _word(CONSTANT_WORDS)},
             "logical": {"name": "keyword.operator.logical.elab", "match": _word(LOGICAL_WORDS)},
-            "keywords": {"name": "keyword.other.elab", "match": _word(plain)},
+            # No keyword stands right before `=` or `:` in the grammar: there the
+            # word is a name (`AnalogIn(channel = 1)`, `out: bool`).
+            "keywords": {"name": "keyword.other.elab", "match": _word(plain) + r"(?!\s*(?:=(?!=)|:))"},
             "types": {"name": "support.type.elab", "match": _word(type_names())},
             "operators": {"patterns": [
                 {"name": "keyword.operator.arrow.elab", "match": "->"},
