@@ -11,7 +11,9 @@ MODEL   ?= examples/pt100_sensor.elab
 # Debian packages the project uses: cross compilers and simulators for the
 # boards, Modbus peers, fuzzing and sanitizer runtimes, Graphviz, tmux, and
 # Chromium with its driver for the service panel's browser tests, Eclipse
-# Cyclone DDS (libddsc, idlc in its tools) for the PC nodes' DDS exports.
+# Cyclone DDS (libddsc, idlc in its tools) for the PC nodes' DDS exports,
+# Node.js for the VS Code extension (`make vsix`) and its tests (npm: see
+# the npm target).
 # (The PIC18 board's sdcc with the pic16 port is built from Debian's source
 # by boards/pic18/toolchain/build.sh: `make setup` runs it once.)
 DEB_PACKAGES := gcc make pkg-config graphviz tmux socat \
@@ -19,9 +21,10 @@ DEB_PACKAGES := gcc make pkg-config graphviz tmux socat \
 	sdcc sdcc-libraries sdcc-ucsim gputils gpsim gpsim-dev libglib2.0-dev g++ dpkg-dev \
 	mbpoll libmodbus-dev clang libclang-rt-14-dev clang-tidy valgrind gtkwave \
 	chromium chromium-driver \
-	cyclonedds-dev cyclonedds-tools
+	cyclonedds-dev cyclonedds-tools \
+	nodejs
 
-.PHONY: fuzz mutations crosscheck-tally setup deps venv toolchains test demo bench clean help flash sim crosscheck
+.PHONY: vsix vscode-packages npm fuzz mutations crosscheck-tally setup deps venv toolchains test demo bench clean help flash sim crosscheck
 
 help:
 	@echo "make setup   install Debian packages (when missing) and the virtual environment"
@@ -41,6 +44,7 @@ help:
 	@echo "             BOARD=pic18: a PICkit on USB, PORT=usb)"
 	@echo "make sim   BOARD=avr MODEL=m.elab [MCU=..] [STIMULUS=s.csv] [TRACE=t.csv] [DURATION=10s]"
 	@echo "             build and run in the board's simulator, serial links on ptys in the build folder"
+	@echo "make vsix    the VS Code extension (editors/vscode) as build/easylab-elab-VERSION.vsix"
 	@echo "make clean   remove build outputs and the virtual environment"
 	@echo "Boards: $(EASYLAB) boards (EASYLAB_BOARD_PATH adds folders of your own)"
 
@@ -92,6 +96,34 @@ test: setup
 demo: setup
 	$(PY) -m easylab.demo
 
+# The VS Code extension (docs/editors_vscode.md): its npm packages as
+# package-lock.json pins them (install scripts skipped: none is needed),
+# then vsce packs the grammar, configuration, client and the client's
+# runtime packages.
+VSCODE_EXT := editors/vscode
+
+# Debian's nodejs comes without npm (its own package); other builds of
+# nodejs bring it and conflict with Debian's: install it only when missing.
+npm: deps
+	@command -v npm >/dev/null || { SUDO=$$( [ "$$(id -u)" = 0 ] || echo sudo ); \
+		DEBIAN_FRONTEND=noninteractive $$SUDO apt-get install -y -qq -o DPkg::Lock::Timeout=600 \
+			--no-install-recommends npm >/dev/null; }
+VSCODE_PACKAGES := $(VSCODE_EXT)/node_modules/.installed
+
+vscode-packages: $(VSCODE_PACKAGES)
+
+$(VSCODE_PACKAGES): $(VSCODE_EXT)/package-lock.json | npm
+	@cd $(VSCODE_EXT) && npm ci --no-audit --no-fund --ignore-scripts --loglevel=error
+	@touch $@
+
+VSIX_VERSION = $(shell node -p "require('./$(VSCODE_EXT)/package.json').version")
+
+vsix: vscode-packages
+	@mkdir -p build
+	@cd $(VSCODE_EXT) && npx --no-install vsce package --skip-license --allow-missing-repository \
+		-o ../../build/easylab-elab-$(VSIX_VERSION).vsix
+	@echo build/easylab-elab-$(VSIX_VERSION).vsix
+
 bench: setup
 	$(PY) bench/run.py
 
@@ -138,7 +170,7 @@ sim: setup
 	$(or $(shell $(EASYLAB) sim $(MODEL) --board $(BOARD) $(MCU_FLAG) -o $(SIM_DIR) --print),$(error make sim: board $(BOARD) has no simulator)) $(SIM_ARGS)
 
 clean:
-	rm -rf build bench/results $(VENV) *.egg-info .pytest_cache
+	rm -rf build bench/results $(VENV) *.egg-info .pytest_cache editors/vscode/node_modules
 	find . -name __pycache__ -type d -prune -exec rm -rf {} +
 
 # The mutation campaign (docs/testing.md, "Mutated models"): N mutants of

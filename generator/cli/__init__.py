@@ -34,10 +34,16 @@ def build_parser() -> argparse.ArgumentParser:
 
     p = sub.add_parser("graph", help="draw devices, dataflows and charts (Graphviz)",
                        description="Write a Graphviz DOT drawing of the model's devices, each dataflow and "
-                                   "each chart; with -o x.svg or x.png render it with Graphviz's dot.")
+                                   "each chart; with -o x.svg or x.png render it with Graphviz's dot; with "
+                                   "--serve show it in a browser page, redrawn when the model is saved.")
     p.add_argument("file", metavar="FILE", help="model file (.elab)")
     p.add_argument("-o", "--output", metavar="OUT", help="output file: .dot, .svg, .png or .pdf "
                                                          "(default: DOT on standard output)")
+    p.add_argument("--serve", action="store_true",
+                   help="serve the drawing to a browser, redrawn when the model or an import is saved; "
+                        "a click on an element shows its file:line")
+    p.add_argument("--listen", metavar="ADDR:PORT", default=None,
+                   help="with --serve: where to listen (default 127.0.0.1:8470; port 0: any free port)")
     p.set_defaults(func=model_commands.cmd_graph)
 
     from .fmt_command import add_parser as add_fmt_parser

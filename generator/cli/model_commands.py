@@ -76,6 +76,13 @@ def _checked_model(path: str):
 def cmd_graph(args) -> int:
     from ..frontend.graph import render_dot, write_graph
 
+    if args.serve:
+        if args.output is not None:
+            raise CliError("graph: --serve shows the drawing in a browser: give no -o with it")
+        from .graph_serve import DEFAULT_LISTEN, serve
+        return serve(args.file, args.listen or DEFAULT_LISTEN)
+    if args.listen is not None:
+        raise CliError("graph: --listen goes with --serve")
     model = _checked_model(args.file)
     dot = render_dot(model)
     if args.output is None:

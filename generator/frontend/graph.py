@@ -13,7 +13,8 @@ Every element carries a stable ``id`` derived from its path in the model
 bar's edges add ``.from.STEP`` or ``.to.STEP``), ``actor:DATAFLOW.INSTANCE``,
 ``edge:DATAFLOW/SRC->DST``, ``ext:DATAFLOW/NAME`` (a var, param, device datum
 or channel drawn in a dataflow), ``device:PATH``, ``var:NAME``,
-``param:NAME``, ``task:NAME``.
+``param:NAME``, ``task:NAME``. ``element_locations`` maps each id to its
+declaration's span (``easylab graph --serve`` shows it on a click).
 """
 
 from __future__ import annotations
@@ -22,6 +23,7 @@ import shutil
 import subprocess
 from pathlib import Path
 
+from ..core.source import Span
 from . import ast
 from .model import CheckedModel, PrimitiveDevice
 
@@ -37,6 +39,66 @@ def _q(text: str) -> str:
 def _id(element_id: str) -> str:
     """The DOT attribute giving an element its stable id (see the module's docstring)."""
     return f"id={_q(element_id)}"
+
+
+# The elements' ids (see the module's docstring), one function each, for
+# the drawing and for element_locations.
+def task_id(task) -> str:
+    return f"task:{task.name}"
+
+
+def data_id(data) -> str:
+    return f"{data.kind}:{data.name}"
+
+
+def device_id(path: str) -> str:
+    return f"device:{path}"
+
+
+def actor_id(df, name: str) -> str:
+    return f"actor:{df.name}.{name}"
+
+
+def external_id(df, end) -> str:
+    return f"ext:{df.name}/{end.label}"
+
+
+def edge_id_of(df, edge) -> str:
+    return f"edge:{df.name}/{edge.src.label}->{edge.dst.label}"
+
+
+def step_id(chart, step) -> str:
+    return f"step:{chart.name}.{step.name}"
+
+
+def transition_id(chart, transition) -> str:
+    return f"transition:{chart.name}.{transition.index}"
+
+
+def element_locations(model: CheckedModel) -> dict[str, Span]:
+    """Where each element of the drawing is declared: its id -> the span of
+    its declaration (an external datum: where the dataflow names it first)."""
+    where: dict[str, Span] = {}
+    for dev in model.devices:
+        where[device_id(dev.path)] = dev.span
+    for df in model.dataflows.values():
+        for name, inst in df.instances.items():
+            where[actor_id(df, name)] = inst.decl.span
+        for e in df.edges:
+            where[edge_id_of(df, e)] = e.decl.span
+            for end in (e.src, e.dst):
+                if end.kind != "actor":
+                    where.setdefault(external_id(df, end), end.path.span)
+    for chart in model.charts.values():
+        for step in chart.steps.values():
+            where[step_id(chart, step)] = step.decl.span
+        for tr in chart.transitions:
+            where[transition_id(chart, tr)] = tr.decl.span
+    for data in model.data.values():
+        where[data_id(data)] = data.decl.span
+    for task in model.tasks.values():
+        where[task_id(task)] = task.decl.span
+    return where
 
 
 def _expr_text(e: ast.Expr) -> str:
@@ -94,7 +156,7 @@ def render_dot(model: CheckedModel) -> str:
         for task in model.tasks.values():
             runs = ", ".join(r.name for r in task.runs)
             period = _duration(task.period_us)
-            dot.add(f"{_q('task.' + task.name)} [shape=note, {_id('task:' + task.name)}, "
+            dot.add(f"{_q('task.' + task.name)} [shape=note, {_id(task_id(task))}, "
                     f"label={_q(f'{task.name} every {period}: {runs}')}];")
         dot.close()
     dot.lines.append("}")
@@ -114,7 +176,7 @@ def _data(dot: _Dot, model: CheckedModel) -> None:
         return
     dot.open("data", "vars and params")
     for data in model.data.values():
-        dot.add(f"{_q('data.' + data.name)} [shape=plaintext, {_id(data.kind + ':' + data.name)}, "
+        dot.add(f"{_q('data.' + data.name)} [shape=plaintext, {_id(data_id(data))}, "
                 f"label={_q(f'{data.kind} {data.name}: {data.type}')}];")
     dot.close()
 
@@ -141,7 +203,7 @@ def _device_tree(dot: _Dot, tree: dict, prefix: str) -> None:
                               for p in child.ports.values())
             claims = ", ".join(str(c) for c in child.claims)
             label = f"{{{name} ({child.type.name})|driver {child.driver}|{data}\\l|{claims}}}"
-            dot.add(f"{_q('dev.' + path)} [shape=record, {_id('device:' + path)}, label={_q(label)}];")
+            dot.add(f"{_q('dev.' + path)} [shape=record, {_id(device_id(path))}, label={_q(label)}];")
         else:
             dot.open("dev_" + path, path)
             _device_tree(dot, child, path + ".")
@@ -154,7 +216,7 @@ def _dataflow(dot: _Dot, df) -> None:
     for name, inst in df.instances.items():
         targs = ", ".join(str(t) for t in inst.type_bindings.values())
         label = f"{name}\n{inst.actor_type.name}" + (f"<{targs}>" if targs else "")
-        dot.add(f"{_q(prefix + name)} [shape=box, style=rounded, {_id(f'actor:{df.name}.{name}')}, "
+        dot.add(f"{_q(prefix + name)} [shape=box, style=rounded, {_id(actor_id(df, name))}, "
                 f"label={_q(label)}];")
     externals: set[str] = set()
     for e in df.edges:
@@ -167,7 +229,7 @@ def _dataflow(dot: _Dot, df) -> None:
                 if node not in externals:
                     externals.add(node)
                     shape = {"channel": "cds", "device": "ellipse"}.get(end.kind, "oval")
-                    dot.add(f"{_q(node)} [shape={shape}, {_id(f'ext:{df.name}/{end.label}')}, "
+                    dot.add(f"{_q(node)} [shape={shape}, {_id(external_id(df, end))}, "
                             f"label={_q(end.label)}, style=dashed];")
                 ends.append(node)
         rates = []
@@ -176,7 +238,7 @@ def _dataflow(dot: _Dot, df) -> None:
         if e.initial_tokens:
             rates.append(f"{len(e.initial_tokens)} D")
         label = f", label={_q('  '.join(rates))}" if rates else ""
-        edge_id = _id(f"edge:{df.name}/{e.src.label}->{e.dst.label}")
+        edge_id = _id(edge_id_of(df, e))
         dot.add(f"{_q(ends[0])} -> {_q(ends[1])} [{edge_id}{label}];")
     if not df.instances and not df.edges:
         dot.add(f"{_q(prefix + 'empty')} [shape=plaintext, label=\"(empty)\"];")
@@ -192,11 +254,11 @@ def _chart(dot: _Dot, chart) -> None:
         actions += [f"P0 {a.target.text} = {_expr_text(a.value)}" for a in step.decl.exit]
         shape = "doubleoctagon" if step.decl.initial else "box"
         label = step.name + ("\n" + "\n".join(actions) if actions else "")
-        dot.add(f"{_q(prefix + step.name)} [shape={shape}, {_id(f'step:{chart.name}.{step.name}')}, "
+        dot.add(f"{_q(prefix + step.name)} [shape={shape}, {_id(step_id(chart, step))}, "
                 f"label={_q(label)}];")
     for tr in chart.transitions:
         guard = _expr_text(tr.decl.guard)
-        tid = f"transition:{chart.name}.{tr.index}"
+        tid = transition_id(chart, tr)
         if len(tr.sources) == 1 and len(tr.targets) == 1:
             dot.add(f"{_q(prefix + tr.sources[0].name)} -> {_q(prefix + tr.targets[0].name)} "
                     f"[{_id(tid)}, label={_q(guard)}];")
@@ -220,11 +282,17 @@ def write_graph(dot: str, output: Path) -> None:
             raise RuntimeError(f"{output}: unknown output format '{output.suffix}' (use .dot, .svg, .png or .pdf)")
         output.write_text(dot, encoding="utf-8")
         return
+    output.write_bytes(run_dot(dot, fmt))
+
+
+def run_dot(dot: str, fmt: str) -> bytes:
+    """The drawing Graphviz's dot makes of DOT text in format ``fmt`` (svg,
+    png, pdf); RuntimeError when dot is missing or fails."""
     exe = shutil.which("dot")
     if exe is None:
         raise RuntimeError("Graphviz's 'dot' is not installed (Debian package: graphviz); "
                            "write DOT instead with -o model.dot")
-    proc = subprocess.run([exe, f"-T{fmt}", "-o", str(output)], input=dot.encode("utf-8"),
-                          capture_output=True, timeout=120)
+    proc = subprocess.run([exe, f"-T{fmt}"], input=dot.encode("utf-8"), capture_output=True, timeout=120)
     if proc.returncode != 0:
         raise RuntimeError(f"dot failed: {proc.stderr.decode(errors='replace').strip()}")
+    return proc.stdout
