@@ -7,7 +7,11 @@ from __future__ import annotations
 
 import concurrent.futures
 import queue
+import threading
+import time
 from typing import Callable
+
+CONNECTING, CONNECTED, LOST = "connecting", "connected", "lost"
 
 
 class Busy(Exception):
@@ -54,3 +58,44 @@ class JobQueue:
                 return
             if future.set_running_or_notify_cancel():
                 future.set_exception(err)
+
+
+class LinkOwner:
+    """What the thread that owns a page's link shares with the page's
+    server: the link's state (CONNECTING, CONNECTED, LOST or the owner's
+    own) with its message and since when, the jobs waiting for it, and the
+    event that stops it. ``what`` names the other end (the device, the
+    target), ``where`` its address; ``log`` gets each new message."""
+
+    def __init__(self, what: str, where: str, queue_size: int, log: Callable[[str], None] | None,
+                 thread_name: str):
+        self.connects = 0
+        self._log = log or (lambda line: None)
+        self._jobs = JobQueue(queue_size, what)
+        self._lock = threading.Lock()
+        self._state, self._message, self._since = CONNECTING, f"connecting to {where}", time.time()
+        self._stopping = threading.Event()
+        self._thread = threading.Thread(target=self._run, name=thread_name, daemon=True)
+
+    def start(self) -> None:
+        self._thread.start()
+
+    def submit(self, job: Callable) -> concurrent.futures.Future:
+        """Queue ``job`` for the link's thread; Busy when the queue is full,
+        NotConnected when the other end is away (nothing is queued for it)."""
+        with self._lock:
+            if self._state != CONNECTED:
+                raise NotConnected(self._message)
+        return self._jobs.put(job)
+
+    def _run(self) -> None:
+        raise NotImplementedError
+
+    def _set_state(self, state: str, message: str) -> None:
+        with self._lock:
+            changed = (state, message) != (self._state, self._message)
+            if state != self._state:
+                self._since = time.time()
+            self._state, self._message = state, message
+        if changed:
+            self._log(message)

@@ -37,10 +37,10 @@ from typing import Callable
 from ..debug_console import describe_comparison, format_value, no_slots
 from ..debug_map import DebugMap, Item
 from ..debug_protocol import K, DebugClient, DebugError, decode_value, type_size
-from ..link_jobs import JobQueue, NotConnected
+from ..link_jobs import CONNECTED, CONNECTING, LOST, LinkOwner, NotConnected
 from ..transport import TransportError
 
-CONNECTING, CONNECTED, LOST, WRONG_PROGRAM = "connecting", "connected", "lost", "wrong program"
+WRONG_PROGRAM = "wrong program"  # the link states beside link_jobs's
 VIEWER_TIMEOUT = 5.0  # seconds without a page asking: polling stops
 FRAME_OVERHEAD = K.HEADER + K.TRAILER + 2  # seq, cmd, CRC, the status byte, APPLIED or the tx state
 TX_RESULT_APPLIED = 3  # TX_RESULT's state once the commit applied (docs/protocol.md; the header has no name for it)
@@ -141,7 +141,7 @@ def read_in_transaction(client: DebugClient, items: list[Item], wait: float,
     return decode_items(items, data)
 
 
-class TargetLink:
+class TargetLink(LinkOwner):
     """The link to one target, its snapshots and its jobs.
 
     Jobs are functions of the open :class:`DebugClient`; :meth:`submit`
@@ -152,6 +152,7 @@ class TargetLink:
                  timeout: float = 0.5,
                  retry: float = 1.0, min_period: float = 0.05, baud: int = 115200, queue_size: int = 4,
                  history: int = 4000, log: Callable[[str], None] | None = None):
+        super().__init__("the target", target, queue_size, log, "easylab-debug-target")
         self.map = dmap
         self.target = target
         self.url = target_url(target)
@@ -163,27 +164,17 @@ class TargetLink:
         self.element_of_point = {tuple(e["point"]): el for el, e in (elements or {}).items() if e.get("point")}
         self.status_items = [it for it in dmap.items if it.kind == "status"]
         self.period = min_period
-        self.connects = 0
         self.breakpoints: list[dict] = []
         self.forced: list[dict] = []
         self.slots = {"force": 0, "conditions": 0}  # HELLO's: forced elements, conditional breakpoints
-        self._log = log or (lambda line: None)
-        self._jobs = JobQueue(queue_size, "the target")
         self._history: deque[Snapshot] = deque(maxlen=history)
         self._seq = 0
         self._view: list[Item] = []
         self._last_viewer = 0.0
         self._refresh_now = threading.Event()
-        self._lock = threading.Lock()
-        self._state, self._message, self._since = CONNECTING, f"connecting to {target}", time.time()
         self._client: DebugClient | None = None
-        self._stopping = threading.Event()
-        self._thread = threading.Thread(target=self._run, name="easylab-debug-target", daemon=True)
 
     # ------------------------------------------------------------ the server's side
-
-    def start(self) -> None:
-        self._thread.start()
 
     def stop(self) -> None:
         self._stopping.set()
@@ -206,12 +197,8 @@ class TargetLink:
             return [s for s in self._history if s.seq > seq][-limit:]
 
     def submit(self, job: Callable[[DebugClient], object]) -> concurrent.futures.Future:
-        """Queue `job` for the target; Busy when the queue is full,
-        NotConnected when the target is away (nothing is queued for it)."""
-        with self._lock:
-            if self._state != CONNECTED:
-                raise NotConnected(self._message)
-        future = self._jobs.put(job)
+        """Queue `job` for the target (LinkOwner.submit), and refresh after it."""
+        future = super().submit(job)
         self._refresh_now.set()
         return future
 
@@ -230,15 +217,6 @@ class TargetLink:
         return {key: no_slots(*words) for key, words in with_none.items() if self.slots[key] == 0}
 
     # ------------------------------------------------------------ the target thread
-
-    def _set_state(self, state: str, message: str) -> None:
-        with self._lock:
-            changed = (state, message) != (self._state, self._message)
-            if state != self._state:
-                self._since = time.time()
-            self._state, self._message = state, message
-        if changed:
-            self._log(message)
 
     def _run(self) -> None:
         next_refresh = time.monotonic()

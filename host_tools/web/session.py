@@ -14,18 +14,16 @@ from __future__ import annotations
 import concurrent.futures
 import math
 import queue
-import threading
 import time
 from collections import deque
 from dataclasses import dataclass
 from typing import Callable
 
-from ..link_jobs import JobQueue, NotConnected
+from ..link_jobs import CONNECTED, CONNECTING, LOST, LinkOwner, NotConnected
 from ..modbus_link import DeviceException, LinkError, LinkStats, ModbusLink
 from ..service_cli import DeviceAddress, read_values
 from ..service_map import ServiceMap
 
-CONNECTING, CONNECTED, LOST = "connecting", "connected", "lost"
 
 
 @dataclass(frozen=True)
@@ -47,7 +45,7 @@ def json_value(value):
     return value
 
 
-class DeviceSession:
+class DeviceSession(LinkOwner):
     """The link to one device, sampled every `period` seconds.
 
     Jobs are functions of the open :class:`ModbusLink`; :meth:`submit` queues
@@ -56,41 +54,23 @@ class DeviceSession:
 
     def __init__(self, smap: ServiceMap, address: DeviceAddress, period: float, *, retry: float = 1.0,
                  queue_size: int = 4, history: int = 1200, log: Callable[[str], None] | None = None):
+        super().__init__("the device", address.where, queue_size, log, "easylab-device")
         self.smap = smap
         self.address = address
         self.period = period
         self.retry = retry
         self.stats = LinkStats()
-        self.connects = 0
-        self._log = log or (lambda line: None)
-        self._jobs = JobQueue(queue_size, "the device")
         self._history: deque[Sample] = deque(maxlen=history)
         self._seq = 0
-        self._lock = threading.Lock()
-        self._state, self._message, self._since = CONNECTING, f"connecting to {address.where}", time.time()
         self._link: ModbusLink | None = None
         self._connected_message = ""
         self._gap = False  # the next sample follows an outage
-        self._stopping = threading.Event()
-        self._thread = threading.Thread(target=self._run, name="easylab-device", daemon=True)
 
     # ------------------------------------------------------------ the server's side
-
-    def start(self) -> None:
-        self._thread.start()
 
     def stop(self) -> None:
         self._stopping.set()
         self._thread.join(timeout=self.address.timeout * 4 + self.period + 1)
-
-    def submit(self, job: Callable[[ModbusLink], object]) -> concurrent.futures.Future:
-        """Queue `job` for the device; Busy when the queue is full, NotConnected
-        when the device is away (nothing is queued for a dead device)."""
-        with self._lock:
-            if self._state != CONNECTED:
-                raise NotConnected(self._message)
-        future = self._jobs.put(job)
-        return future
 
     def link_state(self) -> dict:
         """The link's state for the page: connected or not, why, and counts."""
@@ -110,15 +90,6 @@ class DeviceSession:
             return [s for s in self._history if s.seq > seq]
 
     # ------------------------------------------------------------ the device thread
-
-    def _set_state(self, state: str, message: str) -> None:
-        with self._lock:
-            changed = (state, message) != (self._state, self._message)
-            if state != self._state:
-                self._since = time.time()
-            self._state, self._message = state, message
-        if changed:
-            self._log(message)
 
     def _run(self) -> None:
         next_sample = time.monotonic()
