@@ -4,19 +4,17 @@ checked) at the end of each test."""
 
 from __future__ import annotations
 
-import shutil
 from pathlib import Path
 
 import pytest
 
 from onlinelib import Browser, OnlineServer
+from weblib import start_browser
 
 
 @pytest.fixture(scope="session")
 def browser(tmp_path_factory):
-    missing = [tool for tool in ("chromium", "chromedriver") if shutil.which(tool) is None]
-    assert not missing, f"{' and '.join(missing)} missing: `make setup` installs Debian's chromium and chromium-driver"
-    b = Browser(tmp_path_factory.mktemp("chromium"))
+    b = start_browser(tmp_path_factory, Browser)
     yield b
     b.quit()
 

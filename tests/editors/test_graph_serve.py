@@ -6,14 +6,9 @@ models; the command's refusals."""
 
 from __future__ import annotations
 
-import os
-import queue
 import re
-import shutil
-import signal
 import subprocess
 import sys
-import threading
 from pathlib import Path
 
 import pytest
@@ -25,6 +20,7 @@ sys.path.insert(0, str(ROOT / "tests" / "frontend"))
 sys.path.insert(0, str(ROOT / "tests" / "crosscheck"))
 from modelgen import generate  # noqa: E402
 from onlinelib import Browser, http, wait_for  # noqa: E402
+from weblib import PageServer, start_browser  # noqa: E402
 from test_graph_ids import EXAMPLES, SEEDS, expected_ids  # noqa: E402
 
 from easylab.frontend.graph import element_locations  # noqa: E402
@@ -69,35 +65,21 @@ def test_every_element_of_the_drawing_has_the_location_of_its_declaration(tmp_pa
 # ---------------------------------------------------------------- the server
 
 
-class GraphServer:
-    """`easylab graph --serve MODEL --listen 127.0.0.1:0` in a process."""
+class GraphServer(PageServer):
+    """`easylab graph --serve MODEL --listen 127.0.0.1:0` in a process, started."""
+
+    what = "easylab graph --serve"
+    start_timeout = 60.0
 
     def __init__(self, model: Path, cwd: Path):
-        env = {k: v for k, v in os.environ.items() if k != "PYTHONPATH"}
-        self.proc = subprocess.Popen([sys.executable, "-m", "easylab", "graph", "--serve", str(model), "--listen",
-                                      "127.0.0.1:0"], cwd=cwd, env=env, text=True, stdin=subprocess.DEVNULL,
-                                     stdout=subprocess.PIPE, stderr=subprocess.PIPE)
-        lines: queue.Queue = queue.Queue()
-        self.err: list[str] = []
-        threading.Thread(target=lambda: [lines.put(x) for x in self.proc.stdout] + [lines.put(None)],
-                         daemon=True).start()
-        threading.Thread(target=lambda: self.err.extend(self.proc.stderr), daemon=True).start()
-        first = lines.get(timeout=60)
-        assert first, f"easylab graph --serve exited {self.proc.wait()}: {''.join(self.err)}"
-        self.url = re.search(r"(http://\S+/)", first).group(1)
-
-    def stop(self) -> None:
-        """SIGTERM: the server ends by itself, status 0, no traceback."""
-        self.proc.send_signal(signal.SIGTERM)
-        status = self.proc.wait(timeout=15)
-        assert status == 0 and "Traceback" not in "".join(self.err), (status, "".join(self.err))
+        super().__init__([sys.executable, "-m", "easylab", "graph", "--serve", str(model), "--listen", "127.0.0.1:0"],
+                         cwd=cwd)
+        self.start()
 
 
 @pytest.fixture(scope="module")
 def browser(tmp_path_factory):
-    missing = [tool for tool in ("chromium", "chromedriver") if shutil.which(tool) is None]
-    assert not missing, f"{' and '.join(missing)} missing: `make setup` installs Debian's chromium and chromium-driver"
-    b = Browser(tmp_path_factory.mktemp("chromium"))
+    b = start_browser(tmp_path_factory, Browser)
     yield b
     b.quit()
 

@@ -7,7 +7,6 @@ The firmware processes and builds are those of tests/service (svc_testlib).
 
 from __future__ import annotations
 
-import shutil
 import sys
 from pathlib import Path
 from types import SimpleNamespace
@@ -17,7 +16,7 @@ import pytest
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "service"))
 
 from svc_testlib import EXAMPLES, build_model  # noqa: E402
-from weblib import Browser, Panel, Pt100Devices, ramp_stimulus, wait_for  # noqa: E402
+from weblib import Browser, Panel, Pt100Devices, ramp_stimulus, start_browser, wait_for  # noqa: E402
 
 
 def pt100_with_tcp(directory: Path) -> Path:
@@ -44,9 +43,7 @@ def stimulus(tmp_path_factory) -> Path:
 @pytest.fixture(scope="session")
 def browser(tmp_path_factory):
     """One headless Chromium (a phone-sized window) for every test."""
-    missing = [tool for tool in ("chromium", "chromedriver") if shutil.which(tool) is None]
-    assert not missing, f"{' and '.join(missing)} missing: `make setup` installs Debian's chromium and chromium-driver"
-    b = Browser(tmp_path_factory.mktemp("chromium"))
+    b = start_browser(tmp_path_factory, Browser)
     yield b
     b.quit()
 

@@ -7,6 +7,7 @@ import json
 import os
 import queue
 import re
+import shutil
 import signal
 import subprocess
 import sys
@@ -118,6 +119,14 @@ def http(method: str, url: str, body=None, headers: dict | None = None, timeout:
 
 
 # ---------------------------------------------------------------- the panel process
+
+
+def start_browser(tmp_path_factory, browser_class):
+    """A headless Chromium of ``browser_class`` in a folder of its own, once
+    Debian's chromium and chromium-driver are there (`make setup`)."""
+    missing = [tool for tool in ("chromium", "chromedriver") if shutil.which(tool) is None]
+    assert not missing, f"{' and '.join(missing)} missing: `make setup` installs Debian's chromium and chromium-driver"
+    return browser_class(tmp_path_factory.mktemp("chromium"))
 
 
 class PageServer:
