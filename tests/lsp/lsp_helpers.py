@@ -15,7 +15,7 @@ from pytest_lsp import ClientServerConfig, LanguageClient
 
 ROOT = Path(__file__).resolve().parents[2]
 sys.path[:0] = [str(ROOT / "tests" / "frontend")]  # mutations.py
-EXAMPLES = sorted(p for p in (ROOT / "examples").rglob("*.elab"))
+EXAMPLES = sorted(p for p in (ROOT / "examples").rglob("*.elab") if not p.name.startswith("."))
 
 SERVER = ClientServerConfig(server_command=[sys.executable, "-m", "easylab", "lsp"])
 CHECK_LINE = re.compile(r"^(?P<file>[^\s].*?):(?P<line>\d+):(?P<col>\d+): error: (?P<message>.*)$")
