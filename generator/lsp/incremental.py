@@ -64,7 +64,7 @@ class ChunkedParser:
                 new[key] = module
                 modules.append(module)
             merged = _merge(file, modules)
-        except ModelError:
+        except Exception:  # noqa: BLE001 - whatever a chunk alone raises, the whole text decides
             self._cache.pop(file, None)
             return parse_text(text, file)  # the whole file's own error
         self._cache[file] = new

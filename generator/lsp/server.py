@@ -89,10 +89,22 @@ class ElabServer(LanguageServer):
                 uri, [self.diagnostic(d) for d in diagnostics], version=version))
 
     def refresh(self, uri: str, text: str) -> None:
+        """Check the edited file and the open models that import it. A
+        failure of the server itself is published at the file's start, so
+        that the editor shows it instead of silently showing nothing."""
         path = uri_to_path(uri)
-        self.publish(self.models.open(path, text))
-        for root in self.models.dependents(path):
-            self.publish(self.models.analyse(root))
+        try:
+            self.publish(self.models.open(path, text))
+            for root in self.models.dependents(path):
+                self.publish(self.models.analyse(root))
+        except Exception as err:  # noqa: BLE001 - the server must go on serving
+            logging.exception("checking %s", path)
+            start = lsp.Position(0, 0)
+            self.text_document_publish_diagnostics(lsp.PublishDiagnosticsParams(uri, [lsp.Diagnostic(
+                lsp.Range(start, start), f"easylab lsp: internal error: {type(err).__name__}: {err}",
+                severity=lsp.DiagnosticSeverity.Error, source=SOURCE,
+                data={"message": f"internal error: {err}", "hint": None})],
+                version=self.workspace.text_documents[uri].version if uri in self.workspace.text_documents else None))
 
     def at(self, uri: str, position: lsp.Position):
         """(analysis, occurrence) under a position, or (analysis, None)."""

@@ -4,6 +4,7 @@ diagnostics in the same terms for comparison."""
 
 from __future__ import annotations
 
+import asyncio
 import itertools
 import re
 import subprocess
@@ -12,12 +13,32 @@ from pathlib import Path
 
 from lsprotocol import types as lsp
 from pytest_lsp import ClientServerConfig, LanguageClient
+from pytest_lsp.client import make_test_lsp_client
 
 ROOT = Path(__file__).resolve().parents[2]
 sys.path[:0] = [str(ROOT / "tests" / "frontend")]  # mutations.py
 EXAMPLES = sorted(p for p in (ROOT / "examples").rglob("*.elab") if not p.name.startswith("."))
 
-SERVER = ClientServerConfig(server_command=[sys.executable, "-m", "easylab", "lsp"])
+
+
+def _client() -> LanguageClient:
+    """pytest-lsp's client, also keeping every diagnostics notification by
+    (uri, version): waiting for the next notification could miss one that
+    arrives together with another."""
+    client = make_test_lsp_client()
+    client.published = {}
+    features = client.protocol.fm.features
+    keep_latest = features[lsp.TEXT_DOCUMENT_PUBLISH_DIAGNOSTICS]
+
+    def publish(params: lsp.PublishDiagnosticsParams):
+        client.published.setdefault((params.uri, params.version), []).append(list(params.diagnostics))
+        return keep_latest(params)
+
+    features[lsp.TEXT_DOCUMENT_PUBLISH_DIAGNOSTICS] = publish
+    return client
+
+
+SERVER = ClientServerConfig(server_command=[sys.executable, "-m", "easylab", "lsp"], client_factory=_client)
 CHECK_LINE = re.compile(r"^(?P<file>[^\s].*?):(?P<line>\d+):(?P<col>\d+): error: (?P<message>.*)$")
 
 
@@ -48,12 +69,16 @@ async def change_file(client: LanguageClient, path: Path, text: str) -> list[lsp
     return await diagnostics_of(client, uri, version)
 
 
-async def diagnostics_of(client: LanguageClient, uri: str, version: int | None = None) -> list[lsp.Diagnostic]:
-    """The next diagnostics published for ``uri`` (for that version of its text)."""
-    while True:
-        params = await client.wait_for_notification(lsp.TEXT_DOCUMENT_PUBLISH_DIAGNOSTICS)
-        if params.uri == uri and (version is None or params.version == version):
-            return list(params.diagnostics)
+async def diagnostics_of(client: LanguageClient, uri: str, version: int, index: int = 0) -> list[lsp.Diagnostic]:
+    """The diagnostics published for that version of ``uri``'s text (the
+    ``index``-th publication of it: a file is published again when a file
+    it imports changes)."""
+    async def published():
+        while len(client.published.get((uri, version), ())) <= index:
+            await asyncio.sleep(0.005)
+        return client.published[(uri, version)][index]
+
+    return await asyncio.wait_for(published(), 60)  # a server that never answers fails the test
 
 
 def doc(path: Path) -> lsp.TextDocumentIdentifier:
