@@ -16,7 +16,7 @@ from pathlib import Path
 HERE = Path(__file__).resolve().parent
 # In the order they build on each other; each has main(out_dir).
 BENCHMARKS = ["bench_frontend", "bench_sdf", "bench_codegen", "bench_interp", "bench_debug", "bench_debug_web",
-              "bench_service", "bench_avr", "bench_pic18", "bench_remote", "bench_distribution", "bench_multicore"]
+              "bench_service", "bench_avr", "bench_pic18", "bench_remote", "bench_distribution", "bench_multicore", "bench_lsp"]
 
 
 def _load(name: str):

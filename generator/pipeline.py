@@ -30,19 +30,25 @@ class FrontEndResult:
         return "\n".join(d.render(self.sources) for d in self.diagnostics.sorted())
 
 
-def check_file(path: str | Path, schedule: str | None = None, text: str | None = None) -> FrontEndResult:
+def check_file(path: str | Path, schedule: str | None = None, text: str | None = None,
+               given: dict[Path, str] | None = None, parse=None) -> FrontEndResult:
     """Parse, check and analyse a model file and its imports.
 
     ``schedule`` overrides every dataflow's schedule kind (``sas`` or
     ``min-buffer``). ``text``, if given, is read instead of the root file
-    (its imports are still files, relative to ``path``).
+    (its imports are still files, relative to ``path``). ``given`` maps
+    other files to the texts read instead of them (an editor's unsaved
+    imports); ``parse`` stands for the parser (see :func:`load`).
 
     Raises OSError (FileNotFoundError, UnicodeDecodeError as ValueError) only
     for the root file itself; every problem inside a model is a diagnostic.
     """
-    sources = SourceCache({Path(path): text} if text is not None else None)
+    texts = dict(given or {})
+    if text is not None:
+        texts[Path(path)] = text
+    sources = SourceCache(texts)
     diags = Diagnostics()
-    loaded = load(Path(path), sources, diags)
+    loaded = load(Path(path), sources, diags) if parse is None else load(Path(path), sources, diags, parse)
     model = None
     # After a syntax error anywhere the namespace is partial: checking it
     # would only add misleading follow-on errors.

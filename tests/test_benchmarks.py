@@ -16,7 +16,8 @@ RESULTS = {"bench_frontend": "frontend.json", "bench_sdf": "sdf.json", "bench_co
            "bench_interp": "interp.json", "bench_debug": "debug.json", "bench_debug_web": "debug_web.json",
            "bench_service": "service.json",
            "bench_avr": "avr.json", "bench_pic18": "pic18.json", "bench_remote": "remote.json",
-           "bench_distribution": "distribution.json", "bench_multicore": "multicore.json"}
+           "bench_distribution": "distribution.json", "bench_multicore": "multicore.json",
+           "bench_lsp": "lsp.json"}
 
 
 def test_every_benchmark_is_listed_here_and_in_run_py():

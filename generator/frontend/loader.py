@@ -40,11 +40,13 @@ class LoadedModel:
     modules: list[ast.Module]
 
 
-def load(path: Path, sources: SourceCache, diags: Diagnostics) -> LoadedModel | None:
-    """Parse ``path`` and its imports; syntax errors go to ``diags``."""
+def load(path: Path, sources: SourceCache, diags: Diagnostics, parse=parse_text) -> LoadedModel | None:
+    """Parse ``path`` and its imports; syntax errors go to ``diags``.
+    ``parse(text, name)`` stands for :func:`parse_text` (the language
+    server's parser, which re-parses only what an edit changed)."""
     loaded: dict[Path, ast.Module | None] = {}
     order: list[ast.Module] = []
-    root = _load_file(path, sources, diags, loaded, order, stack=[], importer=None)
+    root = _load_file(path, sources, diags, loaded, order, stack=[], importer=None, parse=parse)
     if root is None:
         return None
     return LoadedModel(root, order)
@@ -65,7 +67,7 @@ def as_if_read(text: str) -> str:
 
 
 def _load_file(path: Path, sources: SourceCache, diags: Diagnostics,
-               loaded: dict, order: list, stack: list[Path], importer: ast.Import | None):
+               loaded: dict, order: list, stack: list[Path], importer: ast.Import | None, parse=parse_text):
     key = path.resolve()
     if key in stack:
         cycle = " -> ".join(p.name for p in stack[stack.index(key):] + [key])
@@ -98,7 +100,7 @@ def _load_file(path: Path, sources: SourceCache, diags: Diagnostics,
         return None
     sources.add(name, text)
     try:
-        module = parse_text(text, name)
+        module = parse(text, name)
     except ModelError as err:
         for d in err.diagnostics:
             diags.add(d)
@@ -116,7 +118,7 @@ def _load_file(path: Path, sources: SourceCache, diags: Diagnostics,
             target = library_path(imp.target)
         else:
             target = path.parent / imp.target
-        _load_file(target, sources, diags, loaded, order, stack, imp)
+        _load_file(target, sources, diags, loaded, order, stack, imp, parse)
     stack.pop()
     order.append(module)
     return module

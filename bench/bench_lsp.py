@@ -1,0 +1,85 @@
+"""Language server benchmark: diagnostics after an edit (docs/editors.md).
+
+For every example, and for the front-end benchmark's generated model
+(bench_frontend.py, 5,000 actor instances), the file is opened in the
+server's workspace once, then edited inside one declaration; the time is
+that of the server's re-check after the edit (the chunked parser re-parses
+the edited declaration only, the checker runs on the whole model) up to
+the diagnostics it would publish. Goals: 100 ms per example, 1.5 s for the
+5,000-actor model. Run: python bench/bench_lsp.py [out_dir] [actors]
+"""
+
+from __future__ import annotations
+
+import json
+import statistics
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+HERE = Path(__file__).resolve().parent
+ROOT = HERE.parent
+REPEATS = 5
+
+
+def _edit(text: str, n: int) -> str:
+    """A small edit inside the last declaration: a comment changed."""
+    return text.rstrip("\n") + f"  // edit {n}\n"
+
+
+def time_edits(path: Path, text: str, repeats: int = REPEATS) -> dict:
+    """Median and worst seconds from an edit to its diagnostics."""
+    from easylab.lsp.workspace import Workspace
+
+    workspace = Workspace()
+    start = time.perf_counter()
+    first = workspace.open(path, text)
+    opened = time.perf_counter() - start
+    times = []
+    for n in range(repeats):
+        start = time.perf_counter()
+        analysis = workspace.open(path, _edit(text, n))
+        analysis.diagnostics_by_file()
+        times.append(time.perf_counter() - start)
+    errors = len(first.result.diagnostics.sorted())
+    return {"open_s": round(opened, 4), "edit_median_s": round(statistics.median(times), 4),
+            "edit_max_s": round(max(times), 4), "errors": errors}
+
+
+def run(actors: int = 5000) -> dict:
+    sys.path.insert(0, str(HERE))
+    from bench_frontend import generate_model
+    from easylab.frontend.parser import _ast_parser
+
+    _ast_parser()  # grammar tables: built once per process
+    examples = {}
+    for path in sorted((ROOT / "examples").rglob("*.elab")):
+        if not path.name.startswith("."):
+            examples[str(path.relative_to(ROOT))] = time_edits(path, path.read_text(encoding="utf-8"))
+    with tempfile.TemporaryDirectory() as tmp:
+        big = Path(tmp) / "big.elab"
+        text = generate_model(actors)
+        big.write_text(text)
+        generated = time_edits(big, text, repeats=3)
+    generated["actors"] = actors
+    return {"examples": examples, "generated": generated,
+            "worst_example_edit_s": max(e["edit_max_s"] for e in examples.values())}
+
+
+def main(out_dir: Path, tiny: bool = False, actors: int = 5000) -> dict:
+    figures = run(100 if tiny else actors)
+    out_dir.mkdir(parents=True, exist_ok=True)
+    (out_dir / "lsp.json").write_text(json.dumps(figures, indent=2) + "\n")
+    for name, f in figures["examples"].items():
+        print(f"{name}: diagnostics after an edit {f['edit_median_s'] * 1000:.1f} ms "
+              f"(worst {f['edit_max_s'] * 1000:.1f} ms; open {f['open_s'] * 1000:.1f} ms)")
+    g = figures["generated"]
+    print(f"generated model, {g['actors']} actors: open {g['open_s']} s, diagnostics after an edit "
+          f"{g['edit_median_s']} s (worst {g['edit_max_s']} s)")
+    return figures
+
+
+if __name__ == "__main__":
+    main(Path(sys.argv[1] if len(sys.argv) > 1 else "bench/results"),
+         actors=int(sys.argv[2]) if len(sys.argv) > 2 else 5000)

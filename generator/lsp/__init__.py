@@ -1,0 +1,1 @@
+"""The language server (``easylab lsp``, docs/editors.md)."""
