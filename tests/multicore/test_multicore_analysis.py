@@ -206,8 +206,8 @@ def test_an_mcu_node_with_cores_is_refused(tmp_path):
     assert "node 'joint1' (board avr, atmega328p): board 'avr' runs on one core" in proc.stderr
 
 
-FORK = """\
-model fork
+# A counter and a multiplier (COST: its `cost` line, or none), for the models below and others'.
+SRC_AND_WORK = """\
 actor type Src() {
     out y: uint32
     state n: uint32
@@ -219,6 +219,9 @@ actor type Work(m: uint32) {
     COST
     step {{ y = x * m; }}
 }
+"""
+
+FORK = "model fork\n" + SRC_AND_WORK + """\
 actor type Add() {
     in  a: uint32
     in  b: uint32

@@ -15,6 +15,7 @@ from hypothesis import HealthCheck, Phase, given, settings
 from hypothesis import strategies as st
 
 from multicore_testlib import DATA, EXAMPLES, build_cores, run
+from test_multicore_analysis import SRC_AND_WORK
 from test_multicore_traces import DURATIONS
 
 from easylab.cli import main as easylab_main
@@ -143,18 +144,7 @@ def test_run_says_what_runs_on_the_cores(tmp_path, capsys):
     assert "easylab run: dataflow F: on 2 cores (saves" in capsys.readouterr().err
 
 
-TWO_TASKS = """\
-model two_tasks
-actor type Src() {
-    out y: uint32
-    state n: uint32
-    step {{ n = n + 1u; y = n; }}
-}
-actor type Work(m: uint32) {
-    in  x: uint32
-    out y: uint32
-    step {{ y = x * m; }}
-}
+TWO_TASKS = "model two_tasks\n" + SRC_AND_WORK.replace("    COST\n", "") + """\
 var a: uint32
 var b: uint32
 dataflow A {
