@@ -96,7 +96,7 @@ test: setup
 demo: setup
 	$(PY) -m easylab.demo
 
-# The VS Code extension (docs/editors_vscode.md): its npm packages as
+# The VS Code extension (docs/editors.md): its npm packages as
 # package-lock.json pins them (install scripts skipped: none is needed),
 # then vsce packs the grammar, configuration, client and the client's
 # runtime packages.
