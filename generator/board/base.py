@@ -68,6 +68,14 @@ class BoardBase:
         return int(value) if value is not None else None
 
     @property
+    def debug_slots_on_request(self) -> bool:
+        """Whether a debug server gets force and condition slots only where
+        the model asks (``debug ... force N conditions N``, docs/protocol.md):
+        parts with model-sized debug buffers, and boards whose board.toml
+        says `debug_slots_on_request = true`."""
+        return self.model_sized_debug_buffers or bool(self.description.raw.get("debug_slots_on_request", False))
+
+    @property
     def model_sized_debug_buffers(self) -> bool:
         """Whether a debug build sizes the server's frame buffers from the
         model (codegen/debug.py: buffer_sizes) instead of the protocol's

@@ -244,7 +244,7 @@ def produce(program: Program, board, env, view, release: bool) -> dict[str, str]
     items = debug_items(program, view) if enabled else []
     sizes = ""
     small = bool(getattr(board, "model_sized_debug_buffers", False))  # BoardBase's; False for a board without it
-    forces, conditions = debug_slots(program, small)
+    forces, conditions = debug_slots(program, bool(getattr(board, "debug_slots_on_request", small)))
     if enabled and small:
         b = buffer_sizes(program, items, len(view.instance_states), forces, conditions)
         sizes = (f"/* The server's buffers sized from the model (docs/protocol.md: HELLO reports them): */\n"
@@ -292,9 +292,9 @@ def _features(program: Program, items: list[DebugItem]) -> str:
 
 def debug_slots(program: Program, small: bool) -> tuple[int, int]:
     """(forced elements, conditional breakpoints) the server has room for:
-    the debug interface's ``force N`` and ``conditions N``, else none on a
-    part short of RAM (``small``: the model asks for them) and the
-    protocol's most elsewhere."""
+    the debug interface's ``force N`` and ``conditions N``, else none where
+    slots come on request (``small``: a part short of RAM, a board that
+    says so) and the protocol's most elsewhere."""
     k = protocol_constants()
     settings = next((i.settings for i in program.interfaces if i.kind == "debug"), {})
     return (settings.get("force", 0 if small else k.FORCE_MAX),
