@@ -37,6 +37,17 @@ def build(model: Path, out: Path, release: bool = False, cc: str | None = None) 
     return do_build(program, "host", out, release=release, cc=cc).executable
 
 
+def wait_halted(client: DebugClient, timeout: float = 5.0):
+    """The flags of ``client``'s program once it is halted (at most ``timeout`` s)."""
+    deadline = time.monotonic() + timeout
+    while True:
+        f = client.flags()
+        if f.halted:
+            return f
+        assert time.monotonic() < deadline, f"not halted after {timeout} s: {f}"
+        time.sleep(0.005)
+
+
 class Firmware:
     """A host firmware process serving its debug interface on a new pty."""
 
@@ -87,13 +98,7 @@ class Firmware:
         return c
 
     def wait_halted(self, client: DebugClient, timeout: float = 5.0):
-        deadline = time.monotonic() + timeout
-        while True:
-            f = client.flags()
-            if f.halted:
-                return f
-            assert time.monotonic() < deadline, f"not halted after {timeout} s: {f}"
-            time.sleep(0.005)
+        return wait_halted(client, timeout)
 
     def wait_exit(self, timeout: float = 20.0) -> tuple[int, str, str]:
         out, err = self.proc.communicate(timeout=timeout)

@@ -8,24 +8,18 @@ release the proxy's reads come through again."""
 from __future__ import annotations
 
 import csv
-import time
+import sys
+from pathlib import Path
 
 from easylab.host_tools.debug_map import DebugMap
 from easylab.host_tools.debug_protocol import K
 from remote_testlib import EXAMPLES, Proxy, debugged_remote_run, device_columns, proxy_of
 
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "debug"))
+from debug_testlib import wait_halted  # noqa: E402
+
 MODEL = EXAMPLES / "pneumatic_cylinder.elab"
 STIMULUS = EXAMPLES / "pneumatic_cylinder.stimulus.csv"
-
-
-def _wait_halted(client, timeout: float = 30.0):
-    deadline = time.monotonic() + timeout
-    while True:
-        f = client.flags()
-        if f.halted:
-            return f
-        assert time.monotonic() < deadline, f"not halted: {f}"
-        time.sleep(0.01)
 
 
 def _value_at(rows: list[dict], column: str, time_us: int) -> str | None:
@@ -43,14 +37,14 @@ def test_force_and_a_conditional_breakpoint_over_the_proxy(build_cache, tmp_path
     with debugged_remote_run(proxy, MODEL, tmp_path, "--duration", "600ms", "--stimulus", str(STIMULUS)) as run:
         client, maps, trace = run.client, run.maps, run.trace
         client.hello()
-        _wait_halted(client)
+        wait_halted(client, 30.0)
         m = DebugMap.load(maps / "debug_map.json")
         end_out, cycles = m.item("end_out.level"), m.item("cycles")
         assert client.hello_info.force_slots == K.FORCE_MAX
         client.force(end_out.id, "bool", 1)
         slot = client.bp_when(cycles.id, cycles.type, ">=", 1)
         client.run()
-        f = _wait_halted(client)
+        f = wait_halted(client, 30.0)
         # the sensor forced from the start: Extended at 25 ms, `cycles` seen at the next instant
         assert (f.why, f.location.kind, f.breakpoint, f.tick) == ("breakpoint", K.P_CONDITION, slot, 6)
         assert [x.item for x in client.forced()] == [end_out.id]
