@@ -284,6 +284,7 @@ def add_parser(sub) -> None:
 
 
 def cmd_lsp(args) -> int:
+    """`easylab lsp`: serve until the editor closes the connection."""
     if args.log:
         logging.basicConfig(filename=args.log, level=logging.INFO)
     server.start_io()
