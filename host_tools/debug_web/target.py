@@ -18,7 +18,9 @@ A snapshot is read the way the protocol makes it consistent
 - otherwise one ``READ`` per frame (each answered between two task
   activations), marked ``split``.
 
-Then ``GET_FLAGS`` gives the state and the logical time. The refresh
+Then ``GET_FLAGS`` gives the state and the logical time; when the program
+halted after the values were taken, they are read again (plain reads), so
+a halted snapshot always holds the halted state. The refresh
 period adapts to the link: never shorter than the time the last refresh
 took (so commands always find the link free between two refreshes) nor
 than ``min_period``; without a page asking for snapshots nothing is polled.
@@ -387,6 +389,11 @@ class TargetLink(LinkOwner):
         elif items:
             values, consistency = decode_items_read(client, items), "split"
         flags = client.flags()  # the state after the reads, and their logical time
+        if items and flags.halted and consistency != "halted":
+            # It halted after the values were taken: read them again, so a
+            # halted snapshot always shows the halted state (nothing runs now).
+            values, consistency = decode_items_read(client, items), "halted"
+            flags = client.flags()
         if consistency == "halted" and not flags.halted:
             consistency = "split"  # it ran on meanwhile: plain reads, not one instant
         m = self.map

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import random
 import sys
+import time
 
 import pytest
 
@@ -152,3 +153,44 @@ def test_the_guards_hold_where_the_firmware_takes_their_transitions(builds, firm
     client.halt()
     fw.wait_halted(client)
     assert "transition:Cylinder.1" not in poller.read_snapshot(client, items[:1]).guards
+
+
+class _HaltsBeforeTheFlags:
+    """The firmware's own client, except that the first GET_FLAGS after the
+    reads comes only once the program has run on a few instants and halted:
+    the race of a breakpoint reached between a refresh's reads and its
+    flags, made certain."""
+
+    def __init__(self, client, wait_halted):
+        self._client, self._wait_halted, self.raced = client, wait_halted, False
+
+    def __getattr__(self, name):
+        return getattr(self._client, name)
+
+    def flags(self):
+        if not self.raced:
+            self.raced = True
+            time.sleep(0.08)  # eight 10 ms instants run on after the reads
+            self._client.halt()
+            self._wait_halted(self._client)
+        return self._client.flags()
+
+
+@pytest.mark.parametrize("fits", [True, False])
+def test_a_program_that_halts_after_the_reads_gives_the_halted_values(fits, many_vars, firmware):
+    fw = firmware(many_vars, halt=True)
+    client = fw.client()
+    dmap = DebugMap.load(fw.map_path)
+    poller = TargetLink(dmap, str(fw.link))
+    counting = dmap.by_name["v0"]
+    items = [counting] + ([] if fits else [it for it in dmap.items if it is not counting])
+    assert fits_one_transaction(client, items) == fits
+    client.run()
+    deadline = time.monotonic() + 5
+    while client.read([(counting.id, counting.type, 1)])[0] <= 3:  # v0 counting
+        assert time.monotonic() < deadline, "v0 does not count"
+        time.sleep(0.01)
+    racing = _HaltsBeforeTheFlags(client, fw.wait_halted)
+    snap = poller.read_snapshot(racing, items, halted=False)
+    assert racing.raced and snap.halted and snap.consistency == "halted", snap
+    assert snap.values == poller.read_snapshot(client, items).values  # the state it halted in, not before
