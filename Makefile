@@ -38,7 +38,6 @@ help:
 	@echo "             mutated examples through the checker, the accepted ones through a host build"
 	@echo "make fuzz [FUZZ_RUNS=10000000]"
 	@echo "             every libFuzzer target to FUZZ_RUNS executions, figures in build/fuzz/figures.md"
-	@echo "             mutated examples through the checker, the accepted ones through a host build"
 	@echo "make flash BOARD=avr MODEL=m.elab PORT=/dev/ttyACM0 [MCU=..] [PROGRAMMER=..] [BUILD_FLAGS=--release]"
 	@echo "             build and burn with the board's programmer (\`make -n flash ...\` shows the commands;"
 	@echo "             BOARD=pic18: a PICkit on USB, PORT=usb)"

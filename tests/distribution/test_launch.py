@@ -215,6 +215,7 @@ def test_a_killed_slaves_faults_are_on_the_masters_debug_interface(tmp_path):
         assert seen["link.joint1.unanswered"] == 0 and seen["link.position1.tardy"] == 0
         client.close()
         client = None
+        _the_online_page_reads_them(tmp_path / "build" / "robot" / "planner" / "debug_map.json", port, dmap, seen)
         # easylab-debug lists them with the other items (read-only, kind status) and reads them by name
         console = subprocess.run([sys.executable, "-m", "easylab.host_tools.debug_console", f"socket://127.0.0.1:{port}",
                                   "--map", str(tmp_path / "build" / "robot" / "planner" / "debug_map.json"),
@@ -241,6 +242,29 @@ def test_a_killed_slaves_faults_are_on_the_masters_debug_interface(tmp_path):
     assert len(joint1) > 3 and joint1 == projected(expected, columns)[:len(joint1)]  # up to the planner's stop
     planner = rows(tmp_path / "traces" / "planner.csv")
     assert planner[1:] != projected(expected, planner[0])[:len(planner) - 1]  # it kept joint2's last position
+
+
+def _the_online_page_reads_them(map_path: Path, port: int, dmap, seen: dict[str, int]) -> None:
+    """`easylab-debug web` against the launched master: its page's model is
+    the robot's drawing, and its snapshots carry the status items (polled
+    with whatever the page shows) counting joint2's silence."""
+    sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "debug_web"))
+    from onlinelib import OnlineServer, wait_for
+
+    server = OnlineServer(map_path, f"tcp:127.0.0.1:{port}", model=None).start()
+    try:
+        model = server.model()
+        assert any(el.startswith("step:") or el.startswith("actor:") for el in model["elements"]), model["elements"]
+        unanswered = str(dmap.item("link.joint2.unanswered").id)
+
+        def counted():
+            snaps = server.state()["snapshots"]
+            return snaps and unanswered in snaps[-1]["values"] and snaps[-1]["values"][unanswered]
+
+        assert wait_for(counted, 60, "the planner's status items on the page") >= seen["link.joint2.unanswered"]
+        assert not server.state()["snapshots"][-1]["halted"]
+    finally:
+        server.stop()
 
 
 def test_a_model_without_nodes_is_not_launched(tmp_path):
