@@ -86,6 +86,12 @@ $(VENV)/.installed: pyproject.toml setup.py
 # `python tests/durations.py LOG` from a run's --durations report).
 TEST_JOBS ?= auto
 
+# The suite starts thousands of Python processes: keep their bytecode (in
+# build/pycache) even where the environment says not to write it, or each
+# process compiles every module it imports again.
+test bench: export PYTHONDONTWRITEBYTECODE =
+test bench: export PYTHONPYCACHEPREFIX = $(CURDIR)/build/pycache
+
 # Tests marked `realtime` (a host answering a simulated board's deadlines
 # against the wall clock) run alone afterwards: parallel tests would starve them.
 test: setup

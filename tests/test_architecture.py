@@ -159,3 +159,22 @@ def test_the_architecture_document_shows_every_stage():
         folder = PACKAGE / name
         shown = f"generator/{name}/" if folder.is_dir() else f"generator/{name}.py"
         assert shown in text, f"docs/architecture.md does not show {shown}"
+
+
+def test_commands_start_without_the_packages_of_other_commands():
+    """`easylab check` and `easylab build` import neither the language
+    server's packages nor the web servers' (each costs a fresh process
+    most of a second; the suite starts thousands)."""
+    import subprocess
+    import sys
+
+    heavy = ("pygls", "lsprotocol", "aiohttp", "selenium", "easylab.lsp")
+    probe = ("import sys, contextlib, io\n"
+             "from easylab.cli import main\n"
+             "with contextlib.redirect_stdout(io.StringIO()):\n"
+             "    main(sys.argv[1:])\n"
+             f"print(sorted(m for m in sys.modules if m.split('.')[0] in {heavy!r} or m.startswith('easylab.lsp')))\n")
+    for args in (["check", str(ROOT / "examples" / "blink.elab")], ["boards"]):
+        proc = subprocess.run([sys.executable, "-c", probe, *args], capture_output=True, text=True, timeout=120)
+        assert proc.returncode == 0, proc.stderr
+        assert proc.stdout.strip().splitlines()[-1] == "[]", (args, proc.stdout)

@@ -102,7 +102,7 @@ def build_parser() -> argparse.ArgumentParser:
     add_launch_parser(sub)
     from .remote_commands import add_parsers as add_remote_parsers
     add_remote_parsers(sub)
-    from ..lsp.server import add_parser as add_lsp_parser
+    from .lsp_command import add_parser as add_lsp_parser
     add_lsp_parser(sub)
     return parser
 

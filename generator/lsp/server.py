@@ -272,20 +272,10 @@ def formatting(ls: ElabServer, params: lsp.DocumentFormattingParams) -> list[lsp
     return [lsp.TextEdit(lsp.Range(lsp.Position(0, 0), end), formatted)]
 
 
-def add_parser(sub) -> None:
-    """Add the ``lsp`` subcommand to the ``easylab`` command line."""
-    p = sub.add_parser("lsp", help="the language server, for editors (over standard input and output)",
-                       description="Serve the Language Server Protocol over standard input and output: "
-                                   "diagnostics as you type, hover, go to definition, references, rename, "
-                                   "symbols, completion, quick fixes and formatting for .elab files "
-                                   "(docs/editors.md).")
-    p.add_argument("--log", metavar="FILE", help="write the server's log to FILE")
-    p.set_defaults(func=cmd_lsp)
-
-
-def cmd_lsp(args) -> int:
-    """`easylab lsp`: serve until the editor closes the connection."""
-    if args.log:
-        logging.basicConfig(filename=args.log, level=logging.INFO)
+def serve(log: str | None = None) -> int:
+    """Serve over standard input and output until the editor closes the
+    connection; `log`: a file for the server's log."""
+    if log:
+        logging.basicConfig(filename=log, level=logging.INFO)
     server.start_io()
     return 0
