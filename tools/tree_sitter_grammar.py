@@ -1,0 +1,711 @@
+#!/usr/bin/env python3
+"""Writes editors/tree-sitter-elab/, the tree-sitter grammar of .elab files,
+from the model language's own grammar (generator/frontend/elab.lark):
+
+- ``grammar.js``: the grammar in tree-sitter's DSL, for the tree-sitter CLI
+  (``tree-sitter generate`` makes an equivalent parser from it);
+- ``src/parser.c``: the parser itself, in the C form the CLI writes (ABI
+  14), made here without the CLI from lark's own LALR(1) tables and a DFA
+  lexer built from the terminals' regular expressions;
+- ``queries/highlights.scm``, ``package.json``, ``tree-sitter.json``.
+
+    python tools/tree_sitter_grammar.py          # write the files
+    python tools/tree_sitter_grammar.py --check  # exit 1 if one is out of date
+
+How the tree follows lark's: one node per rule; a ``_rule``, a ``?rule``
+with one child and lark's own helper rules (``__x_star_0``) are inlined; an
+alias (``-> binary``) names its node. Keywords are contextual as in the
+front end: the lexer reads a word as ``name`` and tree-sitter's keyword
+extraction makes it the keyword only where the parse state has an action
+for it (what lark's contextual lexer and ``keyword_as_name`` do). Inline C
+(``{{ ... }}``) is one token that ends at the balancing ``}}``, up to
+C_CODE_DEPTH nested braces (a regular language cannot count further).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import re
+import sys
+from collections import deque
+from dataclasses import dataclass, field
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+OUTPUT = ROOT / "editors" / "tree-sitter-elab"
+VERSION = "0.1.0"
+
+# Deepest brace nesting inside one inline C block that the tree-sitter lexer
+# follows (the front end follows any depth).
+C_CODE_DEPTH = 8
+MAX_CHAR = 0x10FFFF
+# The terminals lark skips between tokens: WS is skipped by the lexer, the
+# comments are tree-sitter "extras" (nodes that may stand anywhere).
+WHITESPACE = "WS"
+COMMENTS = ("COMMENT", "BLOCK_COMMENT")
+WORD_TERMINAL = "NAME"
+END = "$END"
+ROOT_RULE = "source_file"
+
+
+def _word_re() -> re.Pattern:
+    return re.compile(r"[A-Za-z_][A-Za-z0-9_]*")
+
+
+def _c_code_regex(depth: int = C_CODE_DEPTH) -> str:
+    """``{{ ... }}`` up to the balancing ``}}``: the text between the outer
+    braces is balanced, starts with ``{`` and ends with ``}``, as
+    inline_c.blank_inline_c reads it (braces in C strings count too)."""
+    balanced = "[^{}]*"
+    for _ in range(depth - 2):
+        balanced = rf"(?:[^{{}}]|\{{{balanced}\}})*"
+    group = rf"\{{{balanced}\}}"
+    return rf"\{{{group}(?:[^{{}}]*{group})*\}}"
+
+
+# ---------------------------------------------------------------------------
+# The grammar: lark's rules, reshaped so that every node tree-sitter makes is
+# the one lark's tree builder makes.
+
+
+@dataclass
+class Symbol:
+    """One tree-sitter symbol: a terminal or a nonterminal."""
+    key: str            # lark's name, or a made-up one for a synthetic rule
+    name: str           # the node's type as tree-sitter shows it
+    terminal: bool
+    visible: bool
+    named: bool
+    index: int = 0
+
+
+@dataclass
+class Grammar:
+    symbols: list[Symbol]
+    by_key: dict[str, Symbol]
+    rules: list             # lark Rule objects over the reshaped symbols
+    terminals: dict          # lark TerminalDef by name
+    keywords: dict[str, str]  # word keyword's spelling -> its terminal
+    lark: object
+
+
+def _lark():
+    import lark
+
+    from easylab.frontend.grammar import grammar_text
+
+    return lark.Lark(grammar_text(), parser="lalr", lexer="contextual", keep_all_tokens=True,
+                     maybe_placeholders=False)
+
+
+def _node_of(rule, origin_visible: bool) -> str | None:
+    """The node a lark rule makes when it reduces, or None where lark
+    inlines it (docs/language.md's tree; lark's ChildFilter/ExpandSingleChild)."""
+    if rule.alias:
+        return rule.alias
+    if rule.origin.name.startswith("_"):
+        return None
+    if rule.options.expand1 and len(rule.expansion) == 1:
+        return None
+    return rule.origin.name
+
+
+def build_grammar() -> Grammar:
+    """lark's rules and terminals as tree-sitter symbols (tokens first)."""
+    from lark.grammar import NonTerminal, Rule, Terminal
+
+    parser = _lark()
+    terminals = {t.name: t for t in parser.terminals}
+    word = _word_re()
+    keywords = {t.pattern.value: t.name for t in parser.terminals
+                if t.pattern.type == "str" and word.fullmatch(t.pattern.value)}
+
+    by_origin: dict[str, list] = {}
+    for rule in parser.rules:
+        by_origin.setdefault(rule.origin.name, []).append(rule)
+    # An origin is a node of its own only if every rule of it makes its node.
+    plain = {o for o, rules in by_origin.items() if all(_node_of(r, True) == o for r in rules)}
+
+    rules, synthetic = [], []
+    for origin, origin_rules in by_origin.items():
+        for number, rule in enumerate(origin_rules):
+            node = _node_of(rule, origin in plain)
+            if origin in plain or node is None:
+                rules.append(Rule(rule.origin, rule.expansion, order=len(rules)))
+                continue
+            wrapper = NonTerminal(f"{origin}__{number}")
+            synthetic.append((wrapper.name, node))
+            rules.append(Rule(rule.origin, [wrapper], order=len(rules)))
+            rules.append(Rule(wrapper, rule.expansion, order=len(rules)))
+
+    used = {s.name for r in rules for s in r.expansion if isinstance(s, Terminal)}
+    token_names = [n for n in terminals if n in used or n in COMMENTS]
+    symbols = [Symbol(END, "end", True, False, True)]
+    for name in token_names:
+        pattern = terminals[name].pattern
+        if pattern.type == "str":
+            symbols.append(Symbol(name, pattern.value, True, True, False))
+        else:
+            display = "comment" if name in COMMENTS else name.lower()
+            symbols.append(Symbol(name, display, True, True, True))
+    for origin in by_origin:
+        if origin in plain:
+            display = ROOT_RULE if origin == "start" else origin
+            symbols.append(Symbol(origin, display, False, True, True))
+        else:
+            symbols.append(Symbol(origin, origin, False, False, not origin.startswith("__")))
+    for key, node in synthetic:
+        symbols.append(Symbol(key, node, False, True, True))
+    for index, symbol in enumerate(symbols):
+        symbol.index = index
+    by_key = {s.key: s for s in symbols}
+    clash = {s.name for s in symbols if s.named and s.visible and s.terminal} & \
+            {s.name for s in symbols if s.visible and not s.terminal}
+    assert not clash, f"a token and a rule would have the same node type: {clash}"
+    return Grammar(symbols, by_key, rules, terminals, keywords, parser)
+
+
+# ---------------------------------------------------------------------------
+# The parse table: lark's LALR(1) analysis of the reshaped rules.
+
+
+@dataclass
+class Table:
+    states: list[dict]       # tree-sitter state -> {symbol key: action}; state 0 is the error state
+    accept_state: int
+
+
+def build_table(grammar: Grammar) -> Table:
+    """LALR(1) states numbered breadth-first from the start state (lark's
+    own numbering follows set iteration order, which varies by run)."""
+    from lark.common import ParserConf
+    from lark.parsers.lalr_analysis import IntParseTable, LALR_Analyzer, Shift
+
+    analyzer = LALR_Analyzer(ParserConf(grammar.rules, {}, ["start"]))
+    analyzer.compute_lalr()
+    table = IntParseTable.from_ParseTable(analyzer.parse_table)
+    start, end = table.start_states["start"], table.end_states["start"]
+    number = {start: 1}
+    queue = deque([start])
+    while queue:
+        state = queue.popleft()
+        for key in sorted(table.states[state]):
+            kind, arg = table.states[state][key]
+            if kind is Shift and arg not in number:
+                number[arg] = len(number) + 1
+                queue.append(arg)
+    states: list[dict] = [dict() for _ in range(len(number) + 1)]
+    for lark_state, ts_state in number.items():
+        states[ts_state] = {key: (("shift", number[arg]) if kind is Shift else ("reduce", arg))
+                            for key, (kind, arg) in table.states[lark_state].items()}
+    states[number[end]][END] = ("accept", None)
+    return Table(states, number[end])
+
+
+# ---------------------------------------------------------------------------
+# The lexer: each terminal's regular expression as an NFA, the NFAs of the
+# terminals a parse state accepts as one DFA (longest match, then the
+# terminal lark prefers).
+
+
+class Nfa:
+    """A Thompson NFA over code point ranges."""
+
+    def __init__(self):
+        self.eps: list[list[int]] = []
+        self.edges: list[list[tuple[tuple[tuple[int, int], ...], int]]] = []
+        self.owner: list[str | None] = []
+
+    def state(self, owner: str) -> int:
+        self.eps.append([])
+        self.edges.append([])
+        self.owner.append(owner)
+        return len(self.eps) - 1
+
+
+def _ranges_of_set(items, negate: bool) -> list[tuple[int, int]]:
+    from re import _constants as c
+
+    ranges = []
+    for op, arg in items:
+        if op is c.LITERAL:
+            ranges.append((arg, arg))
+        elif op is c.RANGE:
+            ranges.append(arg)
+        elif op is c.CATEGORY and arg is c.CATEGORY_DIGIT:
+            ranges.append((48, 57))
+        else:
+            raise ValueError(f"unsupported character set item {op} {arg}")
+    ranges = _normalise(ranges)
+    return _complement(ranges) if negate else ranges
+
+
+def _normalise(ranges) -> list[tuple[int, int]]:
+    out: list[list[int]] = []
+    for lo, hi in sorted(ranges):
+        if out and lo <= out[-1][1] + 1:
+            out[-1][1] = max(out[-1][1], hi)
+        else:
+            out.append([lo, hi])
+    return [(lo, hi) for lo, hi in out]
+
+
+def _complement(ranges) -> list[tuple[int, int]]:
+    # Code point 0 is the lexer's end of input: no token goes on over it.
+    out, low = [], 1
+    for lo, hi in ranges:
+        if lo > low:
+            out.append((low, lo - 1))
+        low = max(low, hi + 1)
+    if low <= MAX_CHAR:
+        out.append((low, MAX_CHAR))
+    return out
+
+
+def _add_regex(nfa: Nfa, owner: str, pattern: str, flags: int = 0) -> tuple[int, int, bool]:
+    """The NFA of ``pattern``: (start, accept, lazy). ``lazy`` says the
+    pattern has a non-greedy repeat: it then matches the shortest text."""
+    from re import _constants as c
+    from re import _parser
+
+    lazy = False
+
+    def piece(items) -> tuple[int, int]:
+        start = nfa.state(owner)
+        end = start
+        for op, arg in items:
+            s, e = node(op, arg)
+            nfa.eps[end].append(s)
+            end = e
+        return start, end
+
+    def chars(ranges) -> tuple[int, int]:
+        s, e = nfa.state(owner), nfa.state(owner)
+        nfa.edges[s].append((tuple(ranges), e))
+        return s, e
+
+    def node(op, arg) -> tuple[int, int]:
+        nonlocal lazy
+        if op is c.LITERAL:
+            return chars([(arg, arg)])
+        if op is c.NOT_LITERAL:
+            return chars(_complement([(arg, arg)]))
+        if op is c.ANY:
+            return chars(_complement([(10, 10)]))
+        if op is c.IN:
+            negate = bool(arg) and arg[0][0] is c.NEGATE
+            return chars(_ranges_of_set(arg[1:] if negate else arg, negate))
+        if op is c.SUBPATTERN:
+            return piece(arg[3])
+        if op is c.BRANCH:
+            s, e = nfa.state(owner), nfa.state(owner)
+            for alternative in arg[1]:
+                a, b = piece(alternative)
+                nfa.eps[s].append(a)
+                nfa.eps[b].append(e)
+            return s, e
+        if op in (c.MAX_REPEAT, c.MIN_REPEAT):
+            lazy = lazy or op is c.MIN_REPEAT
+            low, high, sub = arg
+            s = nfa.state(owner)
+            end = s
+            for _ in range(low):
+                a, b = piece(sub)
+                nfa.eps[end].append(a)
+                end = b
+            if high is c.MAXREPEAT:
+                a, b = piece(sub)
+                loop = nfa.state(owner)
+                nfa.eps[end].append(loop)
+                nfa.eps[loop].append(a)
+                nfa.eps[b].append(loop)
+                end = loop
+            else:
+                tail = nfa.state(owner)
+                for _ in range(high - low):
+                    a, b = piece(sub)
+                    nfa.eps[end].append(a)
+                    nfa.eps[end].append(tail)
+                    end = b
+                nfa.eps[end].append(tail)
+                end = tail
+            return s, end
+        raise ValueError(f"unsupported regular expression part {op} in {pattern!r}")
+
+    start, accept = piece(_parser.parse(pattern, flags))
+    return start, accept, lazy
+
+
+@dataclass
+class LexState:
+    accept: str | None = None                      # terminal key accepted here
+    moves: list[tuple[list[tuple[int, int]], int, bool]] = field(default_factory=list)  # ranges, target, skip
+    eof_to: int | None = None
+
+
+class LexerBuilder:
+    """DFA states for several start sets over one NFA, shared where equal."""
+
+    def __init__(self, patterns: dict[str, tuple[str, int]], rank: dict[str, tuple]):
+        self.nfa = Nfa()
+        self.start: dict[str, int] = {}
+        self.accept: dict[int, str] = {}
+        self.lazy: set[str] = set()
+        self.rank = rank
+        for key, (pattern, flags) in patterns.items():
+            s, a, lazy = _add_regex(self.nfa, key, pattern, flags)
+            self.start[key], self.accept[a] = s, key
+            if lazy:
+                self.lazy.add(key)
+        self.states: list[LexState] = []
+        self.ids: dict[tuple, int] = {}
+        self.pending: deque = deque()
+
+    def _closure(self, states) -> frozenset:
+        stack = list(states)
+        seen = set(stack)
+        while stack:
+            for t in self.nfa.eps[stack.pop()]:
+                if t not in seen:
+                    seen.add(t)
+                    stack.append(t)
+        done = {self.accept[s] for s in seen if s in self.accept and self.accept[s] in self.lazy}
+        if done:  # a non-greedy terminal stops at its first match
+            seen = {s for s in seen if self.nfa.owner[s] not in done or s in self.accept}
+        return frozenset(seen)
+
+    def _state(self, key: tuple, nfa_states: frozenset) -> int:
+        if key not in self.ids:
+            self.ids[key] = len(self.states)
+            self.states.append(LexState())
+            self.pending.append((self.ids[key], nfa_states))
+        return self.ids[key]
+
+    def add_mode(self, terminals, skip: list[tuple[int, int]], eof_state: int | None) -> int:
+        """The start state of a lexer for ``terminals`` that skips ``skip``
+        characters before a token and accepts the end of input where
+        ``eof_state`` is given."""
+        nfa_states = self._closure(self.start[t] for t in sorted(terminals))
+        first = self._state(("start", nfa_states, tuple(skip), eof_state), nfa_states)
+        self._run()
+        state = self.states[first]
+        if skip and not any(target == first and is_skip for _, target, is_skip in state.moves):
+            state.moves.append((skip, first, True))
+        state.eof_to = eof_state
+        return first
+
+    def add_accepting(self, terminal: str) -> int:
+        """A state that only accepts ``terminal`` (the end of input)."""
+        index = self._state(("accept", terminal), frozenset())
+        self._run()
+        self.states[index].accept = terminal
+        return index
+
+    def _run(self):
+        while self.pending:
+            index, nfa_states = self.pending.popleft()
+            accepted = [self.accept[s] for s in nfa_states if s in self.accept]
+            state = self.states[index]
+            if accepted:
+                state.accept = min(accepted, key=self.rank.__getitem__)
+            bounds = set()
+            for s in nfa_states:
+                for ranges, _ in self.nfa.edges[s]:
+                    for lo, hi in ranges:
+                        bounds.add(lo)
+                        bounds.add(hi + 1)
+            cuts = sorted(bounds)
+            targets: dict[frozenset, list[tuple[int, int]]] = {}
+            for lo, nxt in zip(cuts, cuts[1:]):
+                moved = {t for s in nfa_states for ranges, t in self.nfa.edges[s]
+                         if any(a <= lo <= b for a, b in ranges)}
+                if moved:
+                    targets.setdefault(self._closure(moved), []).append((lo, nxt - 1))
+            for nfa_target, ranges in targets.items():
+                target = self._state(("set", nfa_target), nfa_target)
+                state.moves.append((_normalise(ranges), target, False))
+            state.moves.sort(key=lambda m: m[0][0])
+
+
+# ---------------------------------------------------------------------------
+# parser.c
+
+
+def _c_identifier(symbol: Symbol) -> str:
+    if symbol.key == END:
+        return "ts_builtin_sym_end"
+    prefix = "anon_sym" if symbol.terminal and not symbol.named else "sym" if symbol.visible else "aux_sym"
+    return f"{prefix}_{re.sub(r'[^A-Za-z0-9_]', '_', symbol.key)}"
+
+
+def _c_string(text: str) -> str:
+    return '"' + text.replace("\\", "\\\\").replace('"', '\\"').replace("\n", "\\n") + '"'
+
+
+def _c_char(code: int) -> str:
+    if 32 <= code < 127 and chr(code) not in "'\\":
+        return f"'{chr(code)}'"
+    return {39: "'\\''", 92: "'\\\\'", 9: "'\\t'", 10: "'\\n'", 13: "'\\r'"}.get(code, hex(code))
+
+
+def _c_condition(ranges) -> str:
+    parts = []
+    for lo, hi in ranges:
+        if lo == hi:
+            parts.append(f"lookahead == {_c_char(lo)}")
+        elif hi == MAX_CHAR:
+            parts.append(f"lookahead >= {_c_char(lo)}")
+        else:
+            parts.append(f"({_c_char(lo)} <= lookahead && lookahead <= {_c_char(hi)})")
+    return " ||\n          ".join(parts)
+
+
+def _c_lex_function(name: str, states: list[LexState], ids: dict[str, str]) -> list[str]:
+    lines = [f"static bool {name}(TSLexer *lexer, TSStateId state) {{", "  START_LEXER();",
+             "  eof = lexer->eof(lexer);", "  switch (state) {"]
+    for index, state in enumerate(states):
+        lines.append(f"    case {index}:")
+        if state.eof_to is not None:
+            lines.append(f"      if (eof) ADVANCE({state.eof_to});")
+        if state.accept is not None:
+            lines.append(f"      ACCEPT_TOKEN({ids[state.accept]});")
+        for ranges, target, skip in state.moves:
+            lines.append(f"      if ({_c_condition(ranges)}) {'SKIP' if skip else 'ADVANCE'}({target});")
+        lines.append("      END_STATE();")
+    lines += ["    default:", "      return false;", "  }", "}", ""]
+    return lines
+
+
+def _lexers(grammar: Grammar, table: Table):
+    """The main lexer (its states and each parse state's start state) and
+    the keyword lexer."""
+    word_keywords = set(grammar.keywords.values())
+    tokens = [s for s in grammar.symbols if s.terminal and s.key != END]
+    patterns = {}
+    for s in tokens:
+        if s.key in word_keywords:
+            continue
+        pattern = grammar.terminals[s.key].pattern
+        if s.key == "C_CODE":
+            patterns[s.key] = (_c_code_regex(), 0)
+        else:
+            patterns[s.key] = (pattern.to_regexp(), 0)
+    # Ties go as lark's lexer sends them: higher priority, then a string
+    # before a pattern, then the longer pattern.
+    rank = {s.key: (-grammar.terminals[s.key].priority, grammar.terminals[s.key].pattern.type != "str",
+                    -len(grammar.terminals[s.key].pattern.value), s.index) for s in tokens}
+    skip = _ranges_of_whitespace(grammar)
+    main = LexerBuilder(patterns, rank)
+    end_state = main.add_accepting(END)
+    modes: dict[frozenset, int] = {}
+    lex_mode = []
+    all_tokens = frozenset(patterns)
+    for number, actions in enumerate(table.states):
+        if number == 0:
+            wanted = all_tokens
+            has_end = True
+        else:
+            wanted = {k for k in actions if k in grammar.by_key and grammar.by_key[k].terminal and k != END}
+            has_end = END in actions
+            if wanted & word_keywords:
+                wanted = (wanted - word_keywords) | {WORD_TERMINAL}
+            wanted = frozenset(wanted | set(COMMENTS))
+        key = (wanted, has_end)
+        if key not in modes:
+            modes[key] = main.add_mode(wanted, skip, end_state if has_end else None)
+        lex_mode.append(modes[key])
+    keyword_lexer = LexerBuilder({t: (re.escape(w), 0) for w, t in grammar.keywords.items()}, rank)
+    keyword_lexer.add_mode(sorted(grammar.keywords.values()), [], None)
+    return main.states, lex_mode, keyword_lexer.states
+
+
+def _ranges_of_whitespace(grammar: Grammar) -> list[tuple[int, int]]:
+    """The characters of the skipped terminal (a repeat of a character set)."""
+    nfa = Nfa()
+    _add_regex(nfa, WHITESPACE, grammar.terminals[WHITESPACE].pattern.to_regexp())
+    return _normalise(r for edges in nfa.edges for ranges, _ in edges for r in ranges)
+
+
+def render_parser_c(grammar: Grammar, table: Table) -> str:
+    """src/parser.c in the layout the tree-sitter CLI writes for ABI 14."""
+    ids = {s.key: _c_identifier(s) for s in grammar.symbols}
+    symbols = grammar.symbols
+    token_count = sum(1 for s in symbols if s.terminal)
+    public = {}
+    for s in symbols:
+        public.setdefault((s.name, s.visible, s.named, s.terminal), s)
+    lex_states, lex_mode, keyword_states = _lexers(grammar, table)
+
+    # The actions: one list per distinct (state, token) action, shared.
+    actions_index: dict[tuple, int] = {(): 0}
+    actions_lines = ["  [0] = {.entry = {.count = 0, .reusable = false}},"]
+    next_index = 1
+
+    def action_id(items: tuple[str, ...]) -> int:
+        nonlocal next_index
+        if items not in actions_index:
+            actions_index[items] = next_index
+            actions_lines.append(f"  [{next_index}] = {{.entry = {{.count = {len(items)}, .reusable = false}}}}, "
+                                 + ", ".join(items) + ",")
+            next_index += 1 + len(items)
+        return actions_index[items]
+
+    recover = action_id(("RECOVER()",))
+    extra = action_id(("SHIFT_EXTRA()",))
+    rows: list[dict[int, int]] = []
+    for number, actions in enumerate(table.states):
+        row: dict[int, int] = {}
+        if number == 0:
+            for s in symbols:
+                if s.terminal:
+                    row[s.index] = recover
+        for key, (kind, arg) in sorted(actions.items(), key=lambda kv: grammar.by_key[kv[0]].index):
+            symbol = grammar.by_key[key]
+            if not symbol.terminal:
+                row[symbol.index] = arg  # a goto
+            elif kind == "shift":
+                row[symbol.index] = action_id((f"SHIFT({arg})",))
+            elif kind == "reduce":
+                origin = grammar.by_key[arg.origin.name]
+                row[symbol.index] = action_id((f"REDUCE({ids[origin.key]}, {len(arg.expansion)}, 0, 0)",))
+            else:
+                row[symbol.index] = action_id(("ACCEPT_INPUT()",))
+        for key in COMMENTS:
+            row[grammar.by_key[key].index] = extra
+        rows.append(row)
+
+    large = 2
+    max_length = max((len(r.expansion) for r in grammar.rules), default=1)
+    out = [
+        "// Written by tools/tree_sitter_grammar.py from generator/frontend/elab.lark: edit that, not this.",
+        '#include "tree_sitter/parser.h"', "",
+        "#if defined(__GNUC__) || defined(__clang__)",
+        '#pragma GCC diagnostic ignored "-Wmissing-field-initializers"',
+        "#endif", "",
+        "#define LANGUAGE_VERSION 14",
+        f"#define STATE_COUNT {len(table.states)}",
+        f"#define LARGE_STATE_COUNT {large}",
+        f"#define SYMBOL_COUNT {len(symbols)}",
+        "#define ALIAS_COUNT 0",
+        f"#define TOKEN_COUNT {token_count}",
+        "#define EXTERNAL_TOKEN_COUNT 0",
+        "#define FIELD_COUNT 0",
+        f"#define MAX_ALIAS_SEQUENCE_LENGTH {max_length}",
+        "#define PRODUCTION_ID_COUNT 1", "",
+        "enum ts_symbol_identifiers {",
+    ]
+    out += [f"  {ids[s.key]} = {s.index}," for s in symbols[1:]]
+    out += ["};", "", "static const char * const ts_symbol_names[] = {"]
+    out += [f"  [{ids[s.key]}] = {_c_string(s.name)}," for s in symbols]
+    out += ["};", "", "static const TSSymbol ts_symbol_map[] = {"]
+    out += [f"  [{ids[s.key]}] = {ids[public[(s.name, s.visible, s.named, s.terminal)].key]}," for s in symbols]
+    out += ["};", "", "static const TSSymbolMetadata ts_symbol_metadata[] = {"]
+    for s in symbols:
+        out += [f"  [{ids[s.key]}] = {{", f"    .visible = {str(s.visible).lower()},",
+                f"    .named = {str(s.named).lower()},", "  },"]
+    out += ["};", "",
+            "static const char * const ts_field_names[] = {", "  [0] = NULL,", "};", "",
+            "static const TSFieldMapSlice ts_field_map_slices[PRODUCTION_ID_COUNT] = {", "  [0] = {0},", "};", "",
+            "static const TSFieldMapEntry ts_field_map_entries[] = {", "  [0] = {0},", "};", "",
+            "static const TSSymbol ts_alias_sequences[PRODUCTION_ID_COUNT][MAX_ALIAS_SEQUENCE_LENGTH] = {",
+            "  [0] = {0},", "};", "",
+            "static const uint16_t ts_non_terminal_alias_map[] = {", "  0,", "};", "",
+            "static const TSStateId ts_primary_state_ids[STATE_COUNT] = {"]
+    out += [f"  [{n}] = {n}," for n in range(len(table.states))]
+    out += ["};", ""]
+    out += _c_lex_function("ts_lex", lex_states, ids)
+    out += _c_lex_function("ts_lex_keywords", keyword_states, ids)
+    out += ["static const TSLexMode ts_lex_modes[STATE_COUNT] = {"]
+    out += [f"  [{n}] = {{.lex_state = {m}}}," for n, m in enumerate(lex_mode)]
+    out += ["};", "", "static const uint16_t ts_parse_table[LARGE_STATE_COUNT][SYMBOL_COUNT] = {"]
+    for n in range(large):
+        out.append(f"  [{n}] = {{")
+        for index, value in sorted(rows[n].items()):
+            macro = "ACTIONS" if symbols[index].terminal else "STATE"
+            out.append(f"    [{ids[symbols[index].key]}] = {macro}({value}),")
+        out.append("  },")
+    out += ["};", "", "static const uint16_t ts_small_parse_table[] = {"]
+    offsets, offset = [], 0
+    for n in range(large, len(rows)):
+        groups: dict[tuple[bool, int], list[int]] = {}
+        for index, value in sorted(rows[n].items()):
+            groups.setdefault((symbols[index].terminal, value), []).append(index)
+        offsets.append(offset)
+        out.append(f"  [{offset}] = {len(groups)},")
+        offset += 1
+        for (terminal, value), members in sorted(groups.items(), key=lambda g: (len(g[1]), g[0])):
+            out.append(f"    {'ACTIONS' if terminal else 'STATE'}({value}), {len(members)},")
+            out += [f"      {ids[symbols[i].key]}," for i in members]
+            offset += 2 + len(members)
+    out += ["};", "", "static const uint32_t ts_small_parse_table_map[] = {"]
+    out += [f"  [SMALL_STATE({n + large})] = {o}," for n, o in enumerate(offsets)]
+    out += ["};", "", "static const TSParseActionEntry ts_parse_actions[] = {"]
+    out += actions_lines
+    out += ["};", "",
+            "#ifdef __cplusplus", 'extern "C" {', "#endif",
+            "#ifdef TREE_SITTER_HIDE_SYMBOLS", "#define TS_PUBLIC",
+            "#elif defined(_WIN32)", "#define TS_PUBLIC __declspec(dllexport)",
+            "#else", '#define TS_PUBLIC __attribute__((visibility("default")))', "#endif", "",
+            "TS_PUBLIC const TSLanguage *tree_sitter_elab(void) {",
+            "  static const TSLanguage language = {",
+            "    .version = LANGUAGE_VERSION,",
+            "    .symbol_count = SYMBOL_COUNT,",
+            "    .alias_count = ALIAS_COUNT,",
+            "    .token_count = TOKEN_COUNT,",
+            "    .external_token_count = EXTERNAL_TOKEN_COUNT,",
+            "    .state_count = STATE_COUNT,",
+            "    .large_state_count = LARGE_STATE_COUNT,",
+            "    .production_id_count = PRODUCTION_ID_COUNT,",
+            "    .field_count = FIELD_COUNT,",
+            "    .max_alias_sequence_length = MAX_ALIAS_SEQUENCE_LENGTH,",
+            "    .parse_table = &ts_parse_table[0][0],",
+            "    .small_parse_table = ts_small_parse_table,",
+            "    .small_parse_table_map = ts_small_parse_table_map,",
+            "    .parse_actions = ts_parse_actions,",
+            "    .symbol_names = ts_symbol_names,",
+            "    .field_names = ts_field_names,",
+            "    .field_map_slices = ts_field_map_slices,",
+            "    .field_map_entries = ts_field_map_entries,",
+            "    .symbol_metadata = ts_symbol_metadata,",
+            "    .public_symbol_map = ts_symbol_map,",
+            "    .alias_map = ts_non_terminal_alias_map,",
+            "    .alias_sequences = &ts_alias_sequences[0][0],",
+            "    .lex_modes = ts_lex_modes,",
+            "    .lex_fn = ts_lex,",
+            "    .keyword_lex_fn = ts_lex_keywords,",
+            f"    .keyword_capture_token = {ids[WORD_TERMINAL]},",
+            "    .primary_state_ids = ts_primary_state_ids,",
+            "  };",
+            "  return &language;",
+            "}",
+            "#ifdef __cplusplus", "}", "#endif", ""]
+    return "\n".join(out)
+
+
+def main(argv=None) -> int:
+    args = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    args.add_argument("--check", action="store_true", help="exit 1 if a written file is out of date")
+    opts = args.parse_args(argv)
+    files = render_all()
+    stale = [path for path, text in files.items() if not path.is_file() or path.read_text() != text]
+    if opts.check:
+        for path in stale:
+            print(f"{path.relative_to(ROOT)} is out of date: run tools/tree_sitter_grammar.py", file=sys.stderr)
+        return 1 if stale else 0
+    for path in stale:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        path.write_text(files[path])
+        print(f"wrote {path.relative_to(ROOT)}")
+    return 0
+
+
+def render_all() -> dict[Path, str]:
+    """Every file this tool writes, by path."""
+    grammar = build_grammar()
+    table = build_table(grammar)
+    return {OUTPUT / "src" / "parser.c": render_parser_c(grammar, table)}
+
+
+if __name__ == "__main__":
+    sys.exit(main())
