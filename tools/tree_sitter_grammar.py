@@ -154,7 +154,8 @@ def build_grammar() -> Grammar:
             display = ROOT_RULE if origin == "start" else origin
             symbols.append(Symbol(origin, display, False, True, True))
         else:
-            symbols.append(Symbol(origin, origin, False, False, not origin.startswith("__")))
+            hidden = origin if origin.startswith("_") else f"_{origin}"  # tree-sitter's mark of a hidden rule
+            symbols.append(Symbol(origin, hidden, False, False, not origin.startswith("__")))
     for key, node in synthetic:
         symbols.append(Symbol(key, node, False, True, True))
     for index, symbol in enumerate(symbols):
@@ -683,6 +684,179 @@ def render_parser_c(grammar: Grammar, table: Table) -> str:
     return "\n".join(out)
 
 
+# ---------------------------------------------------------------------------
+# grammar.js, the queries and the package files
+
+
+def _js_regex(pattern: str) -> str:
+    """A JavaScript regular expression literal; lark's patterns hold their
+    control characters as themselves."""
+    escapes = {"/": "\\/", "\n": "\\n", "\t": "\\t", "\r": "\\r", "\f": "\\f"}
+    return "/" + "".join(escapes.get(c, c) for c in pattern) + "/"
+
+
+def _js_rule_name(grammar: Grammar, key: str) -> str:
+    symbol = grammar.by_key[key]
+    if key == "start":
+        return ROOT_RULE
+    if symbol.visible:
+        return key
+    return key if key.startswith("_") else f"_{key}"
+
+
+def _js_symbol(grammar: Grammar, sym) -> str:
+    symbol = grammar.by_key[sym.name]
+    if symbol.terminal:
+        return json.dumps(symbol.name) if not symbol.named else f"$.{symbol.name}"
+    return f"$.{_js_rule_name(grammar, sym.name)}"
+
+
+def render_grammar_js(grammar: Grammar) -> str:
+    """grammar.js: the same rules, tokens and node names as parser.c."""
+    by_origin: dict[str, list] = {}
+    for rule in grammar.rules:
+        by_origin.setdefault(rule.origin.name, []).append(rule)
+    synthetic = {key for key in by_origin if grammar.by_key[key].visible
+                 and grammar.by_key[key].name != key and key != "start"}
+    lines = [
+        "// The tree-sitter grammar of EasyLab models (.elab).",
+        "// Written by tools/tree_sitter_grammar.py from generator/frontend/elab.lark: edit that, not this.",
+        "// `tree-sitter generate` makes from it a parser equivalent to src/parser.c.",
+        "",
+        "module.exports = grammar({",
+        "  name: 'elab',",
+        "  word: $ => $.name,",
+        "  extras: $ => [/[ \\t\\f\\r\\n]/, $.comment],",
+        "  rules: {",
+    ]
+
+    def body(origin: str) -> str:
+        alternatives = []
+        optional = False
+        for rule in by_origin[origin]:
+            if not rule.expansion:
+                optional = True
+                continue
+            if len(rule.expansion) == 1 and rule.expansion[0].name in synthetic:
+                wrapper = rule.expansion[0].name
+                alternatives.append(f"alias($._{wrapper}, $.{grammar.by_key[wrapper].name})")
+                continue
+            parts = [_js_symbol(grammar, s) for s in rule.expansion]
+            alternatives.append(parts[0] if len(parts) == 1 else f"seq({', '.join(parts)})")
+        text = alternatives[0] if len(alternatives) == 1 else \
+            "choice(\n      " + ",\n      ".join(alternatives) + ",\n    )"
+        return f"optional({text})" if optional else text
+
+    ordered = ["start"] + [o for o in by_origin if o != "start"]
+    for origin in ordered:
+        name = f"_{origin}" if origin in synthetic else _js_rule_name(grammar, origin)
+        lines.append(f"    {name}: $ => {body(origin)},")
+    lines.append("")
+    for symbol in grammar.symbols:
+        if not symbol.terminal or not symbol.named or symbol.key in (END, COMMENTS[1]):
+            continue
+        if symbol.key == COMMENTS[0]:
+            lines.append("    comment: $ => token(choice(/\\/\\/[^\\n]*/, seq('/*', /[^*]*\\*+([^/*][^*]*\\*+)*/, '/'))),")
+        elif symbol.key == "C_CODE":
+            lines.append(f"    // Inline C: up to the balancing '}}}}', at most {C_CODE_DEPTH} braces deep.")
+            lines.append(f"    {symbol.name}: $ => {_js_regex(_c_code_regex())},")
+        else:
+            pattern = grammar.terminals[symbol.key].pattern.value
+            lines.append(f"    {symbol.name}: $ => token({_js_regex(pattern)}),")
+    lines += ["  },", "});", ""]
+    return "\n".join(lines)
+
+
+# How the highlight query names what it colours (nvim-treesitter's and
+# Helix's capture names).
+UNIT_TERMINALS = ("US", "MS", "SEC")
+LOGICAL_TERMINALS = ("AND", "OR", "NOT")
+BOOLEAN_TERMINALS = ("TRUE", "FALSE")
+DECLARED_NAMES = [
+    ("model_decl", "module"), ("import_decl", "module"), ("const_decl", "constant"),
+    ("param_decl", "variable"), ("var_decl", "variable"), ("channel_decl", "variable"),
+    ("device_type", "type"), ("actor_type", "type"), ("type_ref", "type"), ("type_param", "type"),
+    ("dataflow", "function"), ("chart", "function"), ("task", "function"), ("run_action", "function"),
+    ("step", "label"), ("step_set", "label"), ("state_var", "variable"), ("actor_port", "property"),
+    ("data_port", "property"), ("data_export", "property"), ("formal_param", "variable.parameter"),
+    ("actual", "variable.parameter"), ("node_decl", "namespace"), ("link_decl", "namespace"),
+]
+
+
+def render_highlights(grammar: Grammar) -> str:
+    """queries/highlights.scm: keywords, types, numbers, strings, comments,
+    operators and the names declarations introduce."""
+    # Every word of the grammar is a keyword, `min-buffer` too (as in
+    # tools/textmate_grammar.py).
+    words = {s.key: s.name for s in grammar.symbols
+             if s.terminal and not s.named and re.fullmatch(r"[a-z][a-z-]*", s.name)}
+    keywords = sorted(w for t, w in words.items()
+                      if t not in UNIT_TERMINALS + LOGICAL_TERMINALS + BOOLEAN_TERMINALS)
+    operators = sorted(s.name for s in grammar.symbols if s.terminal and not s.named and s.key != END
+                       and s.key not in words and s.name not in "()[]{},.:@")
+    quoted = lambda names: " ".join(json.dumps(n) for n in names)  # noqa: E731
+    declared = [rule for rule, _ in DECLARED_NAMES if rule in {s.name for s in grammar.symbols}]
+    assert len(declared) == len(DECLARED_NAMES), "a rule of DECLARED_NAMES left the grammar"
+    lines = [
+        "; Written by tools/tree_sitter_grammar.py from generator/frontend/elab.lark: edit that, not this.",
+        "",
+        "(comment) @comment",
+        "(string) @string",
+        "[(int) (real)] @number",
+        "(c_code) @embedded",
+        "(persist_attr) @keyword",
+        "",
+        f"[{quoted(keywords)}] @keyword",
+        f"[{quoted(words[t] for t in LOGICAL_TERMINALS)}] @keyword.operator",
+        f"[{quoted(words[t] for t in BOOLEAN_TERMINALS)}] @boolean",
+        f"(duration_lit [{quoted(words[t] for t in UNIT_TERMINALS)}] @type.builtin)",
+        "",
+        f"[{quoted(operators)}] @operator",
+        '["(" ")" "[" "]" "{" "}"] @punctuation.bracket',
+        '["," "." ":" "@"] @punctuation.delimiter',
+        "",
+        "; The name a declaration introduces (the first name of the node).",
+    ]
+    lines += [f"({rule} . (name) @{capture})" for rule, capture in DECLARED_NAMES]
+    lines += ["(instance (name) @variable (name) @type)", "(device_decl (name) @variable (name) @type)",
+              "(path (name) @variable)", ""]
+    return "\n".join(lines)
+
+
+# `#set!` before `#offset!`: py-tree-sitter 0.26 frees the query's
+# predicates twice the other way round (the editors take either order).
+INJECTIONS = """; Inline C between {{ and }} is C.
+((c_code) @injection.content
+  (#set! injection.language "c")
+  (#offset! @injection.content 0 2 0 -2))
+"""
+
+
+def render_package_files() -> dict[str, str]:
+    """package.json and tree-sitter.json as the tree-sitter CLI reads them."""
+    package = {
+        "name": "tree-sitter-elab",
+        "version": VERSION,
+        "description": "EasyLab model language (.elab) grammar for tree-sitter",
+        "main": "bindings/node",
+        "keywords": ["tree-sitter", "parser", "elab", "easylab"],
+        "files": ["grammar.js", "queries/*", "src/**"],
+        "scripts": {"generate": "tree-sitter generate", "test": "tree-sitter test"},
+        "tree-sitter": [{"scope": "source.elab", "file-types": ["elab"], "highlights": "queries/highlights.scm",
+                         "injections": "queries/injections.scm"}],
+    }
+    config = {
+        "grammars": [{"name": "elab", "camelcase": "Elab", "scope": "source.elab", "path": ".",
+                      "file-types": ["elab"], "highlights": "queries/highlights.scm",
+                      "injections": "queries/injections.scm", "injection-regex": "^elab$"}],
+        "metadata": {"version": VERSION, "description": "EasyLab model language (.elab) grammar for tree-sitter",
+                     "links": {}},
+        "bindings": {"c": True},
+    }
+    return {"package.json": json.dumps(package, indent=2) + "\n",
+            "tree-sitter.json": json.dumps(config, indent=2) + "\n"}
+
+
 def main(argv=None) -> int:
     args = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     args.add_argument("--check", action="store_true", help="exit 1 if a written file is out of date")
@@ -704,7 +878,12 @@ def render_all() -> dict[Path, str]:
     """Every file this tool writes, by path."""
     grammar = build_grammar()
     table = build_table(grammar)
-    return {OUTPUT / "src" / "parser.c": render_parser_c(grammar, table)}
+    files = {OUTPUT / "src" / "parser.c": render_parser_c(grammar, table),
+             OUTPUT / "grammar.js": render_grammar_js(grammar),
+             OUTPUT / "queries" / "highlights.scm": render_highlights(grammar),
+             OUTPUT / "queries" / "injections.scm": INJECTIONS}
+    files.update({OUTPUT / name: text for name, text in render_package_files().items()})
+    return files
 
 
 if __name__ == "__main__":
