@@ -155,7 +155,10 @@ def build_grammar() -> Grammar:
             symbols.append(Symbol(origin, display, False, True, True))
         else:
             hidden = origin if origin.startswith("_") else f"_{origin}"  # tree-sitter's mark of a hidden rule
-            symbols.append(Symbol(origin, hidden, False, False, not origin.startswith("__")))
+            # Named, though hidden: the runtime rebalances hidden unnamed
+            # nodes whose first child is of their own symbol as tree-sitter's
+            # own `x -> x x` repeats, which lark's `x -> x item` are not.
+            symbols.append(Symbol(origin, hidden, False, False, True))
     for key, node in synthetic:
         symbols.append(Symbol(key, node, False, True, True))
     for index, symbol in enumerate(symbols):

@@ -21,7 +21,8 @@ import tree_sitter
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from tree_sitter_lang import GRAMMAR_DIR, ROOT, compile_language, first_error, lark_shape, tree_sitter_shape
+from tree_sitter_lang import (GRAMMAR_DIR, ROOT, compile_language, edit_between, first_error, lark_shape,
+                              tree_sitter_shape)
 
 sys.path[:0] = [str(ROOT / "tools"), str(ROOT / "tests" / "frontend"), str(ROOT / "tests" / "crosscheck")]
 import tree_sitter_grammar  # noqa: E402
@@ -97,6 +98,26 @@ def test_mutated_examples_get_an_error_exactly_where_the_front_end_finds_one(par
     path = data.draw(st.sampled_from(MUTATION_SEEDS))
     text = mutate(path.read_text(encoding="utf-8"), HypothesisChooser(data.draw))
     assert_parses_as_the_front_end(parser, text, f"mutation of {path.name}")
+
+
+@settings(max_examples=300, deadline=None, derandomize=True, suppress_health_check=list(HealthCheck))
+@given(st.data())
+def test_an_edited_tree_reparses_as_a_fresh_parse(parser, data):
+    """Editors reparse incrementally: the old tree, told of the edit, gives
+    the tree a fresh parse gives (on texts with a syntax error, an error
+    too: recovery may take another path)."""
+    path = data.draw(st.sampled_from(MUTATION_SEEDS))
+    before = path.read_text(encoding="utf-8")
+    after = mutate(before, HypothesisChooser(data.draw))
+    old, new = before.encode(), after.encode()
+    for source, target in ((old, new), (new, old)):
+        tree = parser.parse(source)
+        edit_between(tree, source, target)
+        incremental, fresh = parser.parse(target, tree), parser.parse(target)
+        if fresh.root_node.has_error:
+            assert incremental.root_node.has_error
+        else:
+            assert str(incremental.root_node) == str(fresh.root_node)
 
 
 @pytest.mark.parametrize("text, accepted", [

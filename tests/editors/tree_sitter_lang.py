@@ -82,3 +82,21 @@ def first_error(node):
             return current
         stack.extend(reversed(current.children))
     return None
+
+
+def _point(source: bytes, offset: int) -> tuple[int, int]:
+    return source.count(b"\n", 0, offset), offset - (source.rfind(b"\n", 0, offset) + 1)
+
+
+def edit_between(tree, old: bytes, new: bytes) -> None:
+    """Tell ``tree`` (of ``old``) the one edit that makes ``new`` of it, as
+    an editor does: the span between the common prefix and suffix."""
+    start = 0
+    while start < min(len(old), len(new)) and old[start] == new[start]:
+        start += 1
+    suffix = 0
+    while suffix < min(len(old), len(new)) - start and old[-1 - suffix] == new[-1 - suffix]:
+        suffix += 1
+    old_end, new_end = len(old) - suffix, len(new) - suffix
+    tree.edit(start_byte=start, old_end_byte=old_end, new_end_byte=new_end, start_point=_point(old, start),
+              old_end_point=_point(old, old_end), new_end_point=_point(new, new_end))

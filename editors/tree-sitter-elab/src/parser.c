@@ -1633,95 +1633,95 @@ static const TSSymbolMetadata ts_symbol_metadata[] = {
   },
   [aux_sym___start_star_0] = {
     .visible = false,
-    .named = false,
+    .named = true,
   },
   [aux_sym___param_decl_star_1] = {
     .visible = false,
-    .named = false,
+    .named = true,
   },
   [aux_sym___device_type_star_2] = {
     .visible = false,
-    .named = false,
+    .named = true,
   },
   [aux_sym___claims_star_3] = {
     .visible = false,
-    .named = false,
+    .named = true,
   },
   [aux_sym___driver_star_4] = {
     .visible = false,
-    .named = false,
+    .named = true,
   },
   [aux_sym___safe_values_star_5] = {
     .visible = false,
-    .named = false,
+    .named = true,
   },
   [aux_sym___formal_params_star_6] = {
     .visible = false,
-    .named = false,
+    .named = true,
   },
   [aux_sym___choices_star_7] = {
     .visible = false,
-    .named = false,
+    .named = true,
   },
   [aux_sym___actuals_star_8] = {
     .visible = false,
-    .named = false,
+    .named = true,
   },
   [aux_sym___actor_type_star_9] = {
     .visible = false,
-    .named = false,
+    .named = true,
   },
   [aux_sym___type_params_star_10] = {
     .visible = false,
-    .named = false,
+    .named = true,
   },
   [aux_sym___dataflow_star_11] = {
     .visible = false,
-    .named = false,
+    .named = true,
   },
   [aux_sym___type_args_star_12] = {
     .visible = false,
-    .named = false,
+    .named = true,
   },
   [aux_sym___chart_star_13] = {
     .visible = false,
-    .named = false,
+    .named = true,
   },
   [aux_sym___step_star_14] = {
     .visible = false,
-    .named = false,
+    .named = true,
   },
   [aux_sym___step_set_plus_15] = {
     .visible = false,
-    .named = false,
+    .named = true,
   },
   [aux_sym___task_star_16] = {
     .visible = false,
-    .named = false,
+    .named = true,
   },
   [aux_sym___task_star_17] = {
     .visible = false,
-    .named = false,
+    .named = true,
   },
   [aux_sym___debug_iface_star_18] = {
     .visible = false,
-    .named = false,
+    .named = true,
   },
   [aux_sym___link_decl_star_19] = {
     .visible = false,
-    .named = false,
+    .named = true,
   },
   [aux_sym___link_decl_star_20] = {
     .visible = false,
-    .named = false,
+    .named = true,
   },
   [aux_sym___remote_settings_plus_21] = {
     .visible = false,
-    .named = false,
+    .named = true,
   },
   [aux_sym___path_star_22] = {
     .visible = false,
-    .named = false,
+    .named = true,
   },
   [sym_or_expr__1] = {
     .visible = true,
