@@ -179,6 +179,16 @@ def test_the_highlight_query_colours_keywords_comments_and_declared_names(langua
     assert captures[(7, 22)] == {"keyword"}          # run
 
 
+def test_helix_s_queries_are_neovim_s_with_helix_s_capture_names(language):
+    helix = (GRAMMAR_DIR / "queries" / "helix" / "highlights.scm").read_text()
+    query = tree_sitter.Query(language, helix)
+    names = {query.capture_name(i) for i in range(query.capture_count)}
+    assert {"keyword", "comment", "string", "constant.numeric", "constant.builtin.boolean", "namespace"} <= names
+    assert not names & {"number", "boolean", "module"}
+    assert helix == tree_sitter_grammar.helix_captures((GRAMMAR_DIR / "queries" / "highlights.scm").read_text())
+    tree_sitter.Query(language, (GRAMMAR_DIR / "queries" / "helix" / "injections.scm").read_text())
+
+
 def test_every_keyword_of_the_grammar_is_in_the_highlight_query():
     grammar = tree_sitter_grammar.build_grammar()
     query = (GRAMMAR_DIR / "queries" / "highlights.scm").read_text()
