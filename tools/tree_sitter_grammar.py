@@ -534,7 +534,8 @@ def render_grammar_js(grammar: Grammar) -> str:
         if not symbol.terminal or not symbol.named or symbol.key in (END, COMMENTS[1]):
             continue
         if symbol.key == COMMENTS[0]:
-            lines.append("    comment: $ => token(choice(/\\/\\/[^\\n]*/, seq('/*', /[^*]*\\*+([^/*][^*]*\\*+)*/, '/'))),")
+            lines.append("    comment: $ => token(choice(/\\/\\/[^\\n]*/,"
+                         " seq('/*', /[^*]*\\*+([^/*][^*]*\\*+)*/, '/'))),")
         elif symbol.key == "C_CODE":
             lines.append(f"    // Inline C: up to the balancing '}}}}', at most {C_CODE_DEPTH} braces deep.")
             lines.append(f"    {symbol.name}: $ => {_js_regex(_c_code_regex())},")
