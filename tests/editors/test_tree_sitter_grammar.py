@@ -64,6 +64,14 @@ def test_the_committed_files_are_written_from_elab_lark():
     assert tree_sitter_grammar.main(["--check"]) == 0
 
 
+@pytest.mark.parametrize("compiler, flags", [("clang", ["-std=c11"]), ("gcc", ["-std=c99", "-pedantic"])])
+def test_parser_c_compiles_warning_free_with_other_compilers_and_standards(compiler, flags):
+    proc = subprocess.run([compiler, *flags, "-Wall", "-Wextra", "-Werror", "-fsyntax-only", "-I",
+                           str(GRAMMAR_DIR / "src"), str(GRAMMAR_DIR / "src" / "parser.c")],
+                          capture_output=True, text=True, timeout=300)
+    assert proc.returncode == 0, proc.stderr
+
+
 def test_the_language_is_abi_14_with_the_grammar_s_nodes(language):
     assert language.abi_version == 14
     kinds = {language.node_kind_for_id(i) for i in range(language.node_kind_count)}
