@@ -13,6 +13,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from urllib.parse import unquote, urlparse
 
+from ..analysis.sdf import AnalysisCache
 from ..core.source import Diagnostic, Span
 from ..frontend import ast
 from ..frontend.loader import LIBRARIES, as_if_read, library_path
@@ -75,6 +76,8 @@ class Workspace:
         self.texts: dict[Path, str] = {}
         self.analyses: dict[Path, Analysis] = {}
         self.parser = ChunkedParser()
+        # Dataflows an edit left alone keep their SDF analysis.
+        self.sdf_cache = AnalysisCache()
         self._modules_seen: dict[Path, list[ast.Module]] = {}
 
     def open(self, path: Path, text: str) -> Analysis:
@@ -97,7 +100,7 @@ class Workspace:
             modules.append(module)
             return module
 
-        result = check_file(path, given=self.texts, parse=parse)
+        result = check_file(path, given=self.texts, parse=parse, sdf_cache=self.sdf_cache)
         # A file that does not parse keeps the index of its last good text,
         # so that navigation still works while it is being edited.
         if result.model is None and not modules:
