@@ -10,6 +10,7 @@ to the other.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 from pathlib import Path
 from urllib.parse import unquote, urlparse
 
@@ -46,7 +47,12 @@ class Analysis:
     root: Path
     result: FrontEndResult
     modules: list[ast.Module]
-    index: ModelIndex
+
+    @cached_property
+    def index(self) -> ModelIndex:
+        """The modules' names, built when a request first needs them:
+        diagnostics do not, so an edit's diagnostics do not wait for it."""
+        return ModelIndex(self.modules)
 
     def file_name(self, path: Path) -> str | None:
         """The front end's name of a file of this model."""
@@ -110,7 +116,7 @@ class Workspace:
             parsed = {m.file for m in modules}
             modules += [m for name, m in previous.items() if name not in parsed]
             self._modules_seen[key] = modules
-        analysis = Analysis(path, result, modules, ModelIndex(modules))
+        analysis = Analysis(path, result, modules)
         self.analyses[key] = analysis
         return analysis
 

@@ -102,3 +102,11 @@ def test_after_random_edits_the_workspace_finds_what_easylab_check_finds(data):
         edit = data.draw(st.sampled_from(["mutate", "move", "move", "undo"]))
         text = original if edit == "undo" else mutate(text, choose) if edit == "mutate" else _moved(text, choose)
         assert in_workspace(workspace, path, text) == from_scratch(path, text), text
+
+
+def test_diagnostics_do_not_wait_for_the_name_index(tmp_path):
+    path = tmp_path / "big.elab"
+    analysis = Workspace().open(path, generate_model(100))
+    analysis.diagnostics_by_file()
+    assert "index" not in vars(analysis)  # not built yet
+    assert analysis.index.globals["Flow0"].kind == "dataflow"  # built on first use
