@@ -15,6 +15,7 @@ from pathlib import Path
 from urllib.parse import unquote, urlparse
 
 from ..analysis.sdf import AnalysisCache
+from ..core.collector import collect_young, cycle_collection_paused
 from ..core.source import Diagnostic, Span
 from ..frontend import ast
 from ..frontend.loader import LIBRARIES, as_if_read, library_path
@@ -97,8 +98,25 @@ class Workspace:
         self.analyses.pop(path.resolve(), None)
 
     def analyse(self, path: Path) -> Analysis:
-        """Check the model rooted at ``path`` with the open files' texts."""
+        """Check the model rooted at ``path`` with the open files' texts.
+
+        The analysis it replaces is garbage from here on for the workspace
+        (whoever still holds it keeps it alive): it was built while the
+        cycle collector was paused and collected once, young, so a young
+        collection frees it now; the new one is built the same way. The
+        collector's own schedule would instead move each model to the
+        oldest generation and then scan everything the server holds (the
+        parsed files included) about once per edit on a large model.
+        """
         key = path.resolve()
+        self.analyses.pop(key, None)
+        collect_young()
+        with cycle_collection_paused():
+            analysis = self._check(path, key)
+        self.analyses[key] = analysis
+        return analysis
+
+    def _check(self, path: Path, key: Path) -> Analysis:
         modules: list[ast.Module] = []
 
         def parse(text: str, name: str) -> ast.Module:
@@ -116,9 +134,7 @@ class Workspace:
             parsed = {m.file for m in modules}
             modules += [m for name, m in previous.items() if name not in parsed]
             self._modules_seen[key] = modules
-        analysis = Analysis(path, result, modules)
-        self.analyses[key] = analysis
-        return analysis
+        return Analysis(path, result, modules)
 
     def dependents(self, path: Path) -> list[Path]:
         """The open models other than ``path`` whose files include ``path``."""

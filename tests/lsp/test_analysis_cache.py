@@ -5,11 +5,14 @@ same diagnostics and, for a good model, the same lowered program."""
 
 from __future__ import annotations
 
+import gc
 import json
 import re
 import sys
+import weakref
 from pathlib import Path
 
+import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
@@ -110,3 +113,28 @@ def test_diagnostics_do_not_wait_for_the_name_index(tmp_path):
     analysis.diagnostics_by_file()
     assert "index" not in vars(analysis)  # not built yet
     assert analysis.index.globals["Flow0"].kind == "dataflow"  # built on first use
+
+
+@pytest.mark.parametrize("collector", ["on", "off"])
+def test_an_edit_frees_the_model_it_replaces_by_a_young_collection(tmp_path, collector):
+    """The collector on: freed at the next edit, not later by a full
+    collection; off: the workspace's own young collection frees it."""
+    path = tmp_path / "big.elab"
+    text = generate_model(300)
+    workspace = Workspace()
+    workspace.open(path, text)
+    was_enabled = gc.isenabled()
+    if collector == "off":
+        gc.disable()
+    try:
+        for n in range(4):
+            # a dataflow and its actor instances refer to each other: a cycle
+            flow = workspace.analyses[path.resolve()].result.model.dataflows["Flow0"]
+            assert next(iter(flow.instances.values())).dataflow is flow
+            previous = weakref.ref(flow)
+            del flow
+            workspace.open(path, text + f"// edit {n}\n").diagnostics_by_file()
+            assert previous() is None  # freed already
+    finally:
+        if was_enabled:
+            gc.enable()
