@@ -36,3 +36,9 @@ def collect_young() -> None:
     nothing older: what a structure built under :func:`cycle_collection_paused`
     left behind once it was dropped, if nothing kept it past a later build."""
     gc.collect(1)
+
+
+def collect_all() -> None:
+    """A full collection: afterwards every object still alive is in the
+    oldest generation, where the young collections never look."""
+    gc.collect()

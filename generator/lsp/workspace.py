@@ -15,7 +15,7 @@ from pathlib import Path
 from urllib.parse import unquote, urlparse
 
 from ..analysis.sdf import AnalysisCache
-from ..core.collector import collect_young, cycle_collection_paused
+from ..core.collector import collect_all, collect_young, cycle_collection_paused
 from ..core.source import Diagnostic, Span
 from ..frontend import ast
 from ..frontend.loader import LIBRARIES, as_if_read, library_path
@@ -106,14 +106,19 @@ class Workspace:
         collection frees it now; the new one is built the same way. The
         collector's own schedule would instead move each model to the
         oldest generation and then scan everything the server holds (the
-        parsed files included) about once per edit on a large model.
+        parsed files included) about once per edit on a large model. A
+        model checked for the first time ends with a full collection, which
+        puts its parsed files, long-lived, where young collections do not
+        look (else the first edit would move them there, and pay for it).
         """
         key = path.resolve()
-        self.analyses.pop(key, None)
+        first = self.analyses.pop(key, None) is None  # holding it would keep it alive
         collect_young()
         with cycle_collection_paused():
             analysis = self._check(path, key)
         self.analyses[key] = analysis
+        if first:
+            collect_all()
         return analysis
 
     def _check(self, path: Path, key: Path) -> Analysis:

@@ -122,7 +122,8 @@ def test_an_edit_frees_the_model_it_replaces_by_a_young_collection(tmp_path, col
     path = tmp_path / "big.elab"
     text = generate_model(300)
     workspace = Workspace()
-    workspace.open(path, text)
+    workspace.open(path, text)  # its model goes to the oldest generation with the parsed files
+    workspace.open(path, text + "// the first edit\n")
     was_enabled = gc.isenabled()
     if collector == "off":
         gc.disable()
@@ -138,3 +139,29 @@ def test_an_edit_frees_the_model_it_replaces_by_a_young_collection(tmp_path, col
     finally:
         if was_enabled:
             gc.enable()
+
+
+def test_a_newly_opened_model_s_parsed_files_start_in_the_oldest_generation(tmp_path):
+    analysis = Workspace().open(tmp_path / "big.elab", generate_model(100))
+    declaration = analysis.module(tmp_path / "big.elab").declarations[-1]
+    assert any(o is declaration for o in gc.get_objects(generation=2))
+
+
+def test_no_collection_runs_during_a_check(tmp_path):
+    path = tmp_path / "big.elab"
+    text = generate_model(300)
+    workspace = Workspace()
+    workspace.open(path, text)
+    generations = []
+
+    def watch(phase, info):
+        if phase == "start":
+            generations.append(info["generation"])
+
+    gc.callbacks.append(watch)
+    try:
+        workspace.open(path, text + "// edited\n")
+    finally:
+        gc.callbacks.remove(watch)
+    # the workspace's young collection before the check, at most one of the new objects after it
+    assert generations[0] == 1 and generations[1:] in ([], [0])
