@@ -8,7 +8,8 @@ the edited declaration only, the SDF analysis runs for the dataflows whose
 graph changed only, the checker runs on the whole model) up to the
 diagnostics it would publish. The large model is also timed after edits
 that change one dataflow's graph (so that this dataflow's SDF analysis
-runs again). Goals: 100 ms per example, 1.5 s for the 5,000-actor model. Run: python bench/bench_lsp.py [out_dir] [actors]
+runs again). Goals: 100 ms per example, 1.5 s for the 5,000-actor model.
+Run: python bench/bench_lsp.py [out_dir] [actors]
 """
 
 from __future__ import annotations
