@@ -5,7 +5,6 @@ Build an :class:`SdfGraph` (or load one with :func:`load_sdf3`), then call
 """
 
 from .analysis import SCHEDULE_KINDS, Analysis, analyze
-from .cache import AnalysisCache
 from .buffers import (
     edge_lower_bound,
     min_edge_bound,
@@ -13,6 +12,7 @@ from .buffers import (
     sas_lower_bound,
     verify,
 )
+from .cache import AnalysisCache
 from .errors import (
     DeadlockError,
     GraphError,
