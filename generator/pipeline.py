@@ -31,14 +31,16 @@ class FrontEndResult:
 
 
 def check_file(path: str | Path, schedule: str | None = None, text: str | None = None,
-               given: dict[Path, str] | None = None, parse=None) -> FrontEndResult:
+               given: dict[Path, str] | None = None, parse=None, sdf_cache=None) -> FrontEndResult:
     """Parse, check and analyse a model file and its imports.
 
     ``schedule`` overrides every dataflow's schedule kind (``sas`` or
     ``min-buffer``). ``text``, if given, is read instead of the root file
     (its imports are still files, relative to ``path``). ``given`` maps
     other files to the texts read instead of them (an editor's unsaved
-    imports); ``parse`` stands for the parser (see :func:`load`).
+    imports); ``parse`` stands for the parser (see :func:`load`);
+    ``sdf_cache`` (an :class:`~easylab.analysis.sdf.AnalysisCache`) answers
+    for dataflows whose SDF graph it has analysed before.
 
     Raises OSError (FileNotFoundError, UnicodeDecodeError as ValueError) only
     for the root file itself; every problem inside a model is a diagnostic.
@@ -56,7 +58,7 @@ def check_file(path: str | Path, schedule: str | None = None, text: str | None =
         model = check(loaded.modules, loaded.root, diags)
     timing = None
     if model is not None:
-        analyze_model(model, diags, schedule)
+        analyze_model(model, diags, schedule, sdf_cache)
         if not diags.has_errors:
             timing = compute_timing(model, diags)
     ok = not diags.has_errors

@@ -133,12 +133,16 @@ def build_graph(df: DataflowInfo) -> tuple[sdf.SdfGraph, dict, dict]:
     return sdf.SdfGraph(actors, edges, name=df.name), node_of_edge, externals
 
 
-def analyze_dataflow(df: DataflowInfo, diags: Diagnostics, schedule: str | None = None) -> DataflowAnalysis | None:
-    """Analyse one dataflow; errors (with the edges involved) go to ``diags``."""
+def analyze_dataflow(df: DataflowInfo, diags: Diagnostics, schedule: str | None = None,
+                     cache: sdf.AnalysisCache | None = None) -> DataflowAnalysis | None:
+    """Analyse one dataflow; errors (with the edges involved) go to ``diags``.
+
+    ``cache``, if given, answers for a graph it has analysed before (see
+    :mod:`easylab.analysis.sdf.cache`): same result, same diagnostics."""
     graph, node_of_edge, externals = build_graph(df)
     kind = schedule or df.decl.schedule or "sas"
     try:
-        result = sdf.analyze(graph, kind)
+        result = cache.analyze(graph, kind) if cache is not None else sdf.analyze(graph, kind)
     except (sdf.InconsistentGraphError, sdf.DeadlockError) as err:
         _report(err, df, diags)
         return None
@@ -188,7 +192,9 @@ def _report(err: sdf.SdfError, df: DataflowInfo, diags: Diagnostics) -> None:
     diags.error(first.loc, message, hint, notes)
 
 
-def analyze_model(model: CheckedModel, diags: Diagnostics, schedule: str | None = None) -> None:
-    """Analyse every dataflow, storing the result in ``DataflowInfo.analysis``."""
+def analyze_model(model: CheckedModel, diags: Diagnostics, schedule: str | None = None,
+                  cache: sdf.AnalysisCache | None = None) -> None:
+    """Analyse every dataflow, storing the result in ``DataflowInfo.analysis``
+    (``cache``: see :func:`analyze_dataflow`)."""
     for df in model.dataflows.values():
-        df.analysis = analyze_dataflow(df, diags, schedule)
+        df.analysis = analyze_dataflow(df, diags, schedule, cache)

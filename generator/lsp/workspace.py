@@ -10,9 +10,12 @@ to the other.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 from pathlib import Path
 from urllib.parse import unquote, urlparse
 
+from ..analysis.sdf import AnalysisCache
+from ..core.collector import collect_all, collect_young, cycle_collection_paused
 from ..core.source import Diagnostic, Span
 from ..frontend import ast
 from ..frontend.loader import LIBRARIES, as_if_read, library_path
@@ -45,7 +48,12 @@ class Analysis:
     root: Path
     result: FrontEndResult
     modules: list[ast.Module]
-    index: ModelIndex
+
+    @cached_property
+    def index(self) -> ModelIndex:
+        """The modules' names, built when a request first needs them:
+        diagnostics do not, so an edit's diagnostics do not wait for it."""
+        return ModelIndex(self.modules)
 
     def file_name(self, path: Path) -> str | None:
         """The front end's name of a file of this model."""
@@ -75,6 +83,8 @@ class Workspace:
         self.texts: dict[Path, str] = {}
         self.analyses: dict[Path, Analysis] = {}
         self.parser = ChunkedParser()
+        # Dataflows an edit left alone keep their SDF analysis.
+        self.sdf_cache = AnalysisCache()
         self._modules_seen: dict[Path, list[ast.Module]] = {}
 
     def open(self, path: Path, text: str) -> Analysis:
@@ -88,8 +98,30 @@ class Workspace:
         self.analyses.pop(path.resolve(), None)
 
     def analyse(self, path: Path) -> Analysis:
-        """Check the model rooted at ``path`` with the open files' texts."""
+        """Check the model rooted at ``path`` with the open files' texts.
+
+        The analysis it replaces is garbage from here on for the workspace
+        (whoever still holds it keeps it alive): it was built while the
+        cycle collector was paused and collected once, young, so a young
+        collection frees it now; the new one is built the same way. The
+        collector's own schedule would instead move each model to the
+        oldest generation and then scan everything the server holds (the
+        parsed files included) about once per edit on a large model. A
+        model checked for the first time ends with a full collection, which
+        puts its parsed files, long-lived, where young collections do not
+        look (else the first edit would move them there, and pay for it).
+        """
         key = path.resolve()
+        first = self.analyses.pop(key, None) is None  # holding it would keep it alive
+        collect_young()
+        with cycle_collection_paused():
+            analysis = self._check(path, key)
+        self.analyses[key] = analysis
+        if first:
+            collect_all()
+        return analysis
+
+    def _check(self, path: Path, key: Path) -> Analysis:
         modules: list[ast.Module] = []
 
         def parse(text: str, name: str) -> ast.Module:
@@ -97,7 +129,7 @@ class Workspace:
             modules.append(module)
             return module
 
-        result = check_file(path, given=self.texts, parse=parse)
+        result = check_file(path, given=self.texts, parse=parse, sdf_cache=self.sdf_cache)
         # A file that does not parse keeps the index of its last good text,
         # so that navigation still works while it is being edited.
         if result.model is None and not modules:
@@ -107,9 +139,7 @@ class Workspace:
             parsed = {m.file for m in modules}
             modules += [m for name, m in previous.items() if name not in parsed]
             self._modules_seen[key] = modules
-        analysis = Analysis(path, result, modules, ModelIndex(modules))
-        self.analyses[key] = analysis
-        return analysis
+        return Analysis(path, result, modules)
 
     def dependents(self, path: Path) -> list[Path]:
         """The open models other than ``path`` whose files include ``path``."""

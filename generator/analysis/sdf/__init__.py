@@ -12,6 +12,7 @@ from .buffers import (
     sas_lower_bound,
     verify,
 )
+from .cache import AnalysisCache
 from .errors import (
     DeadlockError,
     GraphError,
@@ -28,7 +29,7 @@ from .schedule import Fire, Loop, Node, Schedule, repeat
 from .sdf3 import MAX_SDF3_BYTES, XmlLocation, load_sdf3
 
 __all__ = [
-    "SCHEDULE_KINDS", "Analysis", "analyze",
+    "SCHEDULE_KINDS", "Analysis", "AnalysisCache", "analyze",
     "edge_lower_bound", "min_edge_bound", "sas_edge_bound", "sas_lower_bound", "verify",
     "DeadlockError", "GraphError", "InconsistentGraphError", "ScheduleError", "Sdf3Error", "SdfError",
     "check_deadlock", "SdfEdge", "SdfGraph", "SdfOptions", "repetition_vector",

@@ -2,11 +2,10 @@
 
 from __future__ import annotations
 
-import gc
-from contextlib import contextmanager
 from dataclasses import dataclass
 from typing import Iterator
 
+from ...core.collector import cycle_collection_paused
 from ._indexed import IndexedGraph
 from .buffers import check_schedule, edge_lower_bound, sas_lower_bound
 from .errors import ScheduleError
@@ -149,23 +148,11 @@ def analyze(
     """
     if schedule not in SCHEDULE_KINDS:
         raise ValueError(f"schedule must be one of {', '.join(SCHEDULE_KINDS)}, not {schedule!r}")
-    with _without_cycle_collection():
+    # the schedulers allocate hundreds of thousands of short-lived tuples and
+    # lists (freed by reference counting, no cycles): on large graphs the
+    # collector's passes over them cost about a tenth of the analysis
+    with cycle_collection_paused():
         return _analyze(graph, schedule, options or SdfOptions())
-
-
-@contextmanager
-def _without_cycle_collection() -> Iterator[None]:
-    """Python's cycle collector paused: the schedulers allocate hundreds of
-    thousands of short-lived tuples and lists (freed by reference counting,
-    no cycles), and on large graphs the collector's passes over them cost
-    about a tenth of the analysis."""
-    enabled = gc.isenabled()
-    gc.disable()
-    try:
-        yield
-    finally:
-        if enabled:
-            gc.enable()
 
 
 def _analyze(graph: SdfGraph, schedule: str, options: SdfOptions) -> Analysis:
