@@ -39,10 +39,12 @@ def console(fw, commands: str, *extra, timeout=60):
 @pytest.mark.parametrize("board", ["host", "interp", "avr"], indirect=True)
 def test_chart_items_read_and_step_chart_shows_the_entered_step(board, builds, firmware):
     fw = firmware(builds["pneumatic_cylinder"])  # halted at its first instant
-    lines = console(fw, "read Cylinder Cylinder.active Cylinder.Retracted.time; write start_cmd 1; "
+    lines = console(fw, "read Cylinder Cylinder.active Cylinder.Retracted.time Cylinder.fired; write start_cmd 1; "
                         "step chart; step chart; step chart; step chart; "
-                        "read Cylinder Cylinder.Extending.time Cylinder.Retracted.time; vars Cylinder.*")
-    assert lines[:3] == ["Cylinder.active = (none)", "Cylinder.active = (none)", "Cylinder.Retracted.time = 0"]
+                        "read Cylinder Cylinder.Extending.time Cylinder.Retracted.time Cylinder.fired; "
+                        "vars Cylinder.*")
+    assert lines[:4] == ["Cylinder.active = (none)", "Cylinder.active = (none)", "Cylinder.Retracted.time = 0",
+                         "Cylinder.fired = (none)"]
     steps = [line for line in lines if line.startswith("halted (step)")]
     # the first evolution enters the initial step; start_cmd then takes the chart to Extending
     assert steps == [
@@ -52,12 +54,14 @@ def test_chart_items_read_and_step_chart_shows_the_entered_step(board, builds, f
         f"halted (step) at the end of chart:Cylinder's evolution ({CHART_AT}), 15 ms (tick 3): Cylinder in Extending",
     ]
     # Step.time: 0 when entered (tick 1), one period (5 ms) more at each evolution; Retracted keeps its last
-    assert lines[-9:-6] == ["Cylinder.active = Extending", "Cylinder.Extending.time = 10",
-                            "Cylinder.Retracted.time = 5"]
-    listed = lines[-6:]
+    # Cylinder.fired: the transition taken at tick 1, kept through the evolutions that fire none
+    assert lines[-11:-7] == ["Cylinder.active = Extending", "Cylinder.Extending.time = 10",
+                             "Cylinder.Retracted.time = 5", "Cylinder.fired = Retracted -> Extending"]
+    listed = lines[-7:]
     assert listed[0].split()[:4] == ["Cylinder.active", "uint8", "chart", "ro"] and listed[0].endswith(CHART_AT)
     assert listed[2].split()[:4] == ["Cylinder.Extending.time", "time", "step_time", "ro"]
     assert listed[2].endswith(EXTENDING_AT) and 'unit "ms"' in listed[2]
+    assert listed[6].split()[:4] == ["Cylinder.fired", "uint8", "fired", "ro"] and listed[6].endswith(CHART_AT)
 
 
 @pytest.mark.parametrize("board", ["host", "interp", "avr"], indirect=True)
@@ -93,6 +97,46 @@ def test_every_halt_names_the_element_its_line_and_the_time_in_ms(board, builds,
                         f"2010 ms (tick 402)")
 
 
+@pytest.mark.parametrize("board", ["host", "interp", "avr"], indirect=True)
+def test_fired_is_the_transition_just_taken_at_every_transition_breakpoint(board, builds, firmware):
+    """pneumatic_cylinder on its stimulus with a breakpoint on every
+    transition: at each halt `Cylinder.fired` is the transition halted at
+    (none before the first), and it keeps it until the next firing; after a
+    reset it is none again (host board: the process starts anew)."""
+    fw = firmware(builds["pneumatic_cylinder"], "--stimulus", str(ROOT / "examples" / "pneumatic_cylinder.stimulus.csv"))
+    c = fw.client()
+    m = fw.map
+    fired = m.item("Cylinder.fired")
+    read_fired = lambda: c.read([(fired.id, fired.type, 1)])[0]  # noqa: E731
+    assert (fired.kind, fired.type, fired.labels[K.NONE8]) == ("fired", "uint8", None)
+    assert read_fired() == K.NONE8
+    for tr in m.charts[0]["transitions"]:
+        c.bp_set(K.P_TRANSITION, 0, tr["id"])
+    taken = []
+    for _ in range(12):  # the stimulus's cycles: every transition but one
+        c.run()
+        try:
+            f = fw.wait_halted(c, timeout=3.0)
+        except AssertionError:
+            break
+        assert f.why == "breakpoint" and f.location.kind == K.P_TRANSITION, f
+        assert read_fired() == f.location.b, (f.tick, f.location)
+        taken.append(fired.labels[f.location.b])
+        c.step("instant")  # on to the next instant, where no transition of a 5 ms chart fires again at once
+        fw.wait_halted(c)
+        assert read_fired() == f.location.b
+    assert taken[:4] == ["Retracted -> Extending", "Extending -> Extended", "Extended -> Retracting",
+                         "Retracting -> Retracted"], taken
+    assert len(set(taken)) >= 5, taken  # and a timeout's
+    if board == "host":
+        c.halt()
+        fw.wait_halted(c)
+        c.reset(halt=True)
+        c.hello_again()
+        fw.wait_halted(c)
+        assert read_fired() == K.NONE8
+
+
 def test_a_halt_in_json_has_the_location_and_the_time(builds, firmware):
     fw = firmware(builds["pneumatic_cylinder"])
     lines = console(fw, "write start_cmd 1; step chart; step chart", "--json")
@@ -103,7 +147,7 @@ def test_a_halt_in_json_has_the_location_and_the_time(builds, firmware):
 
 def test_chart_items_are_read_only(builds, firmware):
     fw = firmware(builds["pneumatic_cylinder"])
-    for name in ("Cylinder", "Cylinder.Fault.time"):
+    for name in ("Cylinder", "Cylinder.Fault.time", "Cylinder.fired"):
         proc = subprocess.run([sys.executable, "-m", "easylab.host_tools.debug_console", "--map", str(fw.map_path),
                                str(fw.link), "-c", f"write {name} 1"], capture_output=True, text=True, env=ENV,
                               timeout=30)
@@ -127,19 +171,20 @@ def test_the_map_has_the_charts_state_last_and_read_only():
     files = cgen.render(program, load_board("host"), templates_dir())
     m = json.loads(files["debug_map.json"])
     jsonschema.validate(m, DEBUG_MAP_SCHEMA)
-    chart_state = [i for i in m["items"] if i["kind"] in ("chart", "step_time")]
+    chart_state = [i for i in m["items"] if i["kind"] in ("chart", "step_time", "fired")]
     assert m["items"][-len(chart_state):] == chart_state  # after every other item: their ids are unchanged
     assert [(i["name"], i["type"], i["count"], i["flags"], i.get("step")) for i in chart_state] == [
         ("Cylinder.active", "uint8", 1, ["read"], None),
         *((f"Cylinder.{s}.time", "time", 1, ["read"], k)
-          for k, s in enumerate(["Retracted", "Extending", "Extended", "Retracting", "Fault"]))]
+          for k, s in enumerate(["Retracted", "Extending", "Extended", "Retracting", "Fault"])),
+        ("Cylinder.fired", "uint8", 1, ["read"], None)]
     assert all(i["chart"] == 0 for i in chart_state) and chart_state[2]["location"].endswith(EXTENDING_AT)
     assert "EL_DEBUG_PROBE(EL_DBG_P_CHART_END, 0u, 0u);" in files["model.c"]
     # the charts' state does not grow the server's queues
     from easylab.codegen.c_model import build_view
     items = debug_items(program, build_view(program, load_board("host"), probes=True))
     sizes = buffer_sizes(program, items, len(program.instances))
-    without = buffer_sizes(program, [d for d in items if d.kind not in ("chart", "step_time")],
+    without = buffer_sizes(program, [d for d in items if d.kind not in ("chart", "step_time", "fired")],
                            len(program.instances))
     assert (sizes.tx, sizes.writes) == (without.tx, without.writes)
 
