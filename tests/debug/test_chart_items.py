@@ -10,9 +10,11 @@ from __future__ import annotations
 
 import csv
 import json
+import random
 import re
 import subprocess
 import sys
+from dataclasses import dataclass
 from pathlib import Path
 
 import pytest
@@ -189,6 +191,34 @@ def test_the_map_has_the_charts_state_last_and_read_only():
     assert (sizes.tx, sizes.writes) == (without.tx, without.writes)
 
 
+@pytest.mark.parametrize("example", ["pneumatic_cylinder", "line_follower"])
+def test_the_fired_transition_is_kept_by_debug_builds_only(example, tmp_path):
+    """A debug build sets its chart's `fired` at every transition's firing,
+    before the probe; a release build, and a build of the model without a
+    debug interface, have no trace of it (their C is what it was before
+    the item existed), on every board."""
+    from easylab.board.registry import load_board
+    from easylab.codegen import render as cgen
+    from easylab.core.paths import templates_dir
+    from easylab.pipeline import lower_file
+
+    source = ROOT / "examples" / f"{example}.elab"
+    nodebug = tmp_path / f"{example}.elab"
+    nodebug.write_text(re.sub(r"(?m)^debug on .*$", "", source.read_text()))
+    program, _ = lower_file(source)
+    plain, _ = lower_file(nodebug)
+    for board in ("host", "avr", "pic18", "f16"):
+        debug = cgen.render(program, load_board(board), templates_dir())["model.c"]
+        for c in program.charts:
+            assert debug.count(f"el_c{c.id}_fired = ") == len(c.transitions) + 1  # its definition and each firing
+            for t in c.transitions:
+                assert (f"el_c{c.id}_fired = {t.id}u;\n"
+                        f"                EL_DEBUG_PROBE(EL_DBG_P_TRANSITION, {c.id}u, {t.id}u);") in debug
+        for files in (cgen.render(program, load_board(board), templates_dir(), release=True),
+                      cgen.render(plain, load_board(board), templates_dir())):
+            assert not [name for name, text in files.items() if re.search(r"el_c\d+_fired", text)], board
+
+
 def test_a_map_whose_chart_item_names_no_chart_is_refused(tmp_path):
     from easylab.host_tools.debug_map import DebugMap, MapError
 
@@ -201,6 +231,10 @@ def test_a_map_whose_chart_item_names_no_chart_is_refused(tmp_path):
 
 
 # ---------------------------------------------------------------- random charts
+
+FIRED_MODELS = 6  # random firing charts (_firing_chart) whose `fired` items are checked on the host board
+FIRED_MODELS_LOCAL = 2  # and in local execution
+FIRED_RUN_MS = 600
 
 def _random_chart_models(count: int):
     """The first `count` random models (tests/crosscheck/modelgen.py) with
@@ -288,3 +322,128 @@ def test_chart_items_equal_the_traces_active_columns_on_random_charts(model, fir
     assert len(seen) >= 10
     for tick, name, names in seen:
         assert _trace_at(rows, tick * m.tick_us, f"{name}.active") == names, (name, tick, names)
+
+
+@dataclass
+class FiringChart:
+    """A seeded random model whose chart fires often, parallel branches
+    together among them (tests/crosscheck's charts mostly wait on values
+    that do not change): its text and stimulus."""
+
+    name: str
+    text: str
+    stimulus: str
+    duration_ms: int = 0
+
+
+def _firing_chart(seed: int) -> FiringChart:
+    """A chart of 7 steps (a cycle S0 -> S1 -> S2, and from S0 two parallel
+    branches L and R, each looping between two steps, joined into S1) and
+    its 8 transitions in random declaration order, with guards on four
+    params that a random stimulus toggles and on the steps' times (S0 left
+    on time alone)."""
+    rng = random.Random(seed)
+    params = [f"g{k}" for k in range(4)]
+
+    def guard() -> str:
+        roll = rng.random()
+        if roll < 0.4:
+            return f"{rng.choice(['S0', 'S1', 'S2', 'L0', 'L1', 'R0', 'R1'])}.time >= {rng.choice([0, 5, 10, 20])} ms"
+        if roll < 0.7:
+            return rng.choice(params)
+        if roll < 0.8:
+            return f"not {rng.choice(params)}"
+        return f"({rng.choice(params)} {rng.choice(['and', 'or'])} {rng.choice(params)})"
+    transitions = [f"transition S0 -> (L0, R0) when S0.time >= {rng.choice([0, 5, 10])} ms"]  # it starts
+    transitions += [f"transition {src} -> {dst} when {guard()}" for src, dst in [
+        ("L0", "L1"), ("L1", "L0"), ("R0", "R1"), ("R1", "R0"), ("(L1, R1)", "S1"),
+        ("S1", "S2"), ("S2", "S0")]]
+    rng.shuffle(transitions)
+    name = f"fired{seed}"
+    text = "\n".join([f"model {name}", *(f"param {p}: bool = false" for p in params), "var n: int16",
+                      "chart C {", "    initial step S0 { entry n = n + 1 }",
+                      *(f"    step {s} {{ }}" for s in ["S1", "S2", "L0", "L1", "R0", "R1"]),
+                      *(f"    {t}" for t in transitions), "}", "task t period 5 ms { run C }",
+                      "debug on uart0 baud 115200", ""])
+    rows, values = ["time_us," + ",".join(params)], [0] * len(params)
+    for t_ms in range(0, FIRED_RUN_MS, 5 * rng.randint(1, 4)):
+        values = [v if rng.random() < 0.7 else 1 - v for v in values]
+        rows.append(f"{t_ms * 1000}," + ",".join(map(str, values)))
+    return FiringChart(name, text, "\n".join(rows) + "\n", FIRED_RUN_MS)
+
+
+@pytest.mark.parametrize("board, model", [
+    *(("host", _firing_chart(seed)) for seed in range(1, FIRED_MODELS + 1)),
+    *(("interp", _firing_chart(seed)) for seed in range(FIRED_MODELS + 1, FIRED_MODELS + 1 + FIRED_MODELS_LOCAL))],
+    ids=lambda x: x if isinstance(x, str) else x.name, indirect=["board"])
+def test_fired_is_the_last_transition_of_each_evolution_on_random_charts(board, model, firmware, tmp_path):
+    """Over random models with charts (parallel branches among them), on
+    the host board and in local execution, run
+    by `step chart` with a breakpoint on every transition of the charts the
+    breakpoint slots cover: at each transition's halt its chart's `fired`
+    item is that transition, which left steps active before the evolution
+    and enters steps active after it; at the end of each evolution it is
+    the last transition halted at in it (the last in firing order), or the
+    one before when none fired; every other covered chart's item keeps its
+    value meanwhile."""
+    source = tmp_path / f"{model.name}.elab"
+    source.write_text(model.text)
+    stimulus = tmp_path / f"{model.name}.stimulus.csv"
+    stimulus.write_text(model.stimulus)
+    exe = source if board == "interp" else build(source, tmp_path / "build")  # local execution runs the model
+    duration_ms = model.duration_ms
+    fw = firmware(exe, "--stimulus", str(stimulus), duration=f"{duration_ms}ms")
+    m = fw.map
+    c = fw.client()
+    covered, slots = {}, c.hello_info.bp_max
+    for ch in m.charts:  # whole charts, while the breakpoint slots last
+        if len(ch["transitions"]) <= slots:
+            slots -= len(ch["transitions"])
+            covered[ch["id"]] = ch
+            for tr in ch["transitions"]:
+                c.bp_set(K.P_TRANSITION, ch["id"], tr["id"])
+    assert covered
+    fired_items = {it.chart: it for it in m.items if it.kind == "fired" and it.chart in covered}
+    active_items = {it.chart: it for it in m.items if it.kind == "chart"}
+
+    def read(items):
+        return c.read([(it.id, it.type, it.count) for it in items])
+
+    def active(chart):
+        values = read([active_items[chart]])[0]
+        return {s for s in (values if isinstance(values, list) else [values]) if s != K.NONE8}
+
+    expected = {ch: next(k for k, name in fired_items[ch].labels.items() if name is None)  # none yet
+                for ch in covered}
+    before = {ch: set() for ch in covered}
+    this_evolution: dict[int, list[int]] = {ch: [] for ch in covered}
+    halts = transitions = 0
+    # stop stepping while another evolution still comes before the run ends
+    chart_tasks = {ch["task"] for ch in m.charts}
+    last_tick = (duration_ms * 1000 // m.tick_us - 1
+                 - max(t["period_us"] // m.tick_us for t in m.tasks if t["id"] in chart_tasks))
+    while True:
+        c.step("chart")
+        f = fw.wait_halted(c)
+        if f.tick > last_tick:
+            break
+        halts += 1
+        chart = f.location.a
+        if f.location.kind == K.P_TRANSITION:
+            tr = covered[chart]["transitions"][f.location.b]
+            assert set(tr["sources"]) <= before[chart], (f.tick, tr, before[chart])
+            this_evolution[chart].append(f.location.b)
+            expected[chart] = f.location.b
+            transitions += 1
+        elif f.location.kind == K.P_CHART_END and chart in covered:
+            after = active(chart)
+            for t in this_evolution[chart]:
+                assert set(covered[chart]["transitions"][t]["targets"]) <= after, (f.tick, t, after)
+            assert this_evolution[chart] == sorted(this_evolution[chart])  # the documented firing order
+            before[chart], this_evolution[chart] = after, []
+        values = read([fired_items[ch] for ch in covered])
+        assert dict(zip(covered, values)) == expected, (f.tick, f.location, values, expected)
+    assert halts >= 10 and transitions >= 1, (halts, transitions)
+    c.bp_clear()
+    c.run()
+    assert fw.wait_exit(timeout=60)[0] == 0
