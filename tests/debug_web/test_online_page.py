@@ -2,7 +2,8 @@
 running in real time on its slow cycle (onlinelib.SLOW_CYCLE): on the host
 board the highlighted step follows the stimulus, a breakpoint set by a
 click on `Extending` halts there and the page shows its file:line (and the
-line in the model's text), a step advances, the values on PositionControl's
+line in the model's text) and marks the transition Retracted -> Extending
+as the one fired last, a step advances, the values on PositionControl's
 edges change while it runs, the scope plots over logical time and exports
 CSV, zooming in leaves what is out of sight unpolled, a write through the
 form shows on the diagram (a value out of range is refused), a reset halts
@@ -101,6 +102,10 @@ def halt_at_extending_by_a_click(browser, server, where: str = EXTENDING_AT):
     guard = "return document.getElementById(arguments[0]).querySelector('text.el-value').textContent"
     assert (browser.js(guard, "transition:Cylinder.0"), browser.js(guard, "transition:Cylinder.3")) == \
         ("✓ true", "✗ false")
+    # the transition that took the chart there is marked as the one fired last (Cylinder.fired), and in the legend
+    fired = "return [...document.querySelectorAll('#diagram g.fired')].map(g => g.id)"
+    assert wait_for(lambda: browser.js(fired), 10, "the fired transition marked") == ["transition:Cylinder.0"]
+    assert "fired last" in browser.text("#legend")
     return last
 
 

@@ -2,8 +2,8 @@
 // program on it. The server polls the target for the items this page shows
 // (/api/view: only what is visible in the diagram, and what the scope
 // plots); the page reads the snapshots (/api/state) and draws them: active
-// steps, step times, values on edges, vars, params and device data, the
-// halt with its line in the model's text. Commands, breakpoints and writes
+// steps, step times, the transition each chart fired last, values on edges,
+// vars, params and device data, the halt with its line in the model's text. Commands, breakpoints and writes
 // go to the server as same-origin JSON with the page's CSRF header; so do
 // forcing (a value held every instant, drawn on the diagram and listed
 // until released) and conditional breakpoints (halt when ITEM OP VALUE).
@@ -164,6 +164,7 @@
       if (r.right < pane.left || r.left > pane.right || r.bottom < pane.top || r.top > pane.bottom) continue;
       for (const id of info.items) ids.add(id);
       if (info.chart_item !== undefined && info.chart_item !== null) ids.add(info.chart_item);
+      if (info.fired_item !== undefined && info.fired_item !== null) ids.add(info.fired_item);
     }
     return [...ids].sort((a, b) => a - b);
   }
@@ -302,6 +303,9 @@
         const active = online.values.get(info.chart_item);
         const steps = Array.isArray(active) ? active : [active];
         info.g.classList.toggle("active", steps.includes(info.step));
+      }
+      if (info.transition !== undefined && info.fired_item !== undefined && info.fired_item !== null) {
+        info.g.classList.toggle("fired", online.values.get(info.fired_item) === info.transition);
       }
       info.g.classList.toggle("halted-here", s.halted && s.element === id);
       if (info.label && id.startsWith("transition:")) {  // the guard, on this snapshot's values
