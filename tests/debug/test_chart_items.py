@@ -139,6 +139,20 @@ def test_fired_is_the_transition_just_taken_at_every_transition_breakpoint(board
         assert read_fired() == K.NONE8
 
 
+def test_break_when_a_chart_has_fired_a_transition_named_as_the_console_prints_it(builds, firmware):
+    fw = firmware(builds["pneumatic_cylinder"], "--stimulus", str(ROOT / "examples" / "pneumatic_cylinder.stimulus.csv"))
+    lines = console(fw, "break when Cylinder.fired == Extending->Extended; run; wait 5s; read Cylinder.fired Cylinder")
+    assert lines[0] == "breakpoint 8 when Cylinder.fired == Extending -> Extended"
+    assert lines[2].startswith("halted (breakpoint) at breakpoint 8 when Cylinder.fired == Extending -> Extended "
+                               f"({CHART_AT}), ")
+    assert lines[3:] == ["Cylinder.fired = Extending -> Extended", "Cylinder.active = Extended"]
+    proc = subprocess.run([sys.executable, "-m", "easylab.host_tools.debug_console", "--map", str(fw.map_path),
+                           str(fw.link), "-c", "break when Cylinder.fired == Extended"], capture_output=True,
+                          text=True, env=ENV, timeout=30)
+    assert proc.returncode == 1 and "Cylinder.fired: no transition 'Extended' (its transitions: Extended->Retracting" \
+        in proc.stderr
+
+
 def test_a_halt_in_json_has_the_location_and_the_time(builds, firmware):
     fw = firmware(builds["pneumatic_cylinder"])
     lines = console(fw, "write start_cmd 1; step chart; step chart", "--json")
@@ -219,11 +233,29 @@ def test_the_fired_transition_is_kept_by_debug_builds_only(example, tmp_path):
             assert not [name for name, text in files.items() if re.search(r"el_c\d+_fired", text)], board
 
 
-def test_a_map_whose_chart_item_names_no_chart_is_refused(tmp_path):
+def test_fired_tells_the_last_of_255_transitions_from_none(firmware, tmp_path):
+    """A chart of 255 transitions (the most whose ids leave NONE8 free: its
+    item stays uint8): none before the first firing, then transition 254."""
+    transitions = [f"    transition {'A -> B' if k % 2 == 0 else 'B -> A'} when {'go' if k == 254 else 'not go'}"
+                   for k in range(255)]
+    source = tmp_path / "wide.elab"
+    source.write_text("\n".join(["model wide", "param go: bool = false", "chart W {", "    initial step A { }",
+                                 "    step B { }", *transitions, "}", "task t period 10 ms { run W }",
+                                 "debug on uart0 baud 115200", ""]))
+    fw = firmware(build(source, tmp_path / "b"))
+    lines = console(fw, "read W.fired; step chart; write go true; step chart; read W.fired W")
+    assert fw.map.item("W.fired").type == "uint8"
+    assert (lines[0], lines[-2:]) == ("W.fired = (none)", ["W.fired = A -> B", "W.active = B"])
+    c = fw.client()
+    assert c.read([(fw.map.item("W.fired").id, "uint8", 1)]) == [254]
+
+
+@pytest.mark.parametrize("kind", ["chart", "fired"])
+def test_a_map_whose_chart_item_names_no_chart_is_refused(kind, tmp_path):
     from easylab.host_tools.debug_map import DebugMap, MapError
 
     m = json.loads((Path(build(ROOT / MODEL, tmp_path / "b")).parent / "debug_map.json").read_text())
-    del next(i for i in m["items"] if i["kind"] == "chart")["chart"]
+    del next(i for i in m["items"] if i["kind"] == kind)["chart"]
     bad = tmp_path / "bad.json"
     bad.write_text(json.dumps(m))
     with pytest.raises(MapError, match="chart"):
