@@ -6,8 +6,8 @@ slot, the active step's ``Step.time`` grows by the task period and the step
 chooses its first enabled transition (guards on the latched copies); the
 transitions every source of which chose them fire, exits first (in
 transition order, each becoming the chart's last fired transition), then
-entries; last, the ``run`` dataflows of the active
-steps, in step order. Published activity changes at the deadline only.
+entries; last, the ``run`` dataflows of the active steps, in step order.
+Published activity changes at the deadline only.
 """
 
 from __future__ import annotations

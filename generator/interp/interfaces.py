@@ -208,9 +208,10 @@ class Interfaces:
     # ------------------------------------------------------------ items
 
     def push(self, published: list, charts, devices=None) -> None:
-        """The interpreter's published items, chart slots, steps' times, last fired transitions and devices' state
-        (``devices``: interp.devices.ModelDevices) into the library (items
-        that are the library's own arrays stay as they are)."""
+        """The interpreter's published items, chart slots, steps' times,
+        last fired transitions and devices' state (``devices``:
+        interp.devices.ModelDevices) into the library (items that are the
+        library's own arrays stay as they are)."""
         for array, values in zip(self.items, published):
             if values is not array:
                 array[:] = values

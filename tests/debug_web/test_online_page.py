@@ -76,7 +76,8 @@ def check_vcd(vcd: str, names: list[str], first_ms: float, tmp_path) -> None:
     back = subprocess.run(["fst2vcd", str(tmp_path / "scope.fst")], check=True, capture_output=True, text=True,
                           timeout=60).stdout
     declared = {line.split()[4]: line.split()[1:3] for line in back.splitlines() if line.startswith("$var")}
-    assert declared == {"position.value": ["wire", "16"], "drive": ["wire", "16"], "Cylinder.active": ["wire", "5"]}
+    assert declared == {"position.value": ["wire", "16"], "drive": ["wire", "16"], "Cylinder.active": ["wire", "5"],
+                        "Cylinder.fired": ["wire", "8"]}  # the transition's id, not one bit per transition
     assert sorted(declared) == sorted(names)
     body = vcd.split("$enddefinitions $end\n", 1)[1].splitlines()
     assert body[0] == f"#{round(first_ms * 1000)}" and body[1] == "$dumpvars"  # the CSV's first time, in us
@@ -141,7 +142,7 @@ def test_the_page_follows_breaks_and_steps_pneumatic_cylinder_on_the_host_board(
     assert after["tick"] == before["tick"] + 1 and after["at"] == "instant", after
 
     # the scope: chosen items over logical time, exported as CSV and VCD
-    plotted = ["position.value", "drive", "Cylinder.active"]
+    plotted = ["position.value", "drive", "Cylinder.active", "Cylinder.fired"]
     for name in plotted:
         browser.js("document.getElementById('scope-item').value = arguments[0]", str(
             next(it["id"] for it in server.model()["items"] if it["name"] == name)))
