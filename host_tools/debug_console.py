@@ -151,7 +151,7 @@ def step_names(item: Item, value):
 
 
 def format_value(item: Item, value) -> str:
-    if item.labels is not None:  # a chart's active steps: `A + B`, `(none)` before it starts
+    if item.labels is not None:  # a chart's active steps `A + B`, its last transition `A -> B`; `(none)`
         names = step_names(item, value if isinstance(value, list) else [value])
         return " + ".join(n for n in names if n is not None) or "(none)"
     if isinstance(value, list):
@@ -519,13 +519,16 @@ class Session:
 
     @staticmethod
     def step_value(it: Item, text: str) -> int:
-        """A chart's step by name (or its id) as the value of Chart.active."""
-        by_name = {name: ident for ident, name in it.labels.items() if name is not None}
-        if text in by_name:
-            return by_name[text]
+        """A chart's step by name (or its id) as the value of Chart.active;
+        a transition by name (`A->B`, spaces optional) as that of Chart.fired."""
+        by_name = {name.replace(" ", ""): ident for ident, name in it.labels.items() if name is not None}
+        key = text.replace(" ", "")
+        if key in by_name:
+            return by_name[key]
         if text.isdigit():
             return int(text)
-        raise CommandError(f"{it.name}: no step '{text}' (its steps: {', '.join(sorted(by_name))})")
+        what = "transition" if it.kind == "fired" else "step"
+        raise CommandError(f"{it.name}: no {what} '{text}' (its {what}s: {', '.join(sorted(by_name))})")
 
     def _needs_slots(self, field: str, what: str, setting: str) -> None:
         """Refuse a command the firmware was built without (HELLO: 0 slots)."""
@@ -774,7 +777,7 @@ def why_read_only(it: Item) -> str:
         return "a device `in` datum: the application writes it at every publication"
     if it.kind == "dev_state":
         return "a device's state: only its handlers change it"
-    if it.kind in ("chart", "step_time"):
+    if it.kind in ("chart", "step_time", "fired"):
         return "a chart's state: only its evolutions change it"
     return "the firmware does not let the debugger write it"
 

@@ -35,9 +35,11 @@ class Item:
     unit: str | None = None
     range: list | None = None
     location: str = "?"
-    chart: int | None = None  # a chart's state (kinds chart, step_time): its chart
+    chart: int | None = None  # a chart's state (kinds chart, step_time, fired): its chart
     step: int | None = None  # a step's time: its step
-    labels: dict | None = None  # a chart's active steps: step id -> name (NONE8: none)
+    # a chart's active steps: step id -> name; the transition it fired last: transition id -> name `A -> B`
+    # (its type's all ones, NONE8 or NONE16: none)
+    labels: dict | None = None
     scale: Scale = Scale()  # stored integer x scale = the engineering value (host_tools/units.py)
 
     @property
@@ -69,7 +71,7 @@ class DebugMap:
         self.tasks = data.get("tasks", [])
         self.items = [Item(i["id"], i["name"], i["kind"], i["type"], i["count"], i["flags"], i.get("unit"),
                            i.get("range"), i.get("location", "?"), i.get("chart"), i.get("step"),
-                           self._step_labels(i["chart"]) if i["kind"] == "chart" else None,
+                           self._labels(i),
                            Scale.of(i.get("scale")))
                       for i in data["items"]]
         self.by_name = {i.name: i for i in self.items}
@@ -77,9 +79,16 @@ class DebugMap:
         # A chart's name alone names its active steps (`watch Cylinder`).
         self.aliases = {i.name[:-len(".active")]: i for i in self.items if i.kind == "chart"}
 
-    def _step_labels(self, chart: int) -> dict:
-        c = next((c for c in self.charts if c["id"] == chart), {"steps": []})
-        return {**{s["id"]: s["name"] for s in c["steps"]}, K.NONE8: None}
+    def _labels(self, item: dict) -> dict | None:
+        """The names of the values of a chart's `active` (its steps) or
+        `fired` item (its transitions); None for any other item."""
+        if item["kind"] not in ("chart", "fired"):
+            return None
+        c = self._chart(item["chart"]) or {"steps": [], "transitions": []}
+        if item["kind"] == "chart":
+            return {**{s["id"]: s["name"] for s in c["steps"]}, K.NONE8: None}
+        none = K.NONE8 if item["type"] == "uint8" else K.NONE16
+        return {**{t["id"]: t["name"] for t in c.get("transitions", [])}, none: None}
 
     @classmethod
     def load(cls, path: str | Path) -> "DebugMap":

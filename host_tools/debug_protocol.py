@@ -39,7 +39,7 @@ TYPES: dict[str, tuple[int, str]] = {
 TYPE_NAMES = {code: name for name, (code, _) in TYPES.items()}
 KIND_NAMES = {K.K_PARAM: "param", K.K_VAR: "var", K.K_DEV_OUT: "dev_out", K.K_DEV_IN: "dev_in",
               K.K_STATE: "state", K.K_STATUS: "status", K.K_DEV_STATE: "dev_state", K.K_CHART: "chart",
-              K.K_STEP_TIME: "step_time"}
+              K.K_STEP_TIME: "step_time", K.K_FIRED: "fired"}
 PROBE_NAMES = {K.P_NONE: "none", K.P_INSTANT: "instant", K.P_TASK: "task", K.P_CHART: "chart", K.P_STEP: "step",
                K.P_TRANSITION: "transition", K.P_ACTOR: "actor", K.P_CHART_END: "chart end",
                K.P_CONDITION: "condition"}

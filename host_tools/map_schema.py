@@ -44,7 +44,7 @@ DEBUG_MAP_SCHEMA = {
             "properties": {
                 "id": _ID, "name": _NAME,
                 "kind": {"enum": ["param", "var", "dev_out", "dev_in", "state", "status", "dev_state", "chart",
-                                  "step_time"]},
+                                  "step_time", "fired"]},
                 "type": {"enum": _TYPES},
                 "count": {"type": "integer", "minimum": 1, "maximum": 65535},
                 "flags": {"type": "array", "items": {"enum": ["read", "write", "range"]}},
@@ -55,7 +55,7 @@ DEBUG_MAP_SCHEMA = {
                 "scale": _SCALE,
             },
             # a chart's state names its chart (and a step's time its step)
-            "allOf": [{"if": {"properties": {"kind": {"const": "chart"}}, "required": ["kind"]},
+            "allOf": [{"if": {"properties": {"kind": {"enum": ["chart", "fired"]}}, "required": ["kind"]},
                        "then": {"required": ["chart"]}},
                       {"if": {"properties": {"kind": {"const": "step_time"}}, "required": ["kind"]},
                        "then": {"required": ["chart", "step"]}}],

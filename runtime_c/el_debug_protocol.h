@@ -102,6 +102,7 @@
 #define EL_DBG_K_DEV_STATE 6u
 #define EL_DBG_K_CHART 7u        /* a chart's active steps: per slot, its step's id (NONE8: none), read-only */
 #define EL_DBG_K_STEP_TIME 8u    /* a step's time (ms since its last entry, as its guards see it), read-only */
+#define EL_DBG_K_FIRED 9u        /* the transition a chart fired last (its id; NONE8/NONE16: none yet), read-only */
 
 /* ---- item types (EL_T_... of el_model.h) ------------------------------- */
 #define EL_DBG_T_BOOL 0u

@@ -21,8 +21,8 @@ the program's status items (the links' fault counters, read-only), then
 the `state` fields of the devices that run the model's handlers on the
 board (``DEVICE.FIELD``, read-only: the handlers own them), then the
 charts' state, chart by chart: ``Chart.active`` (the step of each parallel
-branch) and ``Chart.Step.time`` per step (read-only: the evolutions own
-them).
+branch), ``Chart.Step.time`` per step and ``Chart.fired`` (the transition
+it fired last; read-only: the evolutions own them).
 """
 
 from __future__ import annotations
@@ -48,15 +48,17 @@ _TYPE_ENUM = {"bool": "EL_DBG_T_BOOL", "int8": "EL_DBG_T_I8", "uint8": "EL_DBG_T
               "float32": "EL_DBG_T_F32", "time": "EL_DBG_T_TIME"}
 _KIND_ENUM = {"param": "EL_DBG_K_PARAM", "var": "EL_DBG_K_VAR", "dev_out": "EL_DBG_K_DEV_OUT",
               "dev_in": "EL_DBG_K_DEV_IN", "state": "EL_DBG_K_STATE", "status": "EL_DBG_K_STATUS",
-              "dev_state": "EL_DBG_K_DEV_STATE", "chart": "EL_DBG_K_CHART", "step_time": "EL_DBG_K_STEP_TIME"}
+              "dev_state": "EL_DBG_K_DEV_STATE", "chart": "EL_DBG_K_CHART", "step_time": "EL_DBG_K_STEP_TIME",
+              "fired": "EL_DBG_K_FIRED"}
 # What the debugger may write (docs/protocol.md "What is writable"): the
 # application's inputs and state. A device `in` datum is the application's
 # output to an actuator, rewritten at every publication: read-only; so is
 # a status item, a fault counter of the links, and a device's state,
 # which only its handlers change; so is a chart's state (its active steps,
-# its steps' times), which only its evolutions change.
+# its steps' times, the transition it fired last), which only its evolutions
+# change.
 WRITABLE_KINDS = ("param", "var", "dev_out", "state")
-CHART_KINDS = ("chart", "step_time")
+CHART_KINDS = ("chart", "step_time", "fired")
 
 
 def has_debug_interface(program: Program) -> bool:
@@ -176,6 +178,9 @@ def debug_items(program: Program, view) -> list[DebugItem]:
                                    f"(void *)&{p}_elapsed[{st.id}u]", None, None, "ms", st.location,
                                    chart=c.id, step=st.id))
             next_id += 1
+        items.append(DebugItem(next_id, f"{c.name}.fired", "fired", c.fired_type, 1, f"(void *)&{p}_fired", None,
+                               None, None, c.location, chart=c.id))
+        next_id += 1
     ranged = 0
     for d in items:
         if d.range is not None:

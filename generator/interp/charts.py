@@ -5,8 +5,9 @@ at the first activation the initial step is entered; afterwards, slot by
 slot, the active step's ``Step.time`` grows by the task period and the step
 chooses its first enabled transition (guards on the latched copies); the
 transitions every source of which chose them fire, exits first (in
-transition order), then entries; last, the ``run`` dataflows of the active
-steps, in step order. Published activity changes at the deadline only.
+transition order, each becoming the chart's last fired transition), then
+entries; last, the ``run`` dataflows of the active steps, in step order.
+Published activity changes at the deadline only.
 """
 
 from __future__ import annotations
@@ -21,7 +22,8 @@ from .exprs import ExprCompiler
 class ChartRunner:
     """The run-time state of one chart: its slots (the step each parallel
     branch continues with, or None), the steps' elapsed times (ms), whether
-    it has started, and the published activity flags."""
+    it has started, the published activity flags and the transition it
+    fired last."""
 
     def __init__(self, program: Program, chart: Chart, task, run_dataflow: Callable[[int], None]):
         self.chart = chart
@@ -31,6 +33,7 @@ class ChartRunner:
         self.elapsed = [0] * len(chart.steps)
         self.started = False
         self.active = [False] * len(chart.steps)  # published at the deadline
+        self.fired: int | None = None  # the transition fired last (docs/ir.md, "Charts"), None: none yet
         # The debugger's probe (kind name, a, b), where the firmware has
         # EL_DEBUG_PROBE: set by the engine when it serves a debug interface.
         self.probe: Callable[[str, int, int], None] | None = None
@@ -74,6 +77,7 @@ class ChartRunner:
             firing = [t for t in chart.transitions
                       if all(choice[chart.steps[s].slot] == t.id for s in t.sources)]
             for t in firing:
+                self.fired = t.id
                 if probe:
                     probe("transition", chart.id, t.id)
                 for s in t.sources:

@@ -171,6 +171,8 @@ class Interfaces:
         self.chart_slots = [(ctypes.c_uint8 * c.slots).from_address(slots[c.id]) for c in self.program.charts]
         times = (ctypes.c_void_p * max(1, len(self.program.charts))).in_dll(lib, "el_interp_step_times")
         self.step_times = [(ctypes.c_uint32 * len(c.steps)).from_address(times[c.id]) for c in self.program.charts]
+        fired = (ctypes.c_void_p * max(1, len(self.program.charts))).in_dll(lib, "el_interp_chart_fired")
+        self.chart_fired = [(V.ctype(c.fired_type) * 1).from_address(fired[c.id]) for c in self.program.charts]
         # The devices' state the debug tables read (codegen/debug.py): a copy of each device's, refreshed by push.
         self.device_states = {dev.id: (ctypes.c_uint8 * 1).in_dll(lib, f"el_mdev{dev.id}_state")
                               for dev in handlers.state_devices(self.program, "host")} if self.has_debug else {}
@@ -206,15 +208,17 @@ class Interfaces:
     # ------------------------------------------------------------ items
 
     def push(self, published: list, charts, devices=None) -> None:
-        """The interpreter's published items, chart slots, steps' times and devices' state
-        (``devices``: interp.devices.ModelDevices) into the library (items
-        that are the library's own arrays stay as they are)."""
+        """The interpreter's published items, chart slots, steps' times,
+        last fired transitions and devices' state (``devices``:
+        interp.devices.ModelDevices) into the library (items that are the
+        library's own arrays stay as they are)."""
         for array, values in zip(self.items, published):
             if values is not array:
                 array[:] = values
-        for array, times, runner in zip(self.chart_slots, self.step_times, charts):
+        for array, times, fired, runner in zip(self.chart_slots, self.step_times, self.chart_fired, charts):
             array[:] = [0xFF if s is None else s for s in runner.slots]
             times[:] = runner.elapsed
+            fired[0] = runner.chart.fired_none if runner.fired is None else runner.fired
         if devices is not None:
             for dev_id, target in self.device_states.items():
                 dev = devices.devices.get(dev_id)

@@ -135,7 +135,8 @@ def _transfer_delay_tokens(old: ProgramState, new: ProgramState) -> None:
 
 def _transfer_charts(old: ProgramState, new: ProgramState, report: Replacement) -> None:
     """A chart with the same steps (names and branches) keeps its slots,
-    step times and activity; another restarts at its initial step."""
+    step times and activity (and its last fired transition when its
+    transitions are the same); another restarts at its initial step."""
     def shape(runner: ChartRunner):
         return [(s.name, s.slot) for s in runner.chart.steps], runner.chart.slots
     old_charts = {r.chart.name: r for r in old.charts}
@@ -146,9 +147,18 @@ def _transfer_charts(old: ProgramState, new: ProgramState, report: Replacement) 
             runner.elapsed = list(previous.elapsed)
             runner.started = previous.started
             runner.active = list(previous.active)
+            # the transition fired last, while its number names the same transition
+            if _transitions(previous.chart) == _transitions(runner.chart):
+                runner.fired = previous.fired
             report.kept_charts.append(runner.chart.name)
         elif previous is not None:
             report.restarted_charts.append(runner.chart.name)
+
+
+def _transitions(chart) -> list:
+    """A chart's transitions by the names of their source and target steps."""
+    return [([chart.steps[s].name for s in t.sources], [chart.steps[s].name for s in t.targets])
+            for t in chart.transitions]
 
 
 def _transfer_channels(old: ProgramState, new: ProgramState) -> None:

@@ -233,6 +233,19 @@ class Chart:
     period_ms: int | None  # Step.time advances by this per activation
     location: str
 
+    @property
+    def fired_type(self) -> T.ValueType:
+        """The type of the chart's last fired transition (docs/ir.md,
+        "Charts"): a transition's id, or all ones (``fired_none``) before the
+        first: uint8 while the ids leave that value free (at most 255
+        transitions), else uint16."""
+        return T.UINT8 if len(self.transitions) <= 0xFF else T.UINT16
+
+    @property
+    def fired_none(self) -> int:
+        """The value of the last fired transition before any fired."""
+        return self.fired_type.max
+
 
 # ====================================================================== tasks
 

@@ -59,7 +59,9 @@ def elements(dmap: DebugMap, ids: list[str], guards=None) -> dict[str, dict]:
     None), ``items`` (the ids of the map items drawn on it; for a
     transition, those its guard reads, from `guards`: a GuardValues), and
     for a step ``chart_item`` and ``step`` (it is active when the chart's
-    item holds it)."""
+    item holds it); for a step and a transition ``fired_item``, the
+    chart's last fired transition (polled with the chart), and for a
+    transition ``transition`` (it fired last when that item holds it)."""
     charts = {c["name"]: c for c in dmap.charts}
     actors = {a["name"]: a for a in dmap.actors}
     tasks = {t["name"]: t for t in dmap.tasks}
@@ -76,6 +78,7 @@ def elements(dmap: DebugMap, ids: list[str], guards=None) -> dict[str, dict]:
                 info["point"] = [K.P_STEP, chart["id"], step["id"]]
                 info["items"] = _ids(by_name, f"{path}.time")
                 info["chart_item"] = by_name[f"{chart_name}.active"].id if f"{chart_name}.active" in by_name else None
+                info["fired_item"] = _fired_item(by_name, chart_name)
                 info["step"] = step["id"]
                 info["location"] = step.get("location")
         elif kind == "transition":
@@ -86,6 +89,8 @@ def elements(dmap: DebugMap, ids: list[str], guards=None) -> dict[str, dict]:
                 info["point"] = [K.P_TRANSITION, chart["id"], tr["id"]]
                 info["location"] = tr.get("location")
                 info["items"] = guards.needs(el) if guards is not None else []
+                info["fired_item"] = _fired_item(by_name, m.group(1))
+                info["transition"] = tr["id"]
         elif kind == "actor":
             actor = actors.get(path)
             if actor is not None:
@@ -112,6 +117,12 @@ def elements(dmap: DebugMap, ids: list[str], guards=None) -> dict[str, dict]:
         if info["point"] is not None or info["items"]:
             out[el] = info
     return out
+
+
+def _fired_item(by_name: dict, chart_name: str) -> int | None:
+    """The id of a chart's `CHART.fired` item (None: a map without it)."""
+    item = by_name.get(f"{chart_name}.fired")
+    return item.id if item is not None else None
 
 
 def _ids(by_name: dict, name: str) -> list[int]:

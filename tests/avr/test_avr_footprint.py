@@ -14,6 +14,7 @@ uart0 (a release build) fit the part."""
 
 from __future__ import annotations
 
+import json
 import subprocess
 from pathlib import Path
 
@@ -162,3 +163,22 @@ def test_blink_debug_server_with_model_sized_buffers_serves_every_size_it_report
     finally:
         proc.kill()
         proc.wait()
+
+
+# A three-step chart's debug build (tests/avr/models/chart_door.elab): flash, RAM. Its `Door.fired` item
+# costs 22 B of flash of it (a store at each of the 3 transitions, its table entry) and its byte of RAM
+# fits the data section's slack: docs/protocol.md ("Items") reports both.
+CHART_DOOR_DEBUG = (5394, 448)
+CHART_DOOR_FIRED_COST = (22, 0)
+
+
+def test_a_charts_debug_build_with_its_fired_transition_costs_what_the_protocol_doc_says(tmp_path):
+    built = avr_build(HERE / "models" / "chart_door.elab", tmp_path / "d")
+    s = sizes(built)
+    assert s["mcu"] == "atmega328p" and (s["flash"], s["ram"]) == CHART_DOOR_DEBUG, s
+    assert "Door.fired" in {i["name"] for i in json.loads((tmp_path / "d" / "debug_map.json").read_text())["items"]}
+    sizes_of = subprocess.run(["avr-nm", "-S", str(built.elf)], capture_output=True, text=True, check=True).stdout
+    assert any(line.split()[1:] == ["00000001", "D", "el_c0_fired"] for line in sizes_of.splitlines()), sizes_of
+    flash, ram = CHART_DOOR_FIRED_COST
+    doc = " ".join((ROOT / "docs/protocol.md").read_text().split())
+    assert f"chart_door.elab) costs {flash} bytes of flash and {ram} of RAM" in doc

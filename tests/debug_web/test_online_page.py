@@ -2,7 +2,8 @@
 running in real time on its slow cycle (onlinelib.SLOW_CYCLE): on the host
 board the highlighted step follows the stimulus, a breakpoint set by a
 click on `Extending` halts there and the page shows its file:line (and the
-line in the model's text), a step advances, the values on PositionControl's
+line in the model's text) and marks the transition Retracted -> Extending
+as the one fired last, a step advances, the values on PositionControl's
 edges change while it runs, the scope plots over logical time and exports
 CSV, zooming in leaves what is out of sight unpolled, a write through the
 form shows on the diagram (a value out of range is refused), a reset halts
@@ -75,7 +76,8 @@ def check_vcd(vcd: str, names: list[str], first_ms: float, tmp_path) -> None:
     back = subprocess.run(["fst2vcd", str(tmp_path / "scope.fst")], check=True, capture_output=True, text=True,
                           timeout=60).stdout
     declared = {line.split()[4]: line.split()[1:3] for line in back.splitlines() if line.startswith("$var")}
-    assert declared == {"position.value": ["wire", "16"], "drive": ["wire", "16"], "Cylinder.active": ["wire", "5"]}
+    assert declared == {"position.value": ["wire", "16"], "drive": ["wire", "16"], "Cylinder.active": ["wire", "5"],
+                        "Cylinder.fired": ["wire", "8"]}  # the transition's id, not one bit per transition
     assert sorted(declared) == sorted(names)
     body = vcd.split("$enddefinitions $end\n", 1)[1].splitlines()
     assert body[0] == f"#{round(first_ms * 1000)}" and body[1] == "$dumpvars"  # the CSV's first time, in us
@@ -101,6 +103,10 @@ def halt_at_extending_by_a_click(browser, server, where: str = EXTENDING_AT):
     guard = "return document.getElementById(arguments[0]).querySelector('text.el-value').textContent"
     assert (browser.js(guard, "transition:Cylinder.0"), browser.js(guard, "transition:Cylinder.3")) == \
         ("✓ true", "✗ false")
+    # the transition that took the chart there is marked as the one fired last (Cylinder.fired), and in the legend
+    fired = "return [...document.querySelectorAll('#diagram g.fired')].map(g => g.id)"
+    assert wait_for(lambda: browser.js(fired), 10, "the fired transition marked") == ["transition:Cylinder.0"]
+    assert "fired last" in browser.text("#legend")
     return last
 
 
@@ -136,7 +142,7 @@ def test_the_page_follows_breaks_and_steps_pneumatic_cylinder_on_the_host_board(
     assert after["tick"] == before["tick"] + 1 and after["at"] == "instant", after
 
     # the scope: chosen items over logical time, exported as CSV and VCD
-    plotted = ["position.value", "drive", "Cylinder.active"]
+    plotted = ["position.value", "drive", "Cylinder.active", "Cylinder.fired"]
     for name in plotted:
         browser.js("document.getElementById('scope-item').value = arguments[0]", str(
             next(it["id"] for it in server.model()["items"] if it["name"] == name)))

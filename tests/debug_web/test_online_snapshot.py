@@ -110,6 +110,11 @@ def test_the_elements_are_the_maps_points_and_items(builds):
     assert els["edge:PositionControl/position.value->pos.x"]["items"] == [dmap.by_name["position.value"].id]
     assert els["device:end_out"]["items"] == [dmap.by_name["end_out.level"].id]
     assert "edge:PositionControl/pos.y->pid.measured" not in els  # between two actors: no item holds it
+    # the chart's last fired transition is polled with its steps and transitions, each transition knows its id
+    fired = dmap.by_name["Cylinder.fired"].id
+    assert els["step:Cylinder.Fault"]["fired_item"] == fired
+    assert [(els[f"transition:Cylinder.{t['id']}"]["fired_item"], els[f"transition:Cylinder.{t['id']}"]["transition"])
+            for t in dmap.charts[0]["transitions"]] == [(fired, t["id"]) for t in dmap.charts[0]["transitions"]]
 
 
 def test_targets_as_the_console_takes_them():

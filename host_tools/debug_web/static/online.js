@@ -2,9 +2,10 @@
 // program on it. The server polls the target for the items this page shows
 // (/api/view: only what is visible in the diagram, and what the scope
 // plots); the page reads the snapshots (/api/state) and draws them: active
-// steps, step times, values on edges, vars, params and device data, the
-// halt with its line in the model's text. Commands, breakpoints and writes
-// go to the server as same-origin JSON with the page's CSRF header; so do
+// steps, step times, the transition each chart fired last, values on edges,
+// vars, params and device data, the halt with its line in the model's
+// text. Commands, breakpoints and writes go to the server as same-origin
+// JSON with the page's CSRF header; so do
 // forcing (a value held every instant, drawn on the diagram and listed
 // until released) and conditional breakpoints (halt when ITEM OP VALUE).
 "use strict";
@@ -164,6 +165,7 @@
       if (r.right < pane.left || r.left > pane.right || r.bottom < pane.top || r.top > pane.bottom) continue;
       for (const id of info.items) ids.add(id);
       if (info.chart_item !== undefined && info.chart_item !== null) ids.add(info.chart_item);
+      if (info.fired_item !== undefined && info.fired_item !== null) ids.add(info.fired_item);
     }
     return [...ids].sort((a, b) => a - b);
   }
@@ -303,6 +305,9 @@
         const steps = Array.isArray(active) ? active : [active];
         info.g.classList.toggle("active", steps.includes(info.step));
       }
+      if (info.transition !== undefined && info.fired_item !== undefined && info.fired_item !== null) {
+        info.g.classList.toggle("fired", online.values.get(info.fired_item) === info.transition);
+      }
       info.g.classList.toggle("halted-here", s.halted && s.element === id);
       if (info.label && id.startsWith("transition:")) {  // the guard, on this snapshot's values
         const holds = s.guards[id];
@@ -372,7 +377,8 @@
         series: [{ label: "ms" }, ...sc.ids.map((id, k) => {
           const it = online.items.get(id);
           const series = { label: it.name, stroke: COLORS[k % COLORS.length], width: 1.5 };
-          if (it.type === "bool" || it.kind === "chart") series.paths = uPlot.paths.stepped({ align: 1 });
+          const stepwise = it.type === "bool" || it.kind === "chart" || it.kind === "fired";
+          if (stepwise) series.paths = uPlot.paths.stepped({ align: 1 });
           return series;
         })],
       };
@@ -440,22 +446,24 @@
 
   // The same as VCD, as the host board's traces write it (boards/host/host_trace.c): `$timescale 1us`,
   // bool a 1-bit wire, integers wires of their width (two's complement), time a 32-bit wire of ms,
-  // float32 `real`, a chart's state a wire of one bit per step (bit i: step i active).
+  // float32 `real`, a chart's state a wire of one bit per step (bit i: step i active), its last fired
+  // transition a wire of its width (the transition's id, all ones: none).
   function vcdText() {
     const sc = online.scope;
     const name = (text) => text.replace(/[^A-Za-z0-9_.]/g, "_");
     const signals = sc.ids.map((id, k) => {
       const it = online.items.get(id);
-      const steps = it.labels ? Object.keys(it.labels).filter((key) => it.labels[key] !== null).length : 0;
+      const oneHot = it.kind === "chart";  // a chart's state; its last fired transition is a number
+      const steps = oneHot ? Object.keys(it.labels).filter((key) => it.labels[key] !== null).length : 0;
       const code = k < 94 ? String.fromCharCode(33 + k) : String.fromCharCode(33 + (k % 94), 33 + Math.floor(k / 94));
       const real = it.type === "float32";
-      return { id, it, code, real, width: real ? 64 : (it.labels ? Math.max(steps, 1) : WIDTHS[it.type] || 32) };
+      return { id, it, code, real, oneHot, width: real ? 64 : (oneHot ? Math.max(steps, 1) : WIDTHS[it.type] || 32) };
     });
     const value = (sig, v) => {
       if (sig.real) return `r${v} ${sig.code}`;
-      if (sig.width === 1 && !sig.it.labels) return `${v ? 1 : 0}${sig.code}`;
+      if (sig.width === 1 && !sig.oneHot) return `${v ? 1 : 0}${sig.code}`;
       let bits;
-      if (sig.it.labels) bits = [...Array(sig.width)].map((_, i) => (sig.width - 1 - i === v ? "1" : "0")).join("");
+      if (sig.oneHot) bits = [...Array(sig.width)].map((_, i) => (sig.width - 1 - i === v ? "1" : "0")).join("");
       else bits = (((v % 2 ** sig.width) + 2 ** sig.width) % 2 ** sig.width).toString(2).padStart(sig.width, "0");
       return `b${bits} ${sig.code}`;
     };
