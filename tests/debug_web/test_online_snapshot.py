@@ -79,8 +79,10 @@ def test_snapshots_of_random_item_sets(model, many_vars, builds, firmware):
     client.halt()
     fw.wait_halted(client)
     small = dmap.items[:3]
-    at_instant = poller.read_snapshot(client, small, halted=False)  # halted at an instant: the commit applies
-    assert at_instant.halted and at_instant.consistency == "instant"
+    # halted at an instant: the commit applies at once (no wait), then the flags say halted: read again
+    at_instant = poller.read_snapshot(client, small, halted=False)
+    assert at_instant.halted and at_instant.consistency == "halted"
+    assert at_instant.values == poller.read_snapshot(client, small).values
     client.step("task")  # halted inside an activation: a commit waits for the next instant
     assert fw.wait_halted(client).location.kind == K.P_TASK
     guessed = poller.read_snapshot(client, small, halted=False)  # never applied: aborted, read as halted
