@@ -267,8 +267,9 @@ def main(out_dir: str | Path = "bench/results", tiny: bool = False) -> dict:
           f"two keep it: {vision['two_cores_keep']}")
     print(f"vision_line in virtual time: one activation {vision['activation_ns_cores1'] / 1000:.0f} us on 1 core, "
           f"{vision['activation_ns_cores2'] / 1000:.0f} us on 2 (predicted {vision['predicted_ns_cores1'] / 1000:.0f}"
-          f" / {vision['predicted_ns_cores2'] / 1000:.0f} us: error {vision['prediction_error']:+.0%}); speedup "
-          f"{fast['speedup_min']:.2f} (min), {fast['speedup_median']:.2f} (median)")
+          f" / {vision['predicted_ns_cores2'] / 1000:.0f} us: error {vision['prediction_error']:+.0%}, goal within "
+          f"{GOAL_PREDICTION:.0%}); speedup {fast['speedup_min']:.2f} (min), {fast['speedup_median']:.2f} (median), "
+          f"goal {GOAL_SPEEDUP}")
     print(f"balanced graph ({BRANCHES} branches of {work} rounds, {activations} activations): "
           f"1 core min {balanced['cores1']['min_s']:.3f} s, 2 cores min {balanced['cores2']['min_s']:.3f} s; "
           f"speedup {balanced['speedup_min']:.2f} (min), {balanced['speedup_median']:.2f} (median), "
