@@ -3,12 +3,14 @@
 The camera line-following example (examples/vision_line/), built for the
 host board with --cores 1 and --cores 2 and run in real time for
 VISION_PERIODS periods of its task, in turns, REPEATS times: each run's
-overruns (the program's own count of activations that ended after their
-deadline), the wall time's minimum and median and the speedup of 2 cores
-over 1, whether one core misses the period and two keep it; then the same
+overruns (the program's own count of activations that ended a tick or
+more after their deadline), the wall time's minimum and median and the
+speedup of 2 cores over 1, whether one core misses the period and two keep
+it; then the same
 programs in virtual time (``--fast``), where nothing waits for the clock:
 the time of one activation on each core count against the prediction of
 ``easylab analyze --cores 2`` (from the example's declared costs).
+
 A synthetic balanced graph (a source, BRANCHES independent branches of
 xorshift work, a join) and a tiny model (examples/blink.elab), each built
 for the host board with --cores 1 and --cores 2 and run in virtual time
