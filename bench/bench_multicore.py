@@ -1,5 +1,16 @@
 """Benchmark of multi-core host builds (docs/multicore.md).
 
+The camera line-following example (examples/vision_line/), built for the
+host board with --cores 1 and --cores 2 and run in real time for
+VISION_PERIODS periods of its task, in turns, REPEATS times: each run's
+overruns (the program's own count of activations that ended a tick or
+more after their deadline), the wall time's minimum and median and the
+speedup of 2 cores over 1, whether one core misses the period and two keep
+it; then the same
+programs in virtual time (``--fast``), where nothing waits for the clock:
+the time of one activation on each core count against the prediction of
+``easylab analyze --cores 2`` (from the example's declared costs).
+
 A synthetic balanced graph (a source, BRANCHES independent branches of
 xorshift work, a join) and a tiny model (examples/blink.elab), each built
 for the host board with --cores 1 and --cores 2 and run in virtual time
@@ -20,9 +31,12 @@ import subprocess
 import sys
 import tempfile
 import time
+from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
+VISION = ROOT / "examples" / "vision_line" / "vision_line.elab"
+VISION_PERIODS = 2000
 BRANCHES = 4
 WORK = 100_000  # xorshift rounds per branch firing (~150 us)
 REPEATS = 7
@@ -154,6 +168,63 @@ def figures(times: dict[int, list[float]]) -> dict:
     return out
 
 
+def overruns_of(stderr: str) -> int:
+    """The overruns a host program reports at its end (``PROG: overruns:
+    TASK N ...``; nothing when there were none), summed over its tasks."""
+    for line in stderr.splitlines():
+        if ": overruns:" in line:
+            words = line.split(": overruns:", 1)[1].split()
+            return sum(int(n) for n in words[1::2])
+    return 0
+
+
+def task_period_us(model: Path) -> int:
+    """The period of the model's first task, in microseconds (its IR)."""
+    from easylab.pipeline import lower_file
+    program, result = lower_file(str(model))
+    if program is None:
+        raise SystemExit(result.report())
+    return program.tasks[0].period * program.tick_us
+
+
+def real_time_runs(programs: dict[int, Path], duration_us: int, repeats: int) -> tuple[dict, dict]:
+    """Real-time runs in turns: (cores -> wall seconds, cores -> overruns), one entry per run."""
+    times: dict[int, list[float]] = {n: [] for n in programs}
+    overruns: dict[int, list[int]] = {n: [] for n in programs}
+    for _ in range(repeats):
+        for n, exe in programs.items():
+            start = time.perf_counter()
+            proc = subprocess.run([str(exe), "--duration", f"{duration_us}us"], check=True, capture_output=True,
+                                  text=True, stdin=subprocess.DEVNULL)
+            times[n].append(time.perf_counter() - start)
+            overruns[n].append(overruns_of(proc.stderr))
+    return times, overruns
+
+
+def vision_line(work_dir: Path, periods: int, repeats: int) -> dict:
+    """examples/vision_line on 1 and 2 cores: real time (overruns, wall
+    time) and virtual time (one activation against the prediction)."""
+    flow = json.loads(easylab("analyze", str(VISION), "--cores", "2", "--json"))["dataflows"][0]
+    period_us = task_period_us(VISION)
+    with ThreadPoolExecutor(max_workers=2) as pool:  # two compilers at once: the tiny run stays short
+        built = dict(zip((1, 2), pool.map(lambda n: build(VISION, work_dir / f"vision{n}", n), (1, 2))))
+    programs, notes = {n: exe for n, (exe, _) in built.items()}, {n: note for n, (_, note) in built.items()}
+    times, overruns = real_time_runs(programs, periods * period_us, repeats)
+    real = figures(times)
+    fast = figures(timed_runs(programs, ["--fast", "--duration", f"{periods * period_us}us"], repeats))
+    per_activation = {n: fast[f"cores{n}"]["min_s"] * 1e9 / periods for n in (1, 2)}
+    return {
+        "periods": periods, "period_us": period_us, "parallel": "on 2 cores" in notes[2],
+        "real_time": real, "overruns_cores1": overruns[1], "overruns_cores2": overruns[2],
+        "one_core_misses": min(overruns[1]) > 0,
+        "two_cores_keep": statistics.median(overruns[2]) == 0,
+        "virtual_time": fast,
+        "activation_ns_cores1": round(per_activation[1]), "activation_ns_cores2": round(per_activation[2]),
+        "predicted_ns_cores1": flow["sequential_ns"], "predicted_ns_cores2": flow["predicted_ns"],
+        "prediction_error": (per_activation[2] - flow["predicted_ns"]) / flow["predicted_ns"],
+    }
+
+
 def main(out_dir: str | Path = "bench/results", tiny: bool = False) -> dict:
     """Run the benchmark, print its figures, write ``out_dir/multicore.json``."""
     repeats, activations, work = (2, 50, 2_000) if tiny else (REPEATS, ACTIVATIONS, WORK)
@@ -185,10 +256,22 @@ def main(out_dir: str | Path = "bench/results", tiny: bool = False) -> dict:
                                    repeats))
         small["ratio_2_over_1_median"] = 1 / small["speedup_median"]
         small["single_core_chosen"] = "a single-core build" in tiny_note
+        vision = vision_line(work_dir, 20 if tiny else VISION_PERIODS, repeats)
         parallelism = machine_parallelism(work_dir, 2_000 * work, repeats)
     report = {"benchmark": "multicore", "machine_cores": os.cpu_count(), "machine_parallelism": parallelism,
-              "load_average": os.getloadavg(), "balanced": balanced, "tiny": small,
+              "load_average": os.getloadavg(), "vision_line": vision, "balanced": balanced, "tiny": small,
               "goals": {"speedup": GOAL_SPEEDUP, "prediction_error": GOAL_PREDICTION, "tiny_ratio": GOAL_TINY_RATIO}}
+    real, fast = vision["real_time"], vision["virtual_time"]
+    print(f"vision_line ({vision['periods']} periods of {vision['period_us']} us in real time): overruns "
+          f"{vision['overruns_cores1']} on 1 core, {vision['overruns_cores2']} on 2; wall time min "
+          f"{real['cores1']['min_s']:.3f} s / {real['cores2']['min_s']:.3f} s, speedup {real['speedup_min']:.2f} "
+          f"(min), {real['speedup_median']:.2f} (median); one core misses the period: {vision['one_core_misses']}, "
+          f"two keep it: {vision['two_cores_keep']}")
+    print(f"vision_line in virtual time: one activation {vision['activation_ns_cores1'] / 1000:.0f} us on 1 core, "
+          f"{vision['activation_ns_cores2'] / 1000:.0f} us on 2 (predicted {vision['predicted_ns_cores1'] / 1000:.0f}"
+          f" / {vision['predicted_ns_cores2'] / 1000:.0f} us: error {vision['prediction_error']:+.0%}, goal within "
+          f"{GOAL_PREDICTION:.0%}); speedup {fast['speedup_min']:.2f} (min), {fast['speedup_median']:.2f} (median), "
+          f"goal {GOAL_SPEEDUP}")
     print(f"balanced graph ({BRANCHES} branches of {work} rounds, {activations} activations): "
           f"1 core min {balanced['cores1']['min_s']:.3f} s, 2 cores min {balanced['cores2']['min_s']:.3f} s; "
           f"speedup {balanced['speedup_min']:.2f} (min), {balanced['speedup_median']:.2f} (median), "

@@ -20,7 +20,8 @@ from easylab.core.source import ModelError
 from easylab.frontend.format import format_text
 from easylab.frontend.parser import parse_text
 
-SEEDS = [*sorted((ROOT / "examples").glob("*.elab")), ROOT / "tests" / "frontend" / "models" / "all_features.elab"]
+SEEDS = [*sorted((ROOT / "examples").glob("*.elab")), ROOT / "examples" / "vision_line" / "vision_line.elab",
+         ROOT / "tests" / "frontend" / "models" / "all_features.elab"]
 
 
 def assert_formats_faithfully(path, text: str) -> bool:

@@ -37,7 +37,8 @@ def test_strict_mode_really_looks_for_collisions():
         lark.Lark(conflicting, parser="lalr", strict=True)
 
 
-@pytest.mark.parametrize("path", [*sorted((ROOT / "examples").glob("*.elab")), library_path("std")],
+@pytest.mark.parametrize("path", [*sorted((ROOT / "examples").glob("*.elab")),
+                                  ROOT / "examples" / "vision_line" / "vision_line.elab", library_path("std")],
                          ids=lambda p: p.stem)
 def test_examples_and_std_parse(path):
     module = P.parse_text(path.read_text(encoding="utf-8"), str(path))

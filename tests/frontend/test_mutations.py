@@ -21,7 +21,8 @@ from mutations import HypothesisChooser, mutate
 
 ROOT = Path(__file__).resolve().parents[2]
 # The examples, and a model with every construct of the language once.
-SEEDS = [*sorted((ROOT / "examples").glob("*.elab")), Path(__file__).parent / "models" / "all_features.elab"]
+SEEDS = [*sorted((ROOT / "examples").glob("*.elab")), ROOT / "examples" / "vision_line" / "vision_line.elab",
+         Path(__file__).parent / "models" / "all_features.elab"]
 TOTAL_CASES = 3000
 
 
