@@ -8,7 +8,6 @@ each item's type (ITEM_INFO).
 from __future__ import annotations
 
 import fnmatch
-import json
 import re
 from dataclasses import dataclass
 from pathlib import Path
