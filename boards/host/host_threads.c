@@ -16,7 +16,11 @@
  * data). */
 #define EL_SPINS 256u
 #define EL_YIELDS 4096u
-#define EL_IDLE_ROUNDS (EL_SPINS + 256u) /* a core between jobs: then it sleeps */
+/* A core between jobs yields for this long after its last job before it
+ * sleeps: a model whose jobs come every few milliseconds keeps its cores
+ * awake (a sleeping core takes a wake-up latency at every job, up to
+ * milliseconds on a virtual machine); an idle model lets them sleep. */
+#define EL_IDLE_NS 4000000L
 
 static pthread_t el_threads[EL_MAX_CORES];
 static uint8_t el_core_count = 1u;
@@ -52,16 +56,31 @@ static void el_wait_equal(atomic_uint_least32_t *word, uint32_t value)
  * until el_post wakes the core. el_go and el_sleepers are sequentially
  * consistent: either el_post sees this core among the sleepers, or this
  * core sees the new job before it sleeps. */
+static int64_t el_ns_since(const struct timespec *start)
+{
+    struct timespec now;
+    (void)clock_gettime(CLOCK_MONOTONIC, &now);
+    return (int64_t)(now.tv_sec - start->tv_sec) * 1000000000 + (int64_t)(now.tv_nsec - start->tv_nsec);
+}
+
 static uint32_t el_next_job(uint32_t seen)
 {
     uint32_t round;
     uint32_t now;
-    for (round = 0u; round < EL_IDLE_ROUNDS; round++) {
+    struct timespec idle_since;
+    (void)clock_gettime(CLOCK_MONOTONIC, &idle_since);
+    for (round = 0u;; round++) {
         now = (uint32_t)atomic_load_explicit(&el_go, memory_order_acquire);
         if (now != seen) {
             return now;
         }
-        el_pause(round);
+        if (round < EL_SPINS) {
+            continue;
+        }
+        if ((round & 63u) == 0u && el_ns_since(&idle_since) > EL_IDLE_NS) {
+            break;
+        }
+        (void)sched_yield();
     }
     (void)pthread_mutex_lock(&el_sleep_lock);
     (void)atomic_fetch_add(&el_sleepers, 1u);
