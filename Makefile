@@ -79,14 +79,13 @@ $(VENV)/.installed: pyproject.toml setup.py
 	   { cat $(VENV)/install.log; echo "make: installing the virtual environment failed"; exit 1; }
 	@touch $@
 
-# Test processes (pytest-xdist): one more than the cores by default (a
-# test often waits on a simulator, a pty or a sleep: the extra process
-# keeps the cores busy meanwhile); TEST_JOBS=0 runs
+# Test processes (pytest-xdist): one per core by default (one more was
+# measured no faster: the suite keeps the cores busy); TEST_JOBS=0 runs
 # the suite in this process. A test module stays in one process (module
 # fixtures build once); firmware several modules need is built once per run.
 # Files start longest first (tests/durations.json; refresh it with
 # `python tests/durations.py LOG` from a run's --durations report).
-TEST_JOBS ?= $(shell echo $$(( $$(nproc) + 1 )))
+TEST_JOBS ?= auto
 
 # The suite starts thousands of Python processes: keep their bytecode (in
 # build/pycache) even where the environment says not to write it, or each
