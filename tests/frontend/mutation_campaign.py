@@ -7,7 +7,8 @@ build. A finding is
 - a traceback anywhere (the checker, the lowering, the generator);
 - a checker that accepts a model and reports errors, or the reverse;
 - a compiler error for a model the checker accepted, unless the mutation
-  changed the C inside the model's `{{ }}` blocks (the user's own C).
+  changed the C inside the model's `{{ }}` blocks or every error is on a
+  line of them (the user's own C, e.g. using a state the mutation deleted).
 
 A board's own refusal (a pin the part lacks) is a clean error, counted.
 Models with nodes are checked, not built (their nodes need MCU boards).
@@ -43,6 +44,28 @@ INLINE_C = re.compile(r"\{\{.*?\}\}", re.S)
 
 def _user_c(text: str) -> list[str]:
     return sorted(INLINE_C.findall(text))
+
+
+GCC_ERROR = re.compile(r"^(?P<file>[^:\n]+\.c):(?P<line>\d+):\d+: error:", re.M)
+
+
+def errors_in_user_c(compiler_output: str, text: str) -> bool:
+    """Whether every error the compiler reports is on a line of the
+    model's own C (a `{{ }}` block, copied as written into the generated
+    file): e.g. an actor body using a state the mutation deleted."""
+    user_lines = {line.strip() for block in INLINE_C.findall(text) for line in block.splitlines()} - {""}
+    errors = list(GCC_ERROR.finditer(compiler_output))
+    if not errors:
+        return False
+    for error in errors:
+        try:
+            lines = Path(error["file"]).read_text(encoding="utf-8").splitlines()
+        except OSError:
+            return False
+        number = int(error["line"])
+        if not 0 < number <= len(lines) or lines[number - 1].strip() not in user_lines:
+            return False
+    return True
 
 
 def one(index: int, seed: int, out: Path, build: bool) -> tuple[str, str]:
@@ -88,7 +111,7 @@ def one(index: int, seed: int, out: Path, build: bool) -> tuple[str, str]:
         try:
             board.compile(program, checked, work, generated, CompileOptions(False, (), None, None, False))
         except BuildError as err:
-            if _user_c(text) != _user_c(original):
+            if _user_c(text) != _user_c(original) or errors_in_user_c(str(err), text):
                 return "user C", ""
             return "finding", f"compiler error for an accepted model:\n{err}"
         marker.parent.mkdir(parents=True, exist_ok=True)

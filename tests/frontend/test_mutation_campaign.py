@@ -20,3 +20,25 @@ def test_a_small_campaign_checks_builds_and_finds_nothing(tmp_path):
     tally = json.loads((tmp_path / "summary.json").read_text())["tally"]
     assert sum(tally.values()) == 24 and "finding" not in tally
     assert tally.get("refused", 0) > 0
+
+
+def test_an_actor_body_using_a_deleted_state_is_the_users_c(tmp_path):
+    """A mutant without `state sum` whose actor body still uses `sum`: the
+    checker accepts it (it does not read C), gcc refuses it on a line of the
+    model's own C: the campaign counts it as the user's C, not a finding;
+    an error on a generated line stays a finding."""
+    import subprocess
+    import sys
+
+    original = (mutation_campaign.ROOT / "examples" / "cd_to_dat.elab").read_text(encoding="utf-8")
+    text = original.replace("    state sum: uint32\n", "", 1)
+    assert text != original
+    model = tmp_path / "cd_to_dat.elab"
+    model.write_text(text, encoding="utf-8")
+    proc = subprocess.run([sys.executable, "-m", "easylab", "build", str(model), "--board", "host", "-o",
+                           str(tmp_path / "host")], capture_output=True, text=True, timeout=300)
+    assert proc.returncode != 0 and "sum" in proc.stderr and "undeclared" in proc.stderr, proc.stderr
+    assert mutation_campaign.errors_in_user_c(proc.stderr, text)
+    generated_line = f"{tmp_path / 'host' / 'model.c'}:1:1: error: something of ours\n"
+    assert not mutation_campaign.errors_in_user_c(generated_line, text)
+    assert not mutation_campaign.errors_in_user_c("no error line at all", text)
