@@ -53,7 +53,7 @@ def errors_in_user_c(compiler_output: str, text: str) -> bool:
     """Whether every error the compiler reports is on a line of the
     model's own C (a `{{ }}` block, copied as written into the generated
     file): e.g. an actor body using a state the mutation deleted."""
-    user_lines = {line.strip() for block in INLINE_C.findall(text) for line in block.splitlines()} - {""}
+    user_lines = {line.strip() for block in INLINE_C.findall(text) for line in block[2:-2].splitlines()} - {""}
     errors = list(GCC_ERROR.finditer(compiler_output))
     if not errors:
         return False

@@ -5,6 +5,8 @@ from __future__ import annotations
 
 import json
 
+import pytest
+
 import mutation_campaign
 from mutations import SeededChooser, mutate
 
@@ -22,8 +24,9 @@ def test_a_small_campaign_checks_builds_and_finds_nothing(tmp_path):
     assert tally.get("refused", 0) > 0
 
 
-def test_an_actor_body_using_a_deleted_state_is_the_users_c(tmp_path):
-    """A mutant without `state sum` whose actor body still uses `sum`: the
+@pytest.mark.parametrize("state, name", [("sum", "sum"), ("n", "n")])  # a body of several lines, of one line
+def test_an_actor_body_using_a_deleted_state_is_the_users_c(state, name, tmp_path):
+    """A mutant without a `state` whose actor body still uses it: the
     checker accepts it (it does not read C), gcc refuses it on a line of the
     model's own C: the campaign counts it as the user's C, not a finding;
     an error on a generated line stays a finding."""
@@ -31,13 +34,14 @@ def test_an_actor_body_using_a_deleted_state_is_the_users_c(tmp_path):
     import sys
 
     original = (mutation_campaign.ROOT / "examples" / "cd_to_dat.elab").read_text(encoding="utf-8")
-    text = original.replace("    state sum: uint32\n", "", 1)
+    text = original.replace(f"    state {state}: uint32\n", "", 1)
     assert text != original
     model = tmp_path / "cd_to_dat.elab"
     model.write_text(text, encoding="utf-8")
     proc = subprocess.run([sys.executable, "-m", "easylab", "build", str(model), "--board", "host", "-o",
                            str(tmp_path / "host")], capture_output=True, text=True, timeout=300)
-    assert proc.returncode != 0 and "sum" in proc.stderr and "undeclared" in proc.stderr, proc.stderr
+    assert proc.returncode != 0, proc.stderr
+    assert any(f"{name}{quote} undeclared" in proc.stderr for quote in ("’", "'")), proc.stderr
     assert mutation_campaign.errors_in_user_c(proc.stderr, text)
     generated_line = f"{tmp_path / 'host' / 'model.c'}:1:1: error: something of ours\n"
     assert not mutation_campaign.errors_in_user_c(generated_line, text)
