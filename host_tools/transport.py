@@ -8,6 +8,7 @@ port, an unplugged adapter, a closed socket), never a pyserial traceback.
 
 from __future__ import annotations
 
+import os
 import socket
 import time
 
@@ -76,6 +77,8 @@ class FrameTransport:
         self._buf = bytearray()
         self.bytes_out = 0
         self.bytes_in = 0
+        self.polling = False
+        self._blocking_timeout = port.timeout
 
     @classmethod
     def open(cls, url: str, baudrate: int = 115200) -> "FrameTransport":
@@ -90,6 +93,14 @@ class FrameTransport:
             self.bytes_out += len(data)
         except _PORT_ERRORS as err:
             raise TransportError(f"lost the connection to {self.url}: {_reason(err)}") from None
+
+    def poll(self, on: bool) -> None:
+        """Wait for bytes by polling the port, yielding the CPU between
+        looks (``on``), or by sleeping in the kernel until they come: a
+        process asleep on an idle machine may be woken milliseconds after
+        its bytes came (docs/remote.md, "Real time at 1 kHz")."""
+        self.polling = on
+        self.port.timeout = 0 if on else self._blocking_timeout
 
     def discard_input(self) -> None:
         """Forget bytes received so far (stale responses)."""
@@ -112,13 +123,18 @@ class FrameTransport:
             if time.monotonic() >= deadline:
                 raise TransportTimeout(f"no answer from {self.url} within {timeout:g} s")
             try:
-                waiting = self.port.in_waiting
-                chunk = self.port.read(max(1, min(waiting, 4096)))
+                if self.polling:  # a timeout of 0: what is there, at once (a closed port still raises)
+                    chunk = self.port.read(4096)
+                else:
+                    waiting = self.port.in_waiting
+                    chunk = self.port.read(max(1, min(waiting, 4096)))
             except _PORT_ERRORS as err:
                 raise TransportError(f"lost the connection to {self.url}: {_reason(err)}") from None
             if chunk:
                 self.bytes_in += len(chunk)
                 self._buf += chunk
+            elif self.polling:
+                os.sched_yield()
 
     def close(self) -> None:
         try:

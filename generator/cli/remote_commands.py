@@ -12,6 +12,7 @@ import sys
 from pathlib import Path
 
 from ..remote.budget import DEFAULT_BAUD
+from ..remote.realtime import POLL_DEADLINES_UP_TO_US, WAITS
 from .common import EXIT_OK, EXIT_USAGE, CliError, add_board_options, default_out_dir, lower_model, report_built
 from .run_command import add_debug_arguments, add_service_arguments, served_interfaces
 
@@ -68,6 +69,10 @@ def add_parsers(sub) -> None:
                    help="real-time scheduling (SCHED_FIFO) and locked memory for this process where the system "
                         "allows them; at 1 kHz on a busy machine use it with a TCP link (socket://), see "
                         "docs/remote.md")
+    r.add_argument("--wait", choices=WAITS, default="auto",
+                   help="in real time, wait for the proxy's frames by polling the link (keeps a CPU busy; a "
+                        "sleeping process may wake milliseconds late) or by sleeping; default auto: poll at "
+                        f"deadlines up to {POLL_DEADLINES_UP_TO_US // 1000} ms unless --realtime")
     r.add_argument("--watch", action="store_true",
                    help="replace the running application when its files change (an edit of the device model is "
                         "refused: the proxy would have to be rebuilt)")
@@ -143,6 +148,30 @@ def _overruns_said(program, model, counters: dict) -> str:
             f"values came late and the previous values held; {counters['watchdog']} watchdog expiries")
 
 
+def _keep_real_time(args, program, model, link) -> None:
+    """SCHED_FIFO and locked memory with --realtime; polling the link at
+    short deadlines (--wait); the objects made so far kept out of the
+    garbage collector's passes (a full pass over the interpreter's objects
+    takes about 10 ms, ten deadlines at 1 kHz): docs/remote.md, "Real time
+    at 1 kHz"."""
+    import gc
+
+    from ..remote.budget import link_budget
+    from ..remote.realtime import go_real_time, polls_its_link
+
+    if args.realtime:
+        for warning in go_real_time(args.target):
+            _say(f"easylab remote: {warning}")
+        if args.wait == "poll":
+            _say("easylab remote: warning: --wait poll with --realtime: a real-time process that polls keeps every "
+                 "ordinary process off its CPU (the kernel's workers that deliver a pty's or serial port's bytes "
+                 "too), and the kernel throttles a real-time process that never sleeps (kernel.sched_rt_runtime_us)")
+    deadline_us = min((b.deadline_us for b in link_budget(program, model, args.baud)), default=None)
+    link.poll(polls_its_link(args.wait, args.realtime, deadline_us))
+    gc.collect()
+    gc.freeze()
+
+
 def cmd_remote(args) -> int:
     """Run the application against a proxy until the duration or a signal."""
     from ..interp.clock import Clock
@@ -204,12 +233,9 @@ def cmd_remote(args) -> int:
     try:
         if watcher:
             watcher.start()
-        if args.realtime and not args.fast:
-            from ..remote.realtime import go_real_time
-
-            for warning in go_real_time(args.target):
-                _say(f"easylab remote: {warning}")
         engine.boot()  # before START: the proxy's clock runs from then on, the first deadlines included
+        if not args.fast:
+            _keep_real_time(args, program, model, link)
         link.start(lock_step=args.fast)
         engine.run(duration, clock)
         counters = link.counters()

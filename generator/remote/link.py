@@ -62,6 +62,10 @@ class Link:
     def close(self) -> None:
         self.transport.close()
 
+    def poll(self, on: bool) -> None:
+        """Wait for frames by polling the link (realtime.polls_its_link)."""
+        self.transport.poll(on)
+
     # ------------------------------------------------------------ frames
 
     def _send(self, cmd: int, instant: int, payload: bytes = b"") -> None:

@@ -48,6 +48,24 @@ def wait_halted(client: DebugClient, timeout: float = 5.0):
         time.sleep(0.005)
 
 
+def transition_halts(client: DebugClient, transitions: list[dict], rounds: int = 12, timeout: float = 3.0):
+    """Breakpoints on every transition of chart 0 (``transitions``, the
+    map's), then run: the flags of each halt at one, for at most ``rounds``
+    halts or until none comes within ``timeout`` s (the stimulus is over)."""
+    from easylab.host_tools.debug_protocol import K
+
+    for tr in transitions:
+        client.bp_set(K.P_TRANSITION, 0, tr["id"])
+    for _ in range(rounds):
+        client.run()
+        try:
+            f = wait_halted(client, timeout)
+        except AssertionError:
+            return
+        assert f.why == "breakpoint" and f.location.kind == K.P_TRANSITION, f
+        yield f
+
+
 class Firmware:
     """A host firmware process serving its debug interface on a new pty."""
 

@@ -8,7 +8,6 @@ trace's `Chart.active` columns."""
 
 from __future__ import annotations
 
-import csv
 import json
 import random
 import re
@@ -19,7 +18,7 @@ from pathlib import Path
 
 import pytest
 
-from debug_testlib import ROOT, board, build, builds, env_with_tools, firmware  # noqa: F401 (fixtures)
+from debug_testlib import ROOT, board, build, builds, env_with_tools, firmware, transition_halts  # noqa: F401 (fixtures)
 
 from easylab.host_tools.debug_protocol import K
 
@@ -112,16 +111,8 @@ def test_fired_is_the_transition_just_taken_at_every_transition_breakpoint(board
     read_fired = lambda: c.read([(fired.id, fired.type, 1)])[0]  # noqa: E731
     assert (fired.kind, fired.type, fired.labels[K.NONE8]) == ("fired", "uint8", None)
     assert read_fired() == K.NONE8
-    for tr in m.charts[0]["transitions"]:
-        c.bp_set(K.P_TRANSITION, 0, tr["id"])
     taken = []
-    for _ in range(12):  # the stimulus's cycles: every transition but one
-        c.run()
-        try:
-            f = fw.wait_halted(c, timeout=3.0)
-        except AssertionError:
-            break
-        assert f.why == "breakpoint" and f.location.kind == K.P_TRANSITION, f
+    for f in transition_halts(c, m.charts[0]["transitions"]):  # the stimulus's cycles: every transition but one
         assert read_fired() == f.location.b, (f.tick, f.location)
         taken.append(fired.labels[f.location.b])
         c.step("instant")  # on to the next instant, where no transition of a 5 ms chart fires again at once

@@ -16,7 +16,7 @@ import time
 
 import pytest
 
-from debug_testlib import ROOT, build, builds, firmware  # noqa: F401 (fixtures)
+from debug_testlib import ROOT, build, builds, firmware, transition_halts  # noqa: F401 (fixtures)
 
 from easylab.host_tools.debug_map import DebugMap
 from easylab.host_tools.debug_protocol import K
@@ -141,16 +141,8 @@ def test_the_guards_hold_where_the_firmware_takes_their_transitions(builds, firm
                         elements={el: {"point": [K.P_TRANSITION, 0, int(el.rsplit(".", 1)[1])]} for el in guards.guards})
     needed = sorted({i for el in guards.guards for i in guards.needs(el)})
     items = [dmap.by_id[i] for i in needed]
-    for tr in dmap.charts[0]["transitions"]:
-        client.bp_set(K.P_TRANSITION, 0, tr["id"])
     verified = set()
-    for _ in range(12):  # until the stimulus's cycles are over
-        client.run()
-        try:
-            f = fw.wait_halted(client, timeout=2.0)
-        except AssertionError:
-            break
-        assert f.why == "breakpoint" and f.location.kind == K.P_TRANSITION, f
+    for f in transition_halts(client, dmap.charts[0]["transitions"], timeout=2.0):  # the stimulus's cycles
         snap = poller.read_snapshot(client, items)
         element = f"transition:Cylinder.{f.location.b}"
         assert snap.element == element and snap.guards[element] is True, (element, snap.values, snap.guards)
