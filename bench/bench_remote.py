@@ -236,6 +236,7 @@ def _one_khz_run(built, program_path: Path, work: Path, duration: str, tcp: bool
 # wait the host had before (docs/remote.md, "Real time at 1 kHz").
 ONE_KHZ_SETTINGS = (("idle", False, False, ()), ("idle_tcp", False, True, ()),
                     ("idle_sleeping", False, False, ("--wait", "sleep")),
+                    ("idle_tcp_sleeping", False, True, ("--wait", "sleep")),
                     ("idle_realtime_tcp", False, True, ("--realtime",)), ("suite_beside", True, False, ()),
                     ("suite_beside_tcp", True, True, ()), ("suite_beside_realtime_tcp", True, True, ("--realtime",)))
 

@@ -107,17 +107,19 @@ def test_the_avr_proxy_in_real_time_gives_the_native_trace(name, mcu, baud, buil
             assert changes(run_dir / "proxy.csv", item.name, 1_000_000) == changes(native, item.name, 1_000_000)
 
 
-def blink_at_1_khz_over_tcp(build_cache, tmp_path, sim_prefix: list[str], *args: str) -> str:
-    """blink's 1 ms task for 3 s through the AVR proxy at 1 Mbaud in real
+def blink_at_1_khz_over_tcp(build_cache, tmp_path, sim_prefix: list[str], *args: str, duration: str = "3s",
+                            most_late: int | None = None) -> None:
+    """blink's 1 ms task for ``duration`` through the AVR proxy at 1 Mbaud in real
     time, the harness's link UART on TCP (started under ``sim_prefix``),
     `easylab remote ARGS`: its trace is the native one (a few late values
-    held, never K in a row). Tried again at most REAL_TIME_ATTEMPTS times
-    when K came in a row; returns the successful run's stderr."""
+    held, never K in a row, and at most ``most_late`` in all if given).
+    Tried again at most REAL_TIME_ATTEMPTS times when K came in a row or
+    more than ``most_late``."""
     import socket
 
     stimulus = EXAMPLES / "blink.stimulus.csv"
     native = tmp_path / "native.csv"
-    run_native(native_of(build_cache, BLINK), native, "3s", stimulus)
+    run_native(native_of(build_cache, BLINK), native, duration, stimulus)
     built = avr_proxy(build_cache, BLINK, "atmega328p", 1_000_000)
     missed = []
     for attempt in range(REAL_TIME_ATTEMPTS):
@@ -129,7 +131,7 @@ def blink_at_1_khz_over_tcp(build_cache, tmp_path, sim_prefix: list[str], *args:
         try:
             time.sleep(0.5)  # the harness listens
             traced = tmp_path / f"remote{attempt}.csv"
-            proc = remote(BLINK, f"socket://127.0.0.1:{port}", "--baud", "1000000", "--duration", "3s",
+            proc = remote(BLINK, f"socket://127.0.0.1:{port}", "--baud", "1000000", "--duration", duration,
                           "--stimulus", str(stimulus), "--trace", str(traced), *args)
         finally:
             sim.terminate()
@@ -140,8 +142,13 @@ def blink_at_1_khz_over_tcp(build_cache, tmp_path, sim_prefix: list[str], *args:
             continue
         assert "warning" not in proc.stderr, proc.stderr
         assert_host_trace_is_native(traced, native, proc)
-        return proc.stderr
-    pytest.fail(f"K late values in a row in every one of {REAL_TIME_ATTEMPTS} runs:\n" + "\n".join(missed))
+        counted = re.search(r"the proxy counted (\d+) overruns", proc.stderr)
+        if most_late is not None and counted and int(counted.group(1)) > most_late:
+            missed.append(proc.stderr.strip())
+            continue
+        return
+    pytest.fail(f"K late values in a row, or more than {most_late} late, in every one of {REAL_TIME_ATTEMPTS} "
+                "runs:\n" + "\n".join(missed))
 
 
 @pytest.mark.realtime
@@ -150,8 +157,10 @@ def test_blink_at_1_khz_on_an_idle_machine(build_cache, tmp_path):
     deadline `easylab remote` polls its link instead of sleeping until a
     frame comes (a sleeping process on an idle machine was woken up to
     milliseconds late: three late values in a row within seconds), and the
-    3 s run at 1 Mbaud gives the native trace."""
-    blink_at_1_khz_over_tcp(build_cache, tmp_path, [])
+    10 s run at 1 Mbaud gives the native trace with at most 5 late values
+    (polling: 1 in 90,000 instants here; `--wait sleep`: 12 to 13 in each
+    run of 10,000 that did not end in the safe state, docs/benchmarks.md)."""
+    blink_at_1_khz_over_tcp(build_cache, tmp_path, [], duration="10s", most_late=5)
 
 
 @pytest.mark.realtime
