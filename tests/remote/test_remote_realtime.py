@@ -15,6 +15,8 @@ import time
 import tty
 
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 import realtime_peers
 from easylab.host_tools.transport import FrameTransport, TransportError, TransportTimeout
@@ -147,6 +149,34 @@ def test_a_sleeping_link_costs_no_cpu_while_it_waits(kind):
         with pytest.raises(TransportTimeout):
             transport.recv(0.3)
         assert time.process_time() - cpu < 0.1
+    finally:
+        transport.close()
+        peer.end()
+
+
+@settings(max_examples=30, deadline=None)
+@given(frames=st.lists(st.binary(max_size=40).map(lambda b: b.replace(b"\x00", b"\x01")), min_size=1, max_size=8),
+       cuts=st.lists(st.integers(min_value=1, max_value=30), max_size=20))
+def test_a_polling_link_returns_any_frames_however_the_bytes_are_cut(frames, cuts):
+    """Random frames (0x00-delimited) written over a real TCP connection in
+    random pieces, with pauses between them: the polling transport returns
+    each frame whole and in order."""
+    peer = _Peer("tcp")
+    transport = FrameTransport.open(peer.url, 1_000_000)
+    try:
+        transport.poll(True)
+        wire = b"".join(f + b"\x00" for f in frames)
+        pieces, at = [], 0
+        for cut in cuts:
+            if at >= len(wire):
+                break
+            pieces.append(wire[at:at + cut])
+            at += cut
+        pieces.append(wire[at:])
+        sender = threading.Thread(target=lambda: [(peer.write(p), time.sleep(0.0005)) for p in pieces if p])
+        sender.start()
+        assert [transport.recv(5.0) for _ in frames] == frames
+        sender.join()
     finally:
         transport.close()
         peer.end()
