@@ -225,8 +225,14 @@ def measure_text(text: str, board: str, work: Path, mcu: str | None = None, inst
     program, result = lower_file(path)
     if program is None:
         raise RuntimeError(result.report())
-    found = sorted((measure(program, board, work / f"m{n}", mcu, instants, baud) for n in range(repeats)),
-                   key=lambda m: m.cycles_per_instant)
+    return median_measurement(lambda n: measure(program, board, work / f"m{n}", mcu, instants, baud), repeats)
+
+
+def median_measurement(measure_once, repeats: int = REPEATS) -> Measured:
+    """The median, by cycles per instant, of ``measure_once(n)`` for n in
+    range(``repeats``): one measurement's clock-interrupt correction moves
+    with the host's round trips, which a loaded machine stretches."""
+    found = sorted((measure_once(n) for n in range(repeats)), key=lambda m: m.cycles_per_instant)
     return found[len(found) // 2]
 
 
